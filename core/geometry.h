@@ -1,0 +1,63 @@
+// SPDX-License-Identifier: Apache-2.0
+// Geometric primitives of the vine world, in metres. Plain value types; thread-compatible.
+#pragma once
+
+#include <vector>
+
+#include "absl/status/status.h"
+#include "Eigen/Core"
+#include "Eigen/Geometry"
+
+namespace vb {
+
+// A 3D polyline with a radius at every point (a cane, trunk or spur), ordered base to tip.
+struct Polyline3 {
+  std::vector<Eigen::Vector3d> points;
+  std::vector<double> radii;  // one per point, metres
+
+  // OK if there are >= 2 points, one radius per point, all finite, radii > 0.
+  // Errors name the offending index, prefixed by `what` (e.g. "canes[3]").
+  absl::Status Validate(const std::string& what) const;
+
+  double Length() const;
+  // Cumulative arc length at each point (first is 0).
+  std::vector<double> ArcLengths() const;
+  // Point and radius at arc length s (clamped to [0, Length()]).
+  Eigen::Vector3d PointAt(double s) const;
+  double RadiusAt(double s) const;
+  // Unit tangent at arc length s (direction base -> tip).
+  Eigen::Vector3d TangentAt(double s) const;
+  // Truncates the polyline at arc length s (keeps [0, s]). s is clamped.
+  void TruncateAt(double s);
+  // Resamples at roughly `step_m` spacing, keeping both ends.
+  std::vector<Eigen::Vector3d> Sample(double step_m) const;
+};
+
+// Line segment with a radius: the swept sphere used for canes, wires and arm links.
+struct Capsule {
+  Eigen::Vector3d a = Eigen::Vector3d::Zero();
+  Eigen::Vector3d b = Eigen::Vector3d::Zero();
+  double radius = 0.0;
+};
+
+struct Sphere {
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();
+  double radius = 0.0;
+};
+
+// Closest distance between point p and segment [a, b]; `t` (optional) receives the
+// segment parameter in [0, 1] of the closest point.
+double PointSegmentDistance(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
+                            const Eigen::Vector3d& b, double* t = nullptr);
+
+// Closest distance between segments [p0, p1] and [q0, q1].
+double SegmentSegmentDistance(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1,
+                              const Eigen::Vector3d& q0, const Eigen::Vector3d& q1);
+
+// True if every entry of `m` is finite.
+template <typename Derived>
+bool AllFinite(const Eigen::MatrixBase<Derived>& m) {
+  return m.allFinite();
+}
+
+}  // namespace vb
