@@ -1,0 +1,21 @@
+// SPDX-License-Identifier: Apache-2.0
+// The vinebot subcommands. Each parses its flags and calls library code; it returns the
+// outcome, printed by main(). Results go to files or stdout; messages to stderr.
+#pragma once
+
+#include "absl/status/status.h"
+#include "app/flags.h"
+
+namespace vb::app {
+
+// vinebot sim render --seed S --vine K --out DIR [...]: renders a simulated stop into a capture
+// bundle with ground_truth.json and label images.
+absl::Status RunSimRender(Flags& flags);
+
+// vinebot capture --source sim|aravis --out DIR [...]: captures one stop into a bundle.
+absl::Status RunCapture(Flags& flags);
+
+// vinebot bundle info --bundle DIR: imports (validating everything) and prints a JSON summary.
+absl::Status RunBundleInfo(Flags& flags);
+
+}  // namespace vb::app

@@ -1,0 +1,71 @@
+// SPDX-License-Identifier: Apache-2.0
+// vinebot: one binary, one subcommand per job (COLMAP's exe/colmap.cc). main() only dispatches.
+#include <cstring>
+#include <functional>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "app/commands.h"
+#include "app/flags.h"
+
+namespace {
+
+struct Command {
+  const char* name;  // may be two words ("sim render")
+  const char* usage;
+  std::function<absl::Status(vb::app::Flags&)> run;
+};
+
+const std::vector<Command>& Commands() {
+  static const std::vector<Command> commands = {
+      {"sim render",
+       "--seed S --vine K --out DIR [--pixel-format rgb8|mono8|bayer_rg8|...] "
+       "[--calibration-error-px X] [--cameras N] [--no-neighbours] [--no-noise] [--noise-seed N]",
+       vb::app::RunSimRender},
+      {"capture",
+       "--source sim|aravis --out DIR [--exposure-us U] [--gain-db G] [--trigger software|free] "
+       "[--timeout-s T] [--row NAME] [--position-m X]\n"
+       "      sim:    [--seed S --vine K --pixel-format F --calibration-error-px X]\n"
+       "      aravis: --devices cam0=ADDR,cam1=ADDR,... --calibration calibration.yaml "
+       "[--pixel-format F]",
+       vb::app::RunCapture},
+      {"bundle info", "--bundle DIR", vb::app::RunBundleInfo},
+  };
+  return commands;
+}
+
+void PrintUsage(std::ostream& out) {
+  out << "usage: vinebot COMMAND [flags]\n\ncommands:\n";
+  for (const Command& c : Commands()) out << "  vinebot " << c.name << " " << c.usage << "\n";
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2 || std::strcmp(argv[1], "help") == 0 || std::strcmp(argv[1], "--help") == 0) {
+    PrintUsage(argc < 2 ? std::cerr : std::cout);
+    return argc < 2 ? 2 : 0;
+  }
+  for (const Command& c : Commands()) {
+    const std::string name = c.name;
+    const size_t space = name.find(' ');
+    int first = 2;
+    if (space == std::string::npos) {
+      if (name != argv[1]) continue;
+    } else {
+      if (argc < 3 || name.substr(0, space) != argv[1] || name.substr(space + 1) != argv[2]) continue;
+      first = 3;
+    }
+    auto flags = vb::app::Flags::Parse(argc, argv, first);
+    absl::Status status = flags.ok() ? c.run(*flags) : flags.status();
+    if (!status.ok()) {
+      std::cerr << "vinebot " << name << ": " << status.message() << "\n";
+      return status.code() == absl::StatusCode::kInvalidArgument ? 2 : 1;
+    }
+    return 0;
+  }
+  std::cerr << "vinebot: unknown command '" << argv[1] << "'\n";
+  PrintUsage(std::cerr);
+  return 2;
+}

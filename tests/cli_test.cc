@@ -1,0 +1,115 @@
+// SPDX-License-Identifier: Apache-2.0
+// End-to-end tests of the vinebot binary: its files, its exit codes and its error messages.
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+
+#include "core/vine_model_json.h"
+#include "gtest/gtest.h"
+#include "workers/capture/bundle.h"
+
+namespace vb {
+namespace {
+
+struct Run {
+  int exit_code = -1;
+  std::string output;  // stdout and stderr
+};
+
+Run Vinebot(const std::string& args) {
+  const std::string command = std::string(VB_BINARY_DIR) + "/app/vinebot " + args + " 2>&1";
+  Run run;
+  FILE* pipe = popen(command.c_str(), "r");
+  if (pipe == nullptr) return run;
+  std::array<char, 4096> buffer;
+  size_t n;
+  while ((n = fread(buffer.data(), 1, buffer.size(), pipe)) > 0) run.output.append(buffer.data(), n);
+  const int status = pclose(pipe);
+  run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return run;
+}
+
+std::string FreshDir(const std::string& name) {
+  const std::string dir = ::testing::TempDir() + "/vinebot_cli_" + name;
+  std::filesystem::remove_all(dir);
+  return dir;
+}
+
+TEST(VinebotCli, SimRenderWritesTheDocumentedFiles) {
+  const std::string dir = FreshDir("render");
+  const Run run = Vinebot("sim render --seed 7 --vine 3 --out " + dir);
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  for (const char* f : {"cam0.png", "cam1.png", "cam2.png", "calibration.yaml", "capture.json",
+                        "ground_truth.json", "labels_cam0.png", "labels_cam1.png",
+                        "labels_cam2.png"}) {
+    EXPECT_TRUE(std::filesystem::exists(dir + "/" + f)) << f;
+  }
+  auto bundle = capture::ReadBundle(dir);
+  ASSERT_TRUE(bundle.ok()) << bundle.status();
+  EXPECT_EQ(bundle->images.size(), 3u);
+  auto truth = ReadVineModel(dir + "/ground_truth.json");
+  ASSERT_TRUE(truth.ok()) << truth.status();
+  EXPECT_GE(truth->canes.size(), 9u);
+  // Same seed and vine: the same vine.
+  const std::string again = FreshDir("render_again");
+  ASSERT_EQ(Vinebot("sim render --seed 7 --vine 3 --out " + again).exit_code, 0);
+  auto truth_again = ReadVineModel(again + "/ground_truth.json");
+  ASSERT_TRUE(truth_again.ok());
+  EXPECT_EQ(VineModelToJson(*truth), VineModelToJson(*truth_again));
+  std::filesystem::remove_all(dir);
+  std::filesystem::remove_all(again);
+}
+
+TEST(VinebotCli, CaptureFromSimulatorWritesAnImportableBundle) {
+  const std::string dir = FreshDir("capture");
+  const Run run = Vinebot("capture --source sim --seed 3 --vine 1 --pixel-format bayer_gr8 --out " + dir);
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  auto bundle = capture::ReadBundle(dir);
+  ASSERT_TRUE(bundle.ok()) << bundle.status();
+  EXPECT_EQ(bundle->images[0].format, PixelFormat::kBayerGr8);
+  const Run info = Vinebot("bundle info --bundle " + dir);
+  EXPECT_EQ(info.exit_code, 0) << info.output;
+  EXPECT_NE(info.output.find("\"valid\": true"), std::string::npos) << info.output;
+  std::filesystem::remove_all(dir);
+}
+
+TEST(VinebotCli, RejectsBadFlagsNamingThem) {
+  Run run = Vinebot("sim render --seed 7 --vine 3");
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.output.find("--out"), std::string::npos) << run.output;
+  run = Vinebot("sim render --seed x --out /tmp/never");
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.output.find("--seed"), std::string::npos) << run.output;
+  run = Vinebot("sim render --out /tmp/never --pixel-format yuv");
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.output.find("pixel-format"), std::string::npos) << run.output;
+  run = Vinebot("sim render --out /tmp/never --colour red");
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.output.find("--colour"), std::string::npos) << run.output;
+  run = Vinebot("capture --source webcam --out /tmp/never");
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.output.find("--source"), std::string::npos) << run.output;
+  run = Vinebot("capture --source aravis --out /tmp/never --devices cam0 --calibration /nonexistent.yaml");
+  EXPECT_NE(run.exit_code, 0);
+  EXPECT_NE(run.output.find("nonexistent.yaml"), std::string::npos) << run.output;
+  run = Vinebot("frobnicate");
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.output.find("unknown command"), std::string::npos) << run.output;
+  EXPECT_FALSE(std::filesystem::exists("/tmp/never"));
+}
+
+TEST(VinebotCli, BundleInfoNamesTheBrokenFile) {
+  const std::string dir = FreshDir("broken");
+  ASSERT_EQ(Vinebot("sim render --seed 1 --vine 0 --cameras 2 --out " + dir).exit_code, 0);
+  std::filesystem::resize_file(dir + "/cam1.png", 1000);  // truncated
+  const Run run = Vinebot("bundle info --bundle " + dir);
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.output.find("cam1.png"), std::string::npos) << run.output;
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace vb

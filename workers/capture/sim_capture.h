@@ -1,0 +1,42 @@
+// SPDX-License-Identifier: Apache-2.0
+// A capture of a simulated stop with everything the simulator knows: the bundle (images rendered
+// with the true rig, calibration.yaml as reported — with calibration error if asked), the ground
+// truth vine model and a label image per camera. Thread-safe (no shared state).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "core/vine_model.h"
+#include "sim/renderer.h"
+#include "sim/rig.h"
+#include "sim/scene.h"
+#include "workers/capture/bundle.h"
+
+namespace vb::capture {
+
+struct SimCaptureOptions {
+  sim::RigOptions rig;                // the simulated rig (true calibration)
+  sim::RenderOptions render;          // pixel format, noise, lighting
+  double calibration_error_px = 0.0;  // RMS reprojection error of the reported calibration
+  std::string row = "sim";            // row name written to capture.json
+
+  absl::Status Validate() const;
+};
+
+struct SimCapture {
+  CaptureBundle bundle;
+  VineModel ground_truth;
+  std::vector<LabelImage> labels;  // one per bundle camera, same order
+};
+
+// Renders `scene` through the rig of `options`. Deterministic in (scene, options, noise_seed).
+absl::StatusOr<SimCapture> RenderSimCapture(const sim::Scene& scene, const SimCaptureOptions& options,
+                                            uint64_t noise_seed);
+
+// Writes the bundle to `dir` plus ground_truth.json and labels_<camera>.png (16-bit).
+absl::Status WriteSimCapture(const std::string& dir, const SimCapture& capture);
+
+}  // namespace vb::capture
