@@ -20,10 +20,11 @@ function(vb_add_executable name)
   target_compile_options(${name} PRIVATE ${VB_WARNINGS})
 endfunction()
 
-# vb_add_test(NAME SRCS x_test.cc LINK libs... [LABELS l...])
-# Builds one GoogleTest binary and registers its tests with CTest.
+# vb_add_test(NAME SRCS x_test.cc LINK libs... [LABELS l...] [RESOURCE_LOCK r])
+# Builds one GoogleTest binary and registers each of its tests with CTest. Tests that share a
+# RESOURCE_LOCK (e.g. fixed loopback addresses) never run at the same time under ctest -j.
 function(vb_add_test name)
-  cmake_parse_arguments(ARG "" "" "SRCS;LINK;LABELS" ${ARGN})
+  cmake_parse_arguments(ARG "" "RESOURCE_LOCK" "SRCS;LINK;LABELS" ${ARGN})
   if(NOT BUILD_TESTING)
     return()
   endif()
@@ -32,7 +33,11 @@ function(vb_add_test name)
   target_compile_options(${name} PRIVATE ${VB_WARNINGS})
   target_compile_definitions(${name} PRIVATE VB_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
                                              VB_BINARY_DIR="${PROJECT_BINARY_DIR}")
-  gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 PROPERTIES LABELS "${ARG_LABELS}")
+  set(properties LABELS "${ARG_LABELS}")
+  if(ARG_RESOURCE_LOCK)
+    list(APPEND properties RESOURCE_LOCK ${ARG_RESOURCE_LOCK})
+  endif()
+  gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 PROPERTIES ${properties})
 endfunction()
 
 # vb_add_benchmark(NAME SRCS x_bench.cc LINK libs...): a Google Benchmark binary, run on demand.
