@@ -69,6 +69,8 @@ class Camera {
 // Grabs one synchronised set: triggers every camera back to back, then retrieves one frame from
 // each within `timeout`. Frames come back in the order of `cameras`. Fails with the first error
 // (prefixed by the camera name); DEADLINE_EXCEEDED if a camera does not deliver in time.
+// INVALID_ARGUMENT for an empty list or a null camera. After a failure, frames of cameras that
+// were already triggered may still be queued; restart acquisition before the next set.
 absl::StatusOr<std::vector<Frame>> GrabSynchronised(std::span<Camera* const> cameras,
                                                     absl::Duration timeout);
 
