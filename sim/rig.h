@@ -12,7 +12,7 @@
 namespace vb::sim {
 
 struct RigOptions {
-  int camera_count = 3;            // cameras in a triangle (2 gives a horizontal pair)
+  int camera_count = 3;            // 1 to 3 cameras: 3 in a triangle, 2 a horizontal pair
   int image_width = 1280;
   int image_height = 1024;
   double horizontal_fov_deg = 100.0;   // wide lens: one vine and the gaps either side at 0.8 m
@@ -26,15 +26,37 @@ struct RigOptions {
   double k3 = -0.012;
   bool toe_in = true;                  // cameras converge on the vine plane centre
 
+  // INVALID_ARGUMENT naming the field: camera_count outside [1, 3], image size outside
+  // [16, 16384], horizontal_fov_deg outside (10, 170), baseline_m outside (0, 2],
+  // rig_height_m or distance_to_vine_plane_m not finite or <= 0.05, non-finite distortion.
   absl::Status Validate() const;
 };
 
 // The true calibration of the simulated rig. Cameras are named cam0, cam1, ...
+// Layout (platform frame): for 3 cameras an equilateral triangle of side baseline_m whose centroid
+// is (0, 0, rig_height_m): cam0 lower left (-x), cam1 lower right (+x), cam2 above the middle;
+// for 2 cameras a horizontal pair; for 1 a camera at the centre. Cameras look along +y with the
+// image x axis along +x and image down = world down; with toe_in each camera is rotated to look at
+// (0, distance_to_vine_plane_m, rig_height_m). fx = fy is chosen so that the half-width of the
+// image sees horizontal_fov_deg / 2 through the distortion model; if that would put the image
+// corners beyond (or within 3% of) the fold of the radial distortion polynomial, where the lens
+// model stops being invertible, fx is increased until they are not (with the default options the
+// horizontal field of view becomes ~96 deg). The principal point is the image centre plus a few
+// pixels of offset, different per camera. INVALID_ARGUMENT for invalid options (see Validate) and
+// for distortion that has no invertible region wide enough for the image.
 absl::StatusOr<RigCalibration> MakeRig(const RigOptions& options = {});
 
 // A copy of `rig` with calibration error: each camera's intrinsics and pose are perturbed so that
-// reprojections move by about `error_px` pixels RMS (focal length, principal point, a small
-// rotation). Deterministic in `seed`. error_px = 0 returns `rig` unchanged.
+// reprojections of points ~0.8 m in front of the camera move by about `error_px` pixels RMS
+// (focal length, principal point and a small rotation about the camera centre, which stays fixed;
+// the magnitude is measured and rescaled, so the RMS is within a few percent of `error_px` for
+// error_px up to ~20). Deterministic in `seed` on every platform (no std distributions).
+// error_px <= 0 (or non-finite) returns `rig` unchanged.
 RigCalibration PerturbCalibration(const RigCalibration& rig, double error_px, uint64_t seed);
+
+// RMS pixel distance between the projections through `a` and through `b` of points on the plane
+// ~`depth_m` in front of `a` (a grid over a's image). For tests and for reporting calibration error.
+double ReprojectionRmsPx(const CameraCalibration& a, const CameraCalibration& b,
+                         double depth_m = 0.8);
 
 }  // namespace vb::sim
