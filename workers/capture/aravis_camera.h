@@ -32,6 +32,10 @@
 // failing Trigger/Configure) or when Aravis' heartbeat thread reports lost control; from then on
 // every call fails fast with UNAVAILABLE and Close skips the control traffic it can skip. A pure
 // stream loss with a live control channel shows as DEADLINE_EXCEEDED from Retrieve.
+// Releasing a vanished device still blocks: Aravis' stream and device finalizers each send GVCP
+// commands that time out (measured ~5 s in StopAcquisition and ~5 s more in Close against the
+// killed fake). This is deliberately synchronous: releasing in the background could let the stale
+// "leave control" reach the same camera after it came back and was reopened.
 //
 // Verified ONLY against Aravis' fake GigE Vision camera (arv-fake-gv-camera-0.8, aravis-tools
 // 0.8.26) on loopback — not yet against a real camera:

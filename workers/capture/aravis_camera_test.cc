@@ -440,6 +440,34 @@ TEST_F(AravisCameraTest, LifecycleViolationsAreFailedPrecondition) {
   EXPECT_TRUE(camera.Configure(Settings(PixelFormat::kRgb8)).ok());
 }
 
+TEST_F(AravisCameraTest, LossyStreamGivesDataLossNotCorruptFrames) {
+  fake_gv::FakeCameraProcess::Options options;
+  options.address = FakeAddresses()[0];
+  options.serial = "LOSSY";
+  options.gvsp_lost_per_thousand = 500;  // half the stream packets never arrive
+  absl::StatusOr<std::unique_ptr<fake_gv::FakeCameraProcess>> fake =
+      fake_gv::FakeCameraProcess::Start(options);
+  ASSERT_TRUE(fake.ok()) << fake.status();
+  AravisCamera camera("cam0", (*fake)->address());
+  ASSERT_TRUE(camera.Open().ok());
+  ASSERT_TRUE(camera.Configure(Settings(PixelFormat::kMono8)).ok());
+  ASSERT_TRUE(camera.StartAcquisition().ok());
+  int data_loss = 0;
+  for (int i = 0; i < 4; ++i) {
+    ASSERT_TRUE(camera.Trigger().ok());
+    absl::StatusOr<Frame> frame = camera.Retrieve(absl::Seconds(1));
+    // A complete frame is (almost) impossible at 50 % loss; a frame must never come back corrupt.
+    EXPECT_FALSE(frame.ok()) << "frame " << frame->frame_id;
+    if (absl::IsDataLoss(frame.status())) {
+      ++data_loss;
+      EXPECT_THAT(std::string(frame.status().message()), HasSubstr("buffer status"));
+    } else {
+      EXPECT_TRUE(absl::IsDeadlineExceeded(frame.status())) << frame.status();
+    }
+  }
+  EXPECT_GT(data_loss, 0);
+}
+
 TEST_F(AravisCameraTest, KilledCameraGivesErrorsNotCrashOrHang) {
   auto fake = StartFake(0, "KILLED");
   ASSERT_NE(fake, nullptr);

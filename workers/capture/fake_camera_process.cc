@@ -183,6 +183,10 @@ absl::StatusOr<std::unique_ptr<FakeCameraProcess>> FakeCameraProcess::Start(Opti
     args.push_back("-g");
     args.push_back(options.genicam_path);
   }
+  if (options.gvsp_lost_per_thousand > 0) {
+    args.push_back("-r");
+    args.push_back(std::to_string(options.gvsp_lost_per_thousand));
+  }
   std::vector<char*> argv;
   for (std::string& arg : args) argv.push_back(arg.data());
   argv.push_back(nullptr);

@@ -42,6 +42,7 @@ class FakeCameraProcess {
     std::string address = "127.0.0.1";  // -i: the interface address it listens on
     std::string serial = "VB0001";      // -s: DeviceID becomes "Aravis-Fake-<serial>"
     std::string genicam_path;           // -g: GenICam XML; empty for the built-in one
+    int gvsp_lost_per_thousand = 0;     // -r: stream packets dropped per thousand
     absl::Duration ready_timeout = absl::Seconds(5);
   };
 
