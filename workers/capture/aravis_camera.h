@@ -47,8 +47,8 @@
 //   - trigger sources Software and Line0 only (no Line1): kHardware with the default Line1 is
 //     rejected (INVALID_ARGUMENT naming trigger) by the fake; with "Line0" it configures, but no
 //     hardware trigger ever arrives;
-//   - software trigger, frame ids increasing by one per frame, device timestamps in ns;
-//   - vanishing device: the fake process killed mid-stream.
+//   - software trigger and free running; frame ids and device timestamps increasing per frame;
+//   - vanishing device: the fake process killed mid-stream; lossy stream (fake -r 500) -> DATA_LOSS.
 // Not verified: USB3 Vision, packet loss/resend on a real network, Bayer colour layout of real
 // sensors, cameras whose exposure feature is not in microseconds, chunk data, multipart buffers.
 //
