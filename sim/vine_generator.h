@@ -2,6 +2,8 @@
 // Synthetic dormant vines with ground truth. A vineyard row is a pure function of a seed: vine k
 // stands near x = k * spacing along the row; a stop at vine k puts it at the platform origin
 // (x = 0) and its neighbours k-1, k+1 at about -/+ spacing, so their canes intrude into view.
+// Vine structure after Botterill et al., "A Robot System for Pruning Grape Vines" (J. Field
+// Robotics 2017); see sim/vine_plant.h and sim/vine_cane_growth.h for the growth model.
 // Thread-safe (no shared state).
 #pragma once
 
@@ -46,7 +48,18 @@ struct VineGeneratorOptions {
 };
 
 // Generates the scene of a stop at vine `vine_index` of the row generated from `seed`.
-// Deterministic in (seed, vine_index, options). Errors only for invalid options.
+// Deterministic in (seed, vine_index, options), portably (sim/vine_random.h). INVALID_ARGUMENT
+// for invalid options (INTERNAL only if the generator produced a model failing Validate()).
+// The platform origin is at the vine's nominal row position vine_index * vine_spacing_m; the vine
+// stands at x = jitter (|jitter| <= 0.1 m), scene.vine_position_m = vine_index * spacing + jitter.
+// scene.vine holds: the trunk (id 1, from z = 0 up to the head), canes (kind cane) and old spurs
+// (kind spur) with ids 2, 3, ... (parents before children; a cane's first point lies on its
+// parent's axis or on a head sphere's surface), the head spheres, the row's wires (id 1 is the
+// fruiting wire; they span x in [-2.5, 2.5] m with sag between posts) and every post with
+// |x| <= 2.5 m (sim/trellis.h). scene.neighbours are vines vine_index - 1 and + 1 (in that order)
+// exactly as their own stops generate them, shifted by -/+ vine_spacing_m: canes and head only.
+// scene.lights are the rig's four LED flashes (x = -/+0.3, y = 0.05, z = 0.7 and 1.4, intensity
+// 0.5 each).
 absl::StatusOr<Scene> GenerateScene(uint64_t seed, int vine_index,
                                     const VineGeneratorOptions& options = {});
 

@@ -10,46 +10,19 @@
 
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
+#include "sim/vine_test_util.h"
 
 namespace vb::sim {
 namespace {
 
 using ::testing::HasSubstr;
-
-constexpr uint64_t kSeed = 20260714;
-constexpr int kVines = 50;
-
-Scene MustGenerate(uint64_t seed, int index, const VineGeneratorOptions& options = {}) {
-  absl::StatusOr<Scene> scene = GenerateScene(seed, index, options);
-  EXPECT_TRUE(scene.ok()) << scene.status();
-  return scene.ok() ? *std::move(scene) : Scene{};
-}
-
-std::vector<const Cane*> CanesOfKind(const VineModel& model, CaneKind kind) {
-  std::vector<const Cane*> out;
-  for (const Cane& c : model.canes) {
-    if (c.kind == kind) out.push_back(&c);
-  }
-  return out;
-}
-
-double DistanceToAxis(const Polyline3& line, const Eigen::Vector3d& p) {
-  double best = std::numeric_limits<double>::infinity();
-  for (size_t i = 0; i + 1 < line.points.size(); ++i) {
-    best = std::min(best, PointSegmentDistance(p, line.points[i], line.points[i + 1]));
-  }
-  return best;
-}
-
-// Height of the wire polyline at platform x (linear between its points).
-double WireZAt(const Wire& wire, double x) {
-  for (size_t i = 0; i + 1 < wire.points.size(); ++i) {
-    const Eigen::Vector3d& a = wire.points[i];
-    const Eigen::Vector3d& b = wire.points[i + 1];
-    if (x >= a.x() && x <= b.x()) return a.z() + (b.z() - a.z()) * (x - a.x()) / (b.x() - a.x());
-  }
-  return std::numeric_limits<double>::quiet_NaN();
-}
+using test::CanesOfKind;
+using test::DistanceToAxis;
+using test::ExpectSameCanes;
+using test::kSeed;
+using test::kVines;
+using test::MustGenerate;
+using test::WireZAt;
 
 // Proper crossing of segments ab and cd in the x-z plane (the front camera's view).
 bool SegmentsCrossXZ(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
@@ -69,27 +42,6 @@ bool CanesCross(const Polyline3& p, const Polyline3& q) {
     }
   }
   return false;
-}
-
-void ExpectSameCanes(const VineModel& a, const VineModel& b, double dx) {
-  ASSERT_EQ(a.canes.size(), b.canes.size());
-  for (size_t i = 0; i < a.canes.size(); ++i) {
-    const Polyline3& pa = a.canes[i].polyline;
-    const Polyline3& pb = b.canes[i].polyline;
-    ASSERT_EQ(a.canes[i].id, b.canes[i].id);
-    ASSERT_EQ(a.canes[i].parent_id, b.canes[i].parent_id);
-    ASSERT_EQ(a.canes[i].kind, b.canes[i].kind);
-    ASSERT_EQ(pa.points.size(), pb.points.size());
-    for (size_t k = 0; k < pa.points.size(); ++k) {
-      ASSERT_LT((pa.points[k] - (pb.points[k] + Eigen::Vector3d(dx, 0, 0))).norm(), 1e-9);
-      ASSERT_DOUBLE_EQ(pa.radii[k], pb.radii[k]);
-    }
-  }
-  ASSERT_EQ(a.head.spheres.size(), b.head.spheres.size());
-  for (size_t i = 0; i < a.head.spheres.size(); ++i) {
-    EXPECT_LT((a.head.spheres[i].center - b.head.spheres[i].center -
-               Eigen::Vector3d(dx, 0, 0)).norm(), 1e-9);
-  }
 }
 
 TEST(VineGenerator, IsDeterministicForSeedAndIndex) {
@@ -343,123 +295,6 @@ TEST(VineGenerator, SomeCanesLieAlongTheWires) {
     draped_vines += draped;
   }
   EXPECT_GE(draped_vines, kVines / 2);
-}
-
-TEST(VineGenerator, TrellisHasThreeOrFourWiresAtTheRightHeights) {
-  const VineGeneratorOptions options;
-  std::set<size_t> wire_counts;
-  bool sags = false;
-  for (int seed = 1; seed <= 20; ++seed) {
-    const Scene s = MustGenerate(seed, 0);
-    ASSERT_GE(s.vine.wires.size(), 3u);
-    ASSERT_LE(s.vine.wires.size(), 4u);
-    wire_counts.insert(s.vine.wires.size());
-    std::vector<double> heights;
-    for (const Wire& w : s.vine.wires) {
-      EXPECT_DOUBLE_EQ(w.radius, options.wire_radius_m);
-      ASSERT_GE(w.points.size(), 5u);
-      EXPECT_LE(w.points.front().x(), -2.5 + 1e-9);
-      EXPECT_GE(w.points.back().x(), 2.5 - 1e-9);
-      double z_min = 10, z_max = -10;
-      for (const Eigen::Vector3d& p : w.points) {
-        EXPECT_NEAR(p.y(), options.vine_plane_y_m, 0.05);
-        z_min = std::min(z_min, p.z());
-        z_max = std::max(z_max, p.z());
-      }
-      EXPECT_LT(z_max - z_min, 0.05);
-      sags |= z_max - z_min > 0.003;
-      heights.push_back(z_max);
-    }
-    const double fruiting = *std::min_element(heights.begin(), heights.end());
-    EXPECT_GE(fruiting, options.fruiting_wire_min_m - 1e-9);
-    EXPECT_LE(fruiting, options.fruiting_wire_max_m + 1e-9);
-    for (double h : heights) EXPECT_LE(h, options.post_height_m);
-  }
-  EXPECT_EQ(wire_counts.size(), 2u);
-  EXPECT_TRUE(sags);
-}
-
-TEST(VineGenerator, PostsStandWhereTheRowPutsThem) {
-  const VineGeneratorOptions options;
-  std::set<long> post_rows_mm;  // row positions of all posts seen, mm
-  std::vector<Scene> scenes;
-  for (int k = 0; k < kVines; ++k) scenes.push_back(MustGenerate(kSeed, k));
-  for (const Scene& s : scenes) {
-    for (const Post& p : s.vine.posts) {
-      EXPECT_DOUBLE_EQ(p.radius, 0.04);
-      EXPECT_NEAR(p.base.z(), 0.0, 1e-12);
-      EXPECT_NEAR(p.top.z(), options.post_height_m, 1e-12);
-      EXPECT_EQ(p.base.x(), p.top.x());
-      EXPECT_LE(std::abs(p.base.x()), 2.5 + 1e-9);
-      post_rows_mm.insert(std::lround(1000 * (p.base.x() + s.vine_index * options.vine_spacing_m)));
-    }
-  }
-  // 50 stops cover ~90 m of row: ~15 posts, exactly post_spacing apart, none skipped.
-  ASSERT_GE(post_rows_mm.size(), 14u);
-  for (auto it = std::next(post_rows_mm.begin()); it != post_rows_mm.end(); ++it) {
-    EXPECT_NEAR(*it - *std::prev(it), 1000 * options.post_spacing_m, 1.0);
-  }
-  // Every stop shows every post of the row within +-1.5 m of it.
-  int stops_with_post = 0;
-  for (const Scene& s : scenes) {
-    const double origin = s.vine_index * options.vine_spacing_m;
-    bool any = false;
-    for (long row_mm : post_rows_mm) {
-      const double x = row_mm / 1000.0 - origin;
-      if (std::abs(x) > 1.5) continue;
-      any = true;
-      bool present = false;
-      for (const Post& p : s.vine.posts) present |= std::abs(p.base.x() - x) < 2e-3;
-      EXPECT_TRUE(present) << "stop " << s.vine_index << " misses the post at x=" << x;
-    }
-    stops_with_post += any;
-  }
-  EXPECT_GT(stops_with_post, 10);
-}
-
-TEST(VineGenerator, NeighboursAreTheAdjacentVinesShifted) {
-  const VineGeneratorOptions options;
-  for (int k : {-3, 0, 5, 11}) {
-    const Scene here = MustGenerate(kSeed, k);
-    const Scene next = MustGenerate(kSeed, k + 1);
-    const Scene prev = MustGenerate(kSeed, k - 1);
-    ASSERT_EQ(here.neighbours.size(), 2u);
-    ExpectSameCanes(here.neighbours[1], next.vine, options.vine_spacing_m);
-    ExpectSameCanes(here.neighbours[0], prev.vine, -options.vine_spacing_m);
-    // The wires continue from one stop to the next.
-    // (Linear interpolation between wire points differs by ~3e-5 m between grids.)
-    EXPECT_NEAR(WireZAt(here.vine.wires[0], 1.0), WireZAt(next.vine.wires[0], 1.0 - 1.8), 1e-4);
-  }
-}
-
-TEST(VineGenerator, NeighbourCanesIntrudeIntoTheView) {
-  int intruding = 0;
-  for (int k = 0; k < kVines; ++k) {
-    const Scene s = MustGenerate(kSeed, k);
-    bool found = false;
-    for (const VineModel& n : s.neighbours) {
-      for (const Cane& c : n.canes) {
-        for (const Eigen::Vector3d& p : c.polyline.points) found |= std::abs(p.x()) < 0.9;
-      }
-    }
-    intruding += found;
-  }
-  EXPECT_GE(intruding, kVines * 3 / 10);
-}
-
-TEST(VineGenerator, LightsBackdropAndNeighboursFollowOptions) {
-  VineGeneratorOptions options;
-  options.backdrop_y_m = 1.5;
-  options.neighbours = false;
-  const Scene s = MustGenerate(kSeed, 2, options);
-  EXPECT_DOUBLE_EQ(s.backdrop_y_m, 1.5);
-  EXPECT_TRUE(s.neighbours.empty());
-  ASSERT_GE(s.lights.size(), 2u);
-  for (const Light& l : s.lights) {
-    EXPECT_LT(l.position_in_platform.y(), 0.2);  // on the rig, in front of the vine
-    EXPECT_GT(l.intensity, 0.2);
-    EXPECT_LE(l.intensity, 1.5);
-  }
 }
 
 TEST(VineGenerator, OptionsShapeTheVine) {

@@ -126,8 +126,8 @@ class PlantBuilder {
   double BaseRadiusForLength(double length) {
     const double lo = options_.cane_length_min_m, hi = options_.cane_length_max_m;
     const double rel = hi > lo ? (length - lo) / (hi - lo) : 0.5;
-    const double frac =
-        std::clamp(0.25 * rng_.Uniform() + 0.75 * rel + rng_.Normal(0.0, 0.1), 0.0, 1.0);
+    // In [0, 1] by construction (no clamping, so the range ends are not over-represented).
+    const double frac = 0.3 * rng_.Uniform() + 0.7 * rel * rng_.Uniform(0.6, 1.0);
     return 0.5 * (options_.cane_diameter_min_m +
                   frac * (options_.cane_diameter_max_m - options_.cane_diameter_min_m));
   }
