@@ -11,10 +11,24 @@ namespace {
 constexpr float kRefDistance2 = 0.64f;  // Light::intensity is defined at 0.8 m (sim/scene.h)
 constexpr float kGridCell = 0.02f;
 constexpr float kTwoPi = 6.2831853f;
+constexpr float kBackdrop[3] = {0.09f, 0.24f, 0.66f};  // blue cloth albedo
 
 inline float Clamp01(float v) { return v < 0.0f ? 0.0f : (v > 1.0f ? 1.0f : v); }
 inline float Frac(float v) { return v - std::floor(v); }
 inline float Unit(uint32_t h) { return static_cast<float>(h) * (1.0f / 4294967295.0f); }
+
+// atan2 to ~0.01 rad (a rational approximation on [0, 1] plus octant folding): texture
+// coordinates do not need libm's accuracy, and this runs for every cane pixel.
+inline float FastAtan2(float y, float x) {
+  const float ax = std::abs(x), ay = std::abs(y);
+  const float mx = std::max(ax, ay);
+  if (mx <= 0.0f) return 0.0f;
+  const float a = std::min(ax, ay) / mx;
+  float r = a * (0.7853982f + 0.273f * (1.0f - a));
+  if (ay > ax) r = 1.5707963f - r;
+  if (x < 0.0f) r = 3.1415927f - r;
+  return y < 0.0f ? -r : r;
+}
 
 inline float PowInt(float x, int n) {
   float r = 1.0f;
@@ -38,6 +52,12 @@ Shader::Shader(const Scene& scene, const std::vector<Segment>& segments,
       cy_(static_cast<float>(camera_centre.y())),
       cz_(static_cast<float>(camera_centre.z())),
       shadows_(scene, segments, options, camera_centre, rays) {
+  for (const sim::Light& l : scene.lights) {
+    lights_.push_back({static_cast<float>(l.position_in_platform.x()),
+                       static_cast<float>(l.position_in_platform.y()),
+                       static_cast<float>(l.position_in_platform.z()),
+                       static_cast<float>(l.intensity) * kRefDistance2});
+  }
   // The backdrop is a cloth: broad uneven illumination and a few soft vertical folds. Computed
   // on a coarse grid once so the per-pixel cost is a bilinear lookup.
   grid_x0_ = cx_ - 4.0f;
@@ -45,7 +65,11 @@ Shader::Shader(const Scene& scene, const std::vector<Segment>& segments,
   grid_nx_ = static_cast<int>(8.0f / kGridCell) + 2;
   grid_nz_ = static_cast<int>(5.0f / kGridCell) + 2;
   grid_.assign(static_cast<size_t>(grid_nx_) * grid_nz_, 1.0f);
-  if (!options.texture) return;
+  if (options.texture) FillUnevenness(scene);
+  BuildBackdrop();
+}
+
+void Shader::FillUnevenness(const Scene& scene) {
   const auto seed = static_cast<uint32_t>(scene.seed ^ (scene.seed >> 32)) + 977u * scene.vine_index;
   for (int iz = 0; iz < grid_nz_; ++iz) {
     for (int ix = 0; ix < grid_nx_; ++ix) {
@@ -56,6 +80,32 @@ Shader::Shader(const Scene& scene, const std::vector<Segment>& segments,
       const float fold = ValueNoise(x / 0.06f, z / 0.9f, seed + 2);
       grid_[static_cast<size_t>(iz) * grid_nx_ + ix] =
           (0.80f + 0.38f * broad) * (1.0f - 0.10f * fold * fold * fold);
+    }
+  }
+}
+
+void Shader::BuildBackdrop() {
+  // Everything on the backdrop except its colour varies slowly or is already sampled on the shadow
+  // cells (lighting, shadows, unevenness), so it is evaluated once per cell rather than per pixel;
+  // a backdrop pixel is then one bilinear lookup. Cells (5 mm) are about two pixels wide.
+  const ShadowMaps::Grid& g = shadows_.grid();
+  backdrop_.assign(static_cast<size_t>(g.nx) * g.nz, 0.0f);
+  const float by = static_cast<float>(scene_.backdrop_y_m);
+  for (int iz = 0; iz < g.nz; ++iz) {
+    const float z = g.z0 + iz * g.cell;
+    for (int ix = 0; ix < g.nx; ++ix) {
+      const float x = g.x0 + ix * g.cell;
+      const size_t cell = static_cast<size_t>(iz) * g.nx + ix;
+      float e = static_cast<float>(options_.ambient);
+      for (size_t i = 0; i < lights_.size(); ++i) {
+        const LightF& l = lights_[i];
+        const float lx = l.x - x, ly = l.y - by, lz = l.z - z;
+        if (ly >= 0.0f) continue;  // the light is behind the backdrop
+        const float d2 = lx * lx + ly * ly + lz * lz;
+        const float cos = -ly / std::sqrt(d2);
+        e += l.power / d2 * cos * (1.0f - shadows_.BackdropCoverage(static_cast<int>(i), cell));
+      }
+      backdrop_[cell] = e * Unevenness(x, z);
     }
   }
 }
@@ -74,17 +124,17 @@ void Shader::Light(const float p[3], const float n[3], const float v[3], const f
                    float specular, int shininess, float rgb[3]) const {
   float diffuse = static_cast<float>(options_.ambient);
   float spec = 0.0f;
-  for (size_t i = 0; i < scene_.lights.size(); ++i) {
-    const Eigen::Vector3d& lp = scene_.lights[i].position_in_platform;
-    const float lx = static_cast<float>(lp.x()) - p[0];
-    const float ly = static_cast<float>(lp.y()) - p[1];
-    const float lz = static_cast<float>(lp.z()) - p[2];
+  for (size_t i = 0; i < lights_.size(); ++i) {
+    const LightF& light = lights_[i];
+    const float lx = light.x - p[0];
+    const float ly = light.y - p[1];
+    const float lz = light.z - p[2];
     const float d2 = lx * lx + ly * ly + lz * lz;
     if (d2 < 1e-8f) continue;
     const float inv_d = 1.0f / std::sqrt(d2);
     const float ndotl = (n[0] * lx + n[1] * ly + n[2] * lz) * inv_d;
     if (ndotl <= 0.0f) continue;
-    float e = static_cast<float>(scene_.lights[i].intensity) * kRefDistance2 / d2;
+    float e = light.power / d2;
     const float blocked = shadows_.Blocked(static_cast<int>(i), p[0], p[1], p[2]);
     if (blocked >= 1.0f) continue;
     e *= 1.0f - blocked;
@@ -114,9 +164,20 @@ void Shader::ShadeBackground(const RayF& r, float rgb[3]) const {
   const float p[3] = {cx_ + t * r.x, cy_ + t * r.y, cz_ + t * r.z};
   const float v[3] = {-r.x, -r.y, -r.z};
   if (t_back <= t_ground) {
+    const ShadowMaps::Grid& g = shadows_.grid();
+    const float u = (p[0] - g.x0) / g.cell;
+    const float w = (p[2] - g.z0) / g.cell;
+    if (u >= 0.0f && w >= 0.0f && u < g.nx - 1 && w < g.nz - 1) {
+      const int iu = static_cast<int>(u), iw = static_cast<int>(w);
+      const float fu = u - iu, fw = w - iw;
+      const float* c = &backdrop_[static_cast<size_t>(iw) * g.nx + iu];
+      const float e = (c[0] * (1 - fu) + c[1] * fu) * (1 - fw) + (c[g.nx] * (1 - fu) + c[g.nx + 1] * fu) * fw;
+      rgb[0] = kBackdrop[0] * e, rgb[1] = kBackdrop[1] * e, rgb[2] = kBackdrop[2] * e;
+      return;
+    }
     const float n[3] = {0.0f, -1.0f, 0.0f};
     const float k = Unevenness(p[0], p[2]);
-    const float albedo[3] = {0.09f * k, 0.24f * k, 0.66f * k};
+    const float albedo[3] = {kBackdrop[0] * k, kBackdrop[1] * k, kBackdrop[2] * k};
     Light(p, n, v, albedo, 0.0f, 1, rgb);
   } else {
     const float n[3] = {0.0f, 0.0f, 1.0f};
@@ -169,7 +230,7 @@ void Shader::ShadePrimitive(const Primitive& prim, const Approach& ap, const Ray
     e1x *= e1n, e1y *= e1n, e1z *= e1n;
     const float e2x = prim.uy * e1z - prim.uz * e1y, e2y = prim.uz * e1x - prim.ux * e1z,
                 e2z = prim.ux * e1y - prim.uy * e1x;
-    around = std::atan2(nx * e2x + ny * e2y + nz * e2z, nx * e1x + ny * e1y + nz * e1z) / kTwoPi + 0.5f;
+    around = FastAtan2(nx * e2x + ny * e2y + nz * e2z, nx * e1x + ny * e1y + nz * e1z) / kTwoPi + 0.5f;
   }
   const auto obj = static_cast<uint32_t>(seg.object);
   const float tint = Unit(HashU32(obj, 17u, 5u)) * 2.0f - 1.0f;  // per-object variation
@@ -184,13 +245,15 @@ void Shader::ShadePrimitive(const Primitive& prim, const Approach& ap, const Ray
       // Dormant canes: brown-grey, some redder, some greyer; fine longitudinal bark fissures and
       // slightly darker nodes every ~7-9 cm.
       const float k = 1.0f + 0.10f * tint;
-      albedo[0] = 0.43f * k + 0.03f * tint2, albedo[1] = 0.33f * k, albedo[2] = 0.25f * k - 0.02f * tint2;
+      albedo[0] = 0.38f * k + 0.03f * tint2, albedo[1] = 0.305f * k, albedo[2] = 0.245f * k - 0.02f * tint2;
       if (tex) {
         const float fiss = ValueNoise(along * 70.0f, around * 14.0f, obj);
         const float grain = ValueNoise(along * 600.0f, around * 40.0f, obj + 101u);
         const float node_period = 0.07f + 0.02f * Unit(HashU32(obj, 3u, 3u));
         const float ph = Frac(along / node_period) - 0.5f;
-        const float node = std::exp(-ph * ph * (node_period * node_period) / (0.005f * 0.005f));
+        // A smooth bump ~1 cm wide at each node.
+        const float q = 1.0f - ph * ph * (node_period * node_period) / (0.005f * 0.005f);
+        const float node = q > 0.0f ? q * q : 0.0f;
         const float m = (0.78f + 0.30f * fiss + 0.16f * (grain - 0.5f)) * (1.0f - 0.30f * node);
         for (float& a : albedo) a *= m;
       }

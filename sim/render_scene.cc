@@ -123,7 +123,7 @@ double ValidRadius2(const CameraCalibration& cam, const RayTable& rays) {
   const auto& [k1, k2, p1, p2, k3] = cam.distortion;
   double prev = 0.0;
   double r_fold = 10.0;
-  for (double rr = 0.0; rr < 10.0; rr += 1e-3) {
+  for (double rr = 1e-3; rr < 10.0; rr += 1e-3) {
     const double r2 = rr * rr;
     const double rd = rr * (1.0 + r2 * (k1 + r2 * (k2 + r2 * k3)));
     if (rd <= prev) {

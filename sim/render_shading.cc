@@ -7,7 +7,7 @@
 namespace vb::sim::render {
 namespace {
 
-constexpr float kCell = 0.004f;        // shadow map cell on the backdrop plane, metres
+constexpr float kCell = 0.005f;        // shadow map cell on the backdrop plane, metres (~2 px)
 constexpr float kShadowBias = 0.015f;  // casters must be this much nearer the light (y) to count
 
 inline float Clamp01(float v) { return v < 0.0f ? 0.0f : (v > 1.0f ? 1.0f : v); }
@@ -88,10 +88,15 @@ ShadowMaps::ShadowMaps(const Scene& scene, const std::vector<Segment>& segments,
       light_radius_(static_cast<float>(options.light_radius_m)),
       depth_scale_(0.0f) {
   maps_.resize(scene.lights.size());
-  if (!options.shadows) return;
   float x0, x1, z0, z1;
   VisiblePlaneRegion(rays, camera_centre, scene.backdrop_y_m, &x0, &x1, &z0, &z1);
   if (!(x1 > x0 && z1 > z0)) return;
+  grid_.x0 = x0;
+  grid_.z0 = z0;
+  grid_.cell = kCell;
+  grid_.nx = static_cast<int>((x1 - x0) / kCell) + 1;
+  grid_.nz = static_cast<int>((z1 - z0) / kCell) + 1;
+  if (!options.shadows) return;
   for (size_t i = 0; i < scene.lights.size(); ++i) {
     Map& m = maps_[i];
     const Eigen::Vector3d& l = scene.lights[i].position_in_platform;
@@ -101,10 +106,9 @@ ShadowMaps::ShadowMaps(const Scene& scene, const std::vector<Segment>& segments,
     if (!(backdrop_y_ - m.ly > 0.05f)) continue;  // a light at or behind the backdrop casts none
     m.x0 = x0;
     m.z0 = z0;
-    m.nx = static_cast<int>((x1 - x0) / kCell) + 1;
-    m.nz = static_cast<int>((z1 - z0) / kCell) + 1;
-    m.cov.assign(static_cast<size_t>(m.nx) * m.nz, 0);
-    m.depth.assign(m.cov.size(), 255);
+    m.nx = grid_.nx;
+    m.nz = grid_.nz;
+    m.cells.assign(static_cast<size_t>(m.nx) * m.nz, 0xFF00);
     depth_scale_ = 254.0f / (backdrop_y_ - m.ly);
     for (const Segment& s : segments) Rasterise(s, &m);
   }
@@ -137,8 +141,7 @@ void ShadowMaps::Rasterise(const Segment& s, Map* m) const {
   const float inv_width = 1.0f / (2.0f * pen);
   for (int iz = cz0; iz <= cz1; ++iz) {
     const float qz = m->z0 + iz * kCell;
-    uint8_t* cov = &m->cov[static_cast<size_t>(iz) * m->nx];
-    uint8_t* dep = &m->depth[static_cast<size_t>(iz) * m->nx];
+    uint16_t* cells = &m->cells[static_cast<size_t>(iz) * m->nx];
     for (int ix = cx0; ix <= cx1; ++ix) {
       const float qx = m->x0 + ix * kCell;
       const float t = Clamp01(((qx - pax) * dx + (qz - paz) * dz) * inv_len2);
@@ -146,17 +149,17 @@ void ShadowMaps::Rasterise(const Segment& s, Map* m) const {
       const float d = std::sqrt(ex * ex + ez * ez);
       const float c = Clamp01((Lerp(ra, rb, t) + pen - d) * inv_width);
       if (c <= 0.0f) continue;
-      const auto c8 = static_cast<uint8_t>(c * 255.0f + 0.5f);
-      if (c8 > cov[ix]) cov[ix] = c8;
-      const auto y8 = static_cast<uint8_t>(std::clamp((Lerp(ay, by, t) - m->ly) * depth_scale_, 0.0f, 254.0f));
-      if (y8 < dep[ix]) dep[ix] = y8;
+      const auto c8 = static_cast<unsigned>(c * 255.0f + 0.5f);
+      const auto y8 = static_cast<unsigned>(std::clamp((Lerp(ay, by, t) - m->ly) * depth_scale_, 0.0f, 254.0f));
+      const unsigned old = cells[ix];
+      cells[ix] = static_cast<uint16_t>(std::max(old & 0xFFu, c8) | (std::min(old >> 8, y8) << 8));
     }
   }
 }
 
 float ShadowMaps::Blocked(int light, float x, float y, float z) const {
   const Map& m = maps_[light];
-  if (m.cov.empty() || y <= m.ly + 0.02f) return 0.0f;
+  if (m.cells.empty() || y <= m.ly + 0.02f) return 0.0f;
   const float k = (backdrop_y_ - m.ly) / (y - m.ly);
   const float u = (m.lx + (x - m.lx) * k - m.x0) * (1.0f / kCell);
   const float v = (m.lz + (z - m.lz) * k - m.z0) * (1.0f / kCell);
@@ -171,7 +174,8 @@ float ShadowMaps::Blocked(int light, float x, float y, float z) const {
   const float limit = (y - kShadowBias - m.ly) * (254.0f / (backdrop_y_ - m.ly));
   float sum = 0.0f;
   for (int j = 0; j < 4; ++j) {
-    if (m.cov[idx[j]] != 0 && m.depth[idx[j]] < limit) sum += w[j] * m.cov[idx[j]];
+    const unsigned cell = m.cells[idx[j]];
+    if ((cell & 0xFFu) != 0 && static_cast<float>(cell >> 8) < limit) sum += w[j] * static_cast<float>(cell & 0xFFu);
   }
   return sum * (1.0f / 255.0f);
 }

@@ -33,16 +33,31 @@ class ShadowMaps {
   // Fraction in [0, 1] of light `light`'s disc hidden from platform point (x, y, z).
   float Blocked(int light, float x, float y, float z) const;
 
+  // The cells of the maps: the visible part of the backdrop plane, x and z from (x0, z0) in steps
+  // of `cell` metres. Defined even when shadows are off.
+  struct Grid {
+    float x0 = 0, z0 = 0, cell = 0.005f;
+    int nx = 0, nz = 0;
+  };
+  const Grid& grid() const { return grid_; }
+  // Shadow coverage in [0, 1] of light `light` on the backdrop at cell index iz * nx + ix.
+  float BackdropCoverage(int light, size_t cell) const {
+    const Map& m = maps_[light];
+    return m.cells.empty() ? 0.0f : static_cast<float>(m.cells[cell] & 0xFFu) * (1.0f / 255.0f);
+  }
+
  private:
   struct Map {
     float lx = 0, ly = 0, lz = 0;  // light position
     float x0 = 0, z0 = 0;          // plane coordinates of cell (0, 0)
     int nx = 0, nz = 0;
-    std::vector<uint8_t> cov;      // coverage * 255
-    std::vector<uint8_t> depth;    // nearest caster y, quantised over [ly, backdrop_y]
+    // Per cell: coverage * 255 in the low byte, the nearest caster's y quantised over
+    // [ly, backdrop_y] in the high byte (one load per cell in the per-pixel lookup).
+    std::vector<uint16_t> cells;
   };
   void Rasterise(const Segment& s, Map* m) const;
 
+  Grid grid_;
   float backdrop_y_;
   float light_radius_;
   float depth_scale_;  // quantisation steps per metre of y for the light being built
@@ -66,7 +81,13 @@ class Shader {
   void Light(const float p[3], const float n[3], const float v[3], const float albedo[3],
              float specular, int shininess, float rgb[3]) const;
   float Unevenness(float x, float z) const;
+  void FillUnevenness(const Scene& scene);
+  void BuildBackdrop();
 
+  struct LightF {
+    float x, y, z, power;  // power = intensity * (0.8 m)^2
+  };
+  std::vector<LightF> lights_;
   const Scene& scene_;
   const std::vector<Segment>& segments_;
   const RenderOptions& options_;
@@ -76,6 +97,8 @@ class Shader {
   float grid_x0_ = 0, grid_z0_ = 0;
   int grid_nx_ = 0, grid_nz_ = 0;
   std::vector<float> grid_;
+  // Backdrop irradiance (lights, shadows, ambient) times unevenness on the shadow map cells.
+  std::vector<float> backdrop_;
 };
 
 }  // namespace vb::sim::render

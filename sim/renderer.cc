@@ -2,6 +2,7 @@
 #include "sim/renderer.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <string>
 
@@ -17,30 +18,51 @@ absl::Status Invalid(const std::string& field, const std::string& why) {
   return absl::InvalidArgumentError(absl::StrCat("render options: ", field, " ", why));
 }
 
-// Counter-style generator: one splitmix64 stream per image row, so noise is reproducible
-// everywhere and does not depend on the order rows are produced in.
+// Standard normal quantiles at (i + 0.5) / 4096: indexing it with 12 random bits draws an exact
+// (discretised) normal sample for the price of a table lookup, ~10x cheaper than Box-Muller.
+const std::array<float, 4096>& NormalQuantiles() {
+  static const std::array<float, 4096> table = [] {
+    std::array<float, 4096> q{};
+    for (int i = 0; i < 4096; ++i) {
+      const double p = (i + 0.5) / 4096.0;
+      double lo = -10.0, hi = 10.0;
+      for (int it = 0; it < 80; ++it) {  // bisection on the CDF 0.5 erfc(-x / sqrt 2)
+        const double mid = 0.5 * (lo + hi);
+        (0.5 * std::erfc(-mid / std::sqrt(2.0)) < p ? lo : hi) = mid;
+      }
+      q[i] = static_cast<float>(0.5 * (lo + hi));
+    }
+    return q;
+  }();
+  return table;
+}
+
+// Counter-style generator: one splitmix64 stream per image row, so noise is reproducible and
+// does not depend on the order rows are produced in. Each 64-bit draw yields four samples.
 class RowNoise {
  public:
-  RowNoise(uint64_t seed, int row) : state_(seed ^ (0x9E3779B97F4A7C15ull * (static_cast<uint64_t>(row) + 1))) {}
-  uint64_t Next() {
-    uint64_t z = (state_ += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-  }
-  // Approximately standard normal: the sum of four 16-bit uniforms (Irwin-Hall), rescaled. Tails
-  // stop at ~3.5 sd, which sensor noise at this level does not miss; one 64-bit draw per sample
-  // keeps it far cheaper than Box-Muller.
+  RowNoise(uint64_t seed, int row)
+      : state_(seed ^ (0x9E3779B97F4A7C15ull * (static_cast<uint64_t>(row) + 1))),
+        table_(NormalQuantiles().data()) {}
   float Gaussian() {
-    const uint64_t r = Next();
-    const float sum = static_cast<float>((r & 0xFFFF) + ((r >> 16) & 0xFFFF) + ((r >> 32) & 0xFFFF) + (r >> 48));
-    constexpr float kMean = 2.0f * 65535.0f;
-    constexpr float kInvSd = 1.0f / (65535.0f * 0.57735027f);  // sd of a sum of 4 U(0,1) = sqrt(1/3)
-    return (sum - kMean) * kInvSd;
+    if (left_ == 0) {
+      uint64_t z = (state_ += 0x9E3779B97F4A7C15ull);
+      z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+      z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+      bits_ = z ^ (z >> 31);
+      left_ = 4;
+    }
+    --left_;
+    const float g = table_[bits_ & 0xFFF];
+    bits_ >>= 16;
+    return g;
   }
 
  private:
   uint64_t state_;
+  const float* table_;
+  uint64_t bits_ = 0;
+  int left_ = 0;
 };
 
 // Colour channel (0 R, 1 G, 2 B) of pixel (x, y) in a Bayer mosaic; the format names the first row
@@ -144,12 +166,12 @@ absl::StatusOr<RenderedView> Render(const Scene& scene, const CameraCalibration&
 
   // Digital number of a linear value with sensor noise; the same arithmetic for every format so
   // that rgb8 and Bayer renders agree exactly when noise is off.
+  // Noise sd per clean digital number, so the per-sample cost is a lookup rather than a sqrt.
+  std::array<float, 256> noise_sd{};
+  for (int dn = 0; dn < 256; ++dn) noise_sd[dn] = std::sqrt(read2 + shot2 * static_cast<float>(dn));
   auto to_dn = [&](float value, RowNoise& rng) -> uint8_t {
-    float dn = value;
-    if (noisy) {
-      const float clean = std::max(dn, 0.0f);
-      dn += std::sqrt(read2 + shot2 * clean) * rng.Gaussian();
-    }
+    float dn = std::clamp(value, 0.0f, 255.0f);
+    if (noisy) dn += noise_sd[static_cast<int>(dn)] * rng.Gaussian();
     return static_cast<uint8_t>(std::clamp(dn + 0.5f, 0.0f, 255.0f));
   };
 

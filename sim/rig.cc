@@ -28,7 +28,7 @@ double RadialFactor(const RigOptions& o, double r) {
 std::pair<double, double> Fold(const RigOptions& o) {
   double best = 0.0;
   double r_best = 0.0;
-  for (double r = 0.0; r <= 4.0; r += 1e-3) {
+  for (double r = 1e-3; r <= 4.0; r += 1e-3) {
     const double rd = r * RadialFactor(o, r);
     if (rd <= best) break;
     best = rd;
