@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <vector>
 
@@ -15,6 +16,7 @@ namespace {
 constexpr double kPi = std::numbers::pi;
 constexpr uint64_t kPlantStream = 0x7A17;
 constexpr double kTrunkStepM = 0.05;
+constexpr double kMaxJitterM = 0.1;  // planting error of the trunk along the row
 // The head top sits at most this far below the fruiting wire (the head is grown up to the wire).
 constexpr double kHeadBelowWireMaxM = 0.08;
 
@@ -28,8 +30,9 @@ class PlantBuilder {
   PlantBuilder(uint64_t seed, int vine_index, const VineGeneratorOptions& options,
                const TrellisRow& row)
       : options_(options), row_(row), rng_(MixSeed(seed, vine_index, kPlantStream)) {
-    plant_.position_m =
-        vine_index * options.vine_spacing_m + std::clamp(rng_.Normal(0.0, 0.04), -0.1, 0.1);
+    const double nominal = vine_index * options.vine_spacing_m;
+    plant_.position_m = nominal + KeepClearOfPost(nominal, std::clamp(rng_.Normal(0.0, 0.04),
+                                                                    -kMaxJitterM, kMaxJitterM));
   }
 
   VinePlant Build() {
@@ -51,6 +54,25 @@ class PlantBuilder {
 
  private:
   const Cane& trunk() const { return plant_.model.canes.front(); }
+
+  // A vine is never planted through a post: if the nearest post would stand within kMaxJitterM of
+  // the trunk, the jitter moves the trunk to kMaxJitterM beside it (still within the jitter range).
+  double KeepClearOfPost(double nominal, double jitter) const {
+    const double spacing = options_.post_spacing_m;
+    const double j = std::round((nominal - row_.post_offset_m) / spacing);
+    const double post = j * spacing + row_.post_offset_m - nominal;  // relative to nominal
+    if (std::abs(jitter - post) >= kMaxJitterM) return jitter;
+    double best = jitter;
+    double best_change = std::numeric_limits<double>::infinity();
+    for (double candidate : {post + kMaxJitterM, post - kMaxJitterM}) {
+      if (std::abs(candidate) <= kMaxJitterM + 1e-12 &&
+          std::abs(candidate - jitter) < best_change) {
+        best = candidate;
+        best_change = std::abs(candidate - jitter);
+      }
+    }
+    return best;
+  }
 
   void GrowTrunkAndHead() {
     const double x0 = plant_.position_m;

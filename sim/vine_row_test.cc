@@ -91,6 +91,20 @@ TEST(VineGenerator, PostsStandWhereTheRowPutsThem) {
   EXPECT_GT(stops_with_post, 10);
 }
 
+TEST(VineGenerator, TrunksAreNeverPlantedThroughAPost) {
+  const VineGeneratorOptions options;
+  int near_post = 0;
+  for (int k = 0; k < 200; ++k) {
+    const Scene s = MustGenerate(kSeed, k);
+    const Eigen::Vector3d base = s.vine.canes[0].polyline.points.front();
+    for (const Post& p : s.vine.posts) {
+      EXPECT_GE(std::abs(p.base.x() - base.x()), 0.1 - 1e-9) << "stop " << k;
+      near_post += std::abs(p.base.x()) < 0.2;
+    }
+  }
+  EXPECT_GT(near_post, 0);  // the row does put posts next to some vines
+}
+
 TEST(VineGenerator, NeighboursAreTheAdjacentVinesShifted) {
   const VineGeneratorOptions options;
   for (int k : {-3, 0, 5, 11}) {
