@@ -142,17 +142,12 @@ absl::StatusOr<CaptureBundle> ReadBundle(const std::string& dir) {
           absl::StrCat(metadata_path, ": cameras[", i, "]: camera '", cam.name,
                        "' has no entry in ", kCalibrationFile));
     }
-    const std::string image_path = (root / cam.image).string();
-    absl::StatusOr<Image> image = ReadPng(image_path, cam.pixel_format);
+    const CameraCalibration& calib = bundle.calibration.cameras[*k];
+    absl::StatusOr<Image> image = internal::ReadPngOfSize(
+        (root / cam.image).string(), cam.pixel_format, calib.image_width, calib.image_height);
     if (!image.ok()) {
       return absl::InvalidArgumentError(absl::StrCat("camera '", cam.name, "': ",
                                                      std::string(image.status().message())));
-    }
-    const CameraCalibration& calib = bundle.calibration.cameras[*k];
-    if (image->width != calib.image_width || image->height != calib.image_height) {
-      return absl::InvalidArgumentError(absl::StrCat(
-          image_path, ": camera '", cam.name, "' image is ", SizeString(image->width, image->height),
-          " but ", kCalibrationFile, " says ", SizeString(calib.image_width, calib.image_height)));
     }
     bundle.images.push_back(*std::move(image));
   }

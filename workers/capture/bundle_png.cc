@@ -3,6 +3,8 @@
 // Files are read into memory and decoded with cv::imdecode so that a missing file, a truncated
 // stream and a wrong PNG type each get their own message; cv::imread would return an empty
 // matrix for all of them.
+#include <algorithm>
+#include <cstdint>
 #include <cstring>
 #include <string>
 #include <vector>
@@ -48,14 +50,53 @@ std::string DescribeMat(const cv::Mat& m) {
   return absl::StrCat(bits, "-bit, ", m.channels(), " channel", m.channels() == 1 ? "" : "s");
 }
 
-// Reads and decodes a PNG file without converting its type. NOT_FOUND if the file is missing,
-// INVALID_ARGUMENT if it is not a complete, decodable PNG.
-absl::StatusOr<cv::Mat> DecodePngFile(const std::string& path) {
-  VB_ASSIGN_OR_RETURN(const std::string bytes, internal::ReadFileBytes(path));
+// Far beyond any camera; stops a corrupt header from requesting gigabytes.
+constexpr uint64_t kMaxPixels = uint64_t{1} << 27;
+
+struct PngHeader {
+  uint32_t width = 0;
+  uint32_t height = 0;
+  int bit_depth = 0;
+};
+
+uint32_t BigEndian32(const std::string& bytes, size_t at) {
+  return (uint32_t{static_cast<uint8_t>(bytes[at])} << 24) |
+         (uint32_t{static_cast<uint8_t>(bytes[at + 1])} << 16) |
+         (uint32_t{static_cast<uint8_t>(bytes[at + 2])} << 8) |
+         uint32_t{static_cast<uint8_t>(bytes[at + 3])};
+}
+
+// The signature and IHDR chunk (PNG spec, section 11.2.2), which must come first.
+absl::StatusOr<PngHeader> ParsePngHeader(const std::string& path, const std::string& bytes) {
   if (bytes.size() < sizeof(kPngSignature) ||
       std::memcmp(bytes.data(), kPngSignature, sizeof(kPngSignature)) != 0) {
     return absl::InvalidArgumentError(absl::StrCat(path, ": not a PNG file (bad signature)"));
   }
+  constexpr size_t kIhdrEnd = 8 + 4 + 4 + 13;
+  if (bytes.size() < kIhdrEnd || BigEndian32(bytes, 8) != 13 ||
+      bytes.compare(12, 4, "IHDR") != 0) {
+    return absl::InvalidArgumentError(
+        absl::StrCat(path, ": cannot decode PNG (truncated or corrupt header)"));
+  }
+  PngHeader header;
+  header.width = BigEndian32(bytes, 16);
+  header.height = BigEndian32(bytes, 20);
+  header.bit_depth = static_cast<uint8_t>(bytes[24]);
+  if (header.width == 0 || header.height == 0 ||
+      uint64_t{header.width} * header.height > kMaxPixels) {
+    return absl::InvalidArgumentError(absl::StrCat(path, ": PNG header claims an image of ",
+                                                   header.width, "x", header.height));
+  }
+  return header;
+}
+
+// Reads and decodes a PNG file without converting its type. NOT_FOUND if the file is missing,
+// INVALID_ARGUMENT if it is not a complete, decodable PNG or if `check_header` rejects it.
+template <typename CheckHeader>
+absl::StatusOr<cv::Mat> DecodePngFile(const std::string& path, CheckHeader check_header) {
+  VB_ASSIGN_OR_RETURN(const std::string bytes, internal::ReadFileBytes(path));
+  VB_ASSIGN_OR_RETURN(const PngHeader header, ParsePngHeader(path, bytes));
+  VB_RETURN_IF_ERROR(check_header(header));
   cv::Mat decoded;
   try {
     const cv::Mat buffer(1, static_cast<int>(bytes.size()), CV_8UC1,
@@ -119,18 +160,42 @@ absl::Status WritePng(const std::string& path, const Image& image) {
   return EncodeAndWrite(path, bgr);
 }
 
-absl::StatusOr<Image> ReadPng(const std::string& path, PixelFormat format) {
-  VB_ASSIGN_OR_RETURN(const cv::Mat decoded, DecodePngFile(path));
+namespace {
+
+std::string BitDepthMismatch(const std::string& path, const std::string& what,
+                             PixelFormat format) {
+  return absl::StrCat(path, ": PNG is ", what, ", but pixel_format ",
+                      std::string(PixelFormatName(format)), " needs an 8-bit PNG");
+}
+
+absl::StatusOr<Image> ReadPngChecked(const std::string& path, PixelFormat format, int width,
+                                     int height) {
+  const auto check_header = [&](const PngHeader& header) -> absl::Status {
+    if (width > 0 && (header.width != static_cast<uint32_t>(width) ||
+                      header.height != static_cast<uint32_t>(height))) {
+      return absl::InvalidArgumentError(absl::StrCat(path, ": image is ", header.width, "x",
+                                                     header.height, " but the calibration says ",
+                                                     width, "x", height));
+    }
+    if (header.bit_depth > 8) {
+      return absl::InvalidArgumentError(
+          BitDepthMismatch(path, absl::StrCat(header.bit_depth, "-bit"), format));
+    }
+    return absl::OkStatus();
+  };
+  VB_ASSIGN_OR_RETURN(const cv::Mat decoded, DecodePngFile(path, check_header));
   const std::string format_name(PixelFormatName(format));
   if (decoded.depth() != CV_8U) {
-    return absl::InvalidArgumentError(absl::StrCat(path, ": PNG is ", DescribeMat(decoded),
-                                                   ", but pixel_format ", format_name,
-                                                   " needs an 8-bit PNG"));
+    return absl::InvalidArgumentError(BitDepthMismatch(path, DescribeMat(decoded), format));
   }
   if (decoded.channels() != ChannelCount(format)) {
     return absl::InvalidArgumentError(absl::StrCat(
         path, ": PNG has ", decoded.channels(), " channel(s), but pixel_format ", format_name,
         " needs ", ChannelCount(format)));
+  }
+  if (width > 0 && (decoded.cols != width || decoded.rows != height)) {
+    return absl::InvalidArgumentError(absl::StrCat(path, ": decoded image is ", decoded.cols, "x",
+                                                   decoded.rows, ", expected ", width, "x", height));
   }
   Image image(decoded.cols, decoded.rows, format);
   cv::Mat out(image.height, image.width, CV_8UC(image.channels()), image.data.data());
@@ -151,6 +216,21 @@ absl::StatusOr<Image> ReadPng(const std::string& path, PixelFormat format) {
   return image;
 }
 
+}  // namespace
+
+namespace internal {
+
+absl::StatusOr<Image> ReadPngOfSize(const std::string& path, PixelFormat format, int width,
+                                    int height) {
+  return ReadPngChecked(path, format, std::max(width, 1), std::max(height, 1));
+}
+
+}  // namespace internal
+
+absl::StatusOr<Image> ReadPng(const std::string& path, PixelFormat format) {
+  return ReadPngChecked(path, format, 0, 0);
+}
+
 absl::Status WriteLabelPng(const std::string& path, const LabelImage& labels) {
   if (labels.width <= 0 || labels.height <= 0 ||
       labels.data.size() != static_cast<size_t>(labels.width) * labels.height) {
@@ -164,7 +244,8 @@ absl::Status WriteLabelPng(const std::string& path, const LabelImage& labels) {
 }
 
 absl::StatusOr<LabelImage> ReadLabelPng(const std::string& path) {
-  VB_ASSIGN_OR_RETURN(const cv::Mat decoded, DecodePngFile(path));
+  VB_ASSIGN_OR_RETURN(const cv::Mat decoded,
+                      DecodePngFile(path, [](const PngHeader&) { return absl::OkStatus(); }));
   if (decoded.depth() != CV_16U || decoded.channels() != 1) {
     return absl::InvalidArgumentError(absl::StrCat(
         path, ": label PNG is ", DescribeMat(decoded), ", expected 16-bit, 1 channel"));

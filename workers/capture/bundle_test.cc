@@ -317,6 +317,19 @@ TEST_F(BundleTest, ImageSizeDisagreeingWithCalibrationRejects) {
                                 HasSubstr("64x48")));
 }
 
+TEST_F(BundleTest, AbsurdPngHeaderSizeRejectsWithoutDecoding) {
+  std::string png = ReadText(BundleFile("cam1.png"));
+  ASSERT_EQ(png.compare(12, 4, "IHDR"), 0);
+  png.replace(16, 8, std::string("\x7f\xff\xff\xff\x7f\xff\xff\xff", 8));  // width, height
+  WriteText(BundleFile("cam1.png"), png);
+  absl::Status s = ReadStatus();
+  EXPECT_EQ(s.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(Message(s), AllOf(HasSubstr("cam1.png"), HasSubstr("2147483647x2147483647")));
+  s = ReadPng(BundleFile("cam1.png"), PixelFormat::kBayerRg8).status();
+  EXPECT_EQ(s.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(Message(s), HasSubstr("header claims"));
+}
+
 TEST_F(BundleTest, SixteenBitImageRejects) {
   cv::Mat deep(kHeight, kWidth, CV_16UC3, cv::Scalar(1000, 2000, 3000));
   ASSERT_TRUE(cv::imwrite(BundleFile("cam0.png"), deep));
