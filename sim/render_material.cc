@@ -194,27 +194,38 @@ void Shader::ShadeBackground(const RayF& r, float rgb[3]) const {
 void Shader::ShadePrimitive(const Primitive& prim, const Approach& ap, const RayF& r,
                             float rgb[3]) const {
   const Segment& seg = segments_[prim.seg];
-  // Surface point and normal, camera-relative. Where the ray misses the surface (a partially
-  // covered pixel at a silhouette), shade the nearest surface point: the silhouette itself.
+  // Surface point and normal, camera-relative, from the offset across the axis at which the
+  // pixel sees the surface. A pixel the structure only partly covers sees the part of it inside
+  // the pixel footprint, so it is shaded at the middle of that part rather than at the ray
+  // (which may miss): otherwise thin wires and cane edges would be shaded at grazing normals.
   const float qx = prim.ax + ap.s * prim.ux, qy = prim.ay + ap.s * prim.uy, qz = prim.az + ap.s * prim.uz;
-  float px, py, pz;
-  if (ap.d < ap.radius) {
-    const float th = ap.t - std::sqrt(ap.radius * ap.radius - ap.d * ap.d);
-    px = th * r.x, py = th * r.y, pz = th * r.z;
-  } else {
-    px = ap.t * r.x, py = ap.t * r.y, pz = ap.t * r.z;
-  }
-  float nx = px - qx, ny = py - qy, nz = pz - qz;
+  // Towards the camera, perpendicular to the axis.
+  float vx = -r.x, vy = -r.y, vz = -r.z;
   if (prim.shape != Shape::kSphere) {
-    const float along = nx * prim.ux + ny * prim.uy + nz * prim.uz;
-    nx -= along * prim.ux, ny -= along * prim.uy, nz -= along * prim.uz;
+    const float a = vx * prim.ux + vy * prim.uy + vz * prim.uz;
+    vx -= a * prim.ux, vy -= a * prim.uy, vz -= a * prim.uz;
   }
-  float nn = std::sqrt(nx * nx + ny * ny + nz * nz);
-  if (nn < 1e-9f) {
-    nx = -r.x, ny = -r.y, nz = -r.z, nn = 1.0f;
+  float vn = std::sqrt(vx * vx + vy * vy + vz * vz);
+  if (vn < 1e-6f) vx = -r.x, vy = -r.y, vz = -r.z, vn = 1.0f;
+  vx /= vn, vy /= vn, vz /= vn;
+  // Sideways: from the axis towards the ray's closest point.
+  float ex = ap.t * r.x - qx, ey = ap.t * r.y - qy, ez = ap.t * r.z - qz;
+  const float along_v = ex * vx + ey * vy + ez * vz;
+  ex -= along_v * vx, ey -= along_v * vy, ez -= along_v * vz;
+  const float en = std::sqrt(ex * ex + ey * ey + ez * ez);
+  float offset = 0.0f;  // signed offset across the axis, as a fraction of the radius
+  if (en > 1e-9f && ap.radius > 0.0f) {
+    ex /= en, ey /= en, ez /= en;
+    const float half = 0.5f * ap.t * prim.pix_angle;
+    const float lo = std::max(ap.d - half, -ap.radius);
+    const float hi = std::min(ap.d + half, ap.radius);
+    offset = std::clamp(0.5f * (lo + hi) / ap.radius, -0.999f, 0.999f);
+  } else {
+    ex = ey = ez = 0.0f;
   }
-  nx /= nn, ny /= nn, nz /= nn;
-  if (ap.d >= ap.radius) px = qx + ap.radius * nx, py = qy + ap.radius * ny, pz = qz + ap.radius * nz;
+  const float toward = std::sqrt(1.0f - offset * offset);
+  const float nx = offset * ex + toward * vx, ny = offset * ey + toward * vy, nz = offset * ez + toward * vz;
+  const float px = qx + ap.radius * nx, py = qy + ap.radius * ny, pz = qz + ap.radius * nz;
   const float p[3] = {cx_ + px, cy_ + py, cz_ + pz};
   const float n[3] = {nx, ny, nz};
   const float v[3] = {-r.x, -r.y, -r.z};
