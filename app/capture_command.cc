@@ -86,7 +86,7 @@ absl::Status CaptureFromAravis(Flags& flags, const std::string& out) {
   VB_ASSIGN_OR_RETURN(const RigCalibration calibration,
                       capture::ReadCalibrationYaml(calibration_path));
   std::vector<std::unique_ptr<capture::Camera>> cameras;
-  for (const std::string& entry : absl::StrSplit(devices, ',', absl::SkipEmpty())) {
+  for (const std::string& entry : std::vector<std::string>(absl::StrSplit(devices, ',', absl::SkipEmpty()))) {
     const std::vector<std::string> parts = absl::StrSplit(entry, absl::MaxSplits('=', 1));
     if (parts.size() != 2 || parts[0].empty() || parts[1].empty()) {
       return absl::InvalidArgumentError(

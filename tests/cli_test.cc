@@ -14,14 +14,14 @@
 namespace vb {
 namespace {
 
-struct Run {
+struct RunResult {
   int exit_code = -1;
   std::string output;  // stdout and stderr
 };
 
-Run Vinebot(const std::string& args) {
+RunResult Vinebot(const std::string& args) {
   const std::string command = std::string(VB_BINARY_DIR) + "/app/vinebot " + args + " 2>&1";
-  Run run;
+  RunResult run;
   FILE* pipe = popen(command.c_str(), "r");
   if (pipe == nullptr) return run;
   std::array<char, 4096> buffer;
@@ -40,7 +40,7 @@ std::string FreshDir(const std::string& name) {
 
 TEST(VinebotCli, SimRenderWritesTheDocumentedFiles) {
   const std::string dir = FreshDir("render");
-  const Run run = Vinebot("sim render --seed 7 --vine 3 --out " + dir);
+  const RunResult run = Vinebot("sim render --seed 7 --vine 3 --out " + dir);
   ASSERT_EQ(run.exit_code, 0) << run.output;
   for (const char* f : {"cam0.png", "cam1.png", "cam2.png", "calibration.yaml", "capture.json",
                         "ground_truth.json", "labels_cam0.png", "labels_cam1.png",
@@ -65,19 +65,19 @@ TEST(VinebotCli, SimRenderWritesTheDocumentedFiles) {
 
 TEST(VinebotCli, CaptureFromSimulatorWritesAnImportableBundle) {
   const std::string dir = FreshDir("capture");
-  const Run run = Vinebot("capture --source sim --seed 3 --vine 1 --pixel-format bayer_gr8 --out " + dir);
+  const RunResult run = Vinebot("capture --source sim --seed 3 --vine 1 --pixel-format bayer_gr8 --out " + dir);
   ASSERT_EQ(run.exit_code, 0) << run.output;
   auto bundle = capture::ReadBundle(dir);
   ASSERT_TRUE(bundle.ok()) << bundle.status();
   EXPECT_EQ(bundle->images[0].format, PixelFormat::kBayerGr8);
-  const Run info = Vinebot("bundle info --bundle " + dir);
+  const RunResult info = Vinebot("bundle info --bundle " + dir);
   EXPECT_EQ(info.exit_code, 0) << info.output;
   EXPECT_NE(info.output.find("\"valid\": true"), std::string::npos) << info.output;
   std::filesystem::remove_all(dir);
 }
 
 TEST(VinebotCli, RejectsBadFlagsNamingThem) {
-  Run run = Vinebot("sim render --seed 7 --vine 3");
+  RunResult run = Vinebot("sim render --seed 7 --vine 3");
   EXPECT_EQ(run.exit_code, 2);
   EXPECT_NE(run.output.find("--out"), std::string::npos) << run.output;
   run = Vinebot("sim render --seed x --out /tmp/never");
@@ -105,7 +105,7 @@ TEST(VinebotCli, BundleInfoNamesTheBrokenFile) {
   const std::string dir = FreshDir("broken");
   ASSERT_EQ(Vinebot("sim render --seed 1 --vine 0 --cameras 2 --out " + dir).exit_code, 0);
   std::filesystem::resize_file(dir + "/cam1.png", 1000);  // truncated
-  const Run run = Vinebot("bundle info --bundle " + dir);
+  const RunResult run = Vinebot("bundle info --bundle " + dir);
   EXPECT_EQ(run.exit_code, 2);
   EXPECT_NE(run.output.find("cam1.png"), std::string::npos) << run.output;
   std::filesystem::remove_all(dir);
