@@ -198,7 +198,20 @@ void Shader::ShadePrimitive(const Primitive& prim, const Approach& ap, const Ray
   // pixel sees the surface. A pixel the structure only partly covers sees the part of it inside
   // the pixel footprint, so it is shaded at the middle of that part rather than at the ray
   // (which may miss): otherwise thin wires and cane edges would be shaded at grazing normals.
-  const float qx = prim.ax + ap.s * prim.ux, qy = prim.ay + ap.s * prim.uy, qz = prim.az + ap.s * prim.uz;
+  // Shading uses the closest point on the infinite axis line: at the joints between capsule pieces
+  // the clamped point would turn the overlapping end caps into dark rings.
+  float s_line = ap.s;
+  float t_line = ap.t;
+  if (prim.shape != Shape::kSphere) {
+    const float b = r.x * prim.ux + r.y * prim.uy + r.z * prim.uz;
+    const float dr = r.x * prim.ax + r.y * prim.ay + r.z * prim.az;
+    const float denom = 1.0f - b * b;
+    if (denom > 1e-8f) {
+      s_line = (dr * b - prim.eu) / denom;
+      t_line = dr + s_line * b;
+    }
+  }
+  const float qx = prim.ax + s_line * prim.ux, qy = prim.ay + s_line * prim.uy, qz = prim.az + s_line * prim.uz;
   // Towards the camera, perpendicular to the axis.
   float vx = -r.x, vy = -r.y, vz = -r.z;
   if (prim.shape != Shape::kSphere) {
@@ -209,7 +222,7 @@ void Shader::ShadePrimitive(const Primitive& prim, const Approach& ap, const Ray
   if (vn < 1e-6f) vx = -r.x, vy = -r.y, vz = -r.z, vn = 1.0f;
   vx /= vn, vy /= vn, vz /= vn;
   // Sideways: from the axis towards the ray's closest point.
-  float ex = ap.t * r.x - qx, ey = ap.t * r.y - qy, ez = ap.t * r.z - qz;
+  float ex = t_line * r.x - qx, ey = t_line * r.y - qy, ez = t_line * r.z - qz;
   const float along_v = ex * vx + ey * vy + ez * vz;
   ex -= along_v * vx, ey -= along_v * vy, ez -= along_v * vz;
   const float en = std::sqrt(ex * ex + ey * ey + ez * ez);
@@ -217,8 +230,8 @@ void Shader::ShadePrimitive(const Primitive& prim, const Approach& ap, const Ray
   if (en > 1e-9f && ap.radius > 0.0f) {
     ex /= en, ey /= en, ez /= en;
     const float half = 0.5f * ap.t * prim.pix_angle;
-    const float lo = std::max(ap.d - half, -ap.radius);
-    const float hi = std::min(ap.d + half, ap.radius);
+    const float lo = std::max(en - half, -ap.radius);
+    const float hi = std::min(en + half, ap.radius);
     offset = std::clamp(0.5f * (lo + hi) / ap.radius, -0.999f, 0.999f);
   } else {
     ex = ey = ez = 0.0f;
@@ -231,7 +244,7 @@ void Shader::ShadePrimitive(const Primitive& prim, const Approach& ap, const Ray
   const float v[3] = {-r.x, -r.y, -r.z};
 
   // Texture coordinates: arc length along the object and the angle around its axis.
-  const float along = seg.s0 + ap.s;
+  const float along = seg.s0 + s_line;
   float around = 0.0f;
   if (prim.shape != Shape::kSphere) {
     // A basis perpendicular to the axis; horizontal reference unless the axis is near vertical.
@@ -263,9 +276,9 @@ void Shader::ShadePrimitive(const Primitive& prim, const Approach& ap, const Ray
         const float node_period = 0.07f + 0.02f * Unit(HashU32(obj, 3u, 3u));
         const float ph = Frac(along / node_period) - 0.5f;
         // A smooth bump ~1 cm wide at each node.
-        const float q = 1.0f - ph * ph * (node_period * node_period) / (0.005f * 0.005f);
+        const float q = 1.0f - ph * ph * (node_period * node_period) / (0.004f * 0.004f);
         const float node = q > 0.0f ? q * q : 0.0f;
-        const float m = (0.78f + 0.30f * fiss + 0.16f * (grain - 0.5f)) * (1.0f - 0.30f * node);
+        const float m = (0.72f + 0.40f * fiss + 0.18f * (grain - 0.5f)) * (1.0f - 0.18f * node);
         for (float& a : albedo) a *= m;
       }
       specular = 0.05f;
