@@ -87,7 +87,7 @@ void Shader::FillUnevenness(const Scene& scene) {
 void Shader::BuildBackdrop() {
   // Everything on the backdrop except its colour varies slowly or is already sampled on the shadow
   // cells (lighting, shadows, unevenness), so it is evaluated once per cell rather than per pixel;
-  // a backdrop pixel is then one bilinear lookup. Cells (5 mm) are about two pixels wide.
+  // a backdrop pixel is then one bilinear lookup. Cells (6 mm) are 2-3 pixels wide, finer than the shadow penumbrae.
   const ShadowMaps::Grid& g = shadows_.grid();
   backdrop_.assign(static_cast<size_t>(g.nx) * g.nz, 0.0f);
   const float by = static_cast<float>(scene_.backdrop_y_m);

@@ -241,10 +241,12 @@ std::vector<PixelHit> CastPrimary(const std::vector<Primitive>& prims,
       PixelHit* row = &hits[static_cast<size_t>(y) * w];
       for (int x = p.x0; x <= p.x1; ++x) {
         const RayF& r = ray[x];
-        const Approach ap = Closest(p, r.x, r.y, r.z);
+        Approach ap = Closest(p, r.x, r.y, r.z, /*with_distance=*/false);
         if (!ap.ok) continue;
         const float footprint = ap.t * p.pix_angle;
-        if (ap.d >= ap.radius + 0.5f * footprint) continue;
+        const float reach = ap.radius + 0.5f * footprint;
+        if (ap.d2 >= reach * reach) continue;  // most of a bounding box misses; skip the sqrt
+        ap.d = std::sqrt(ap.d2);
         const float cov = Coverage(ap.d, ap.radius, footprint);
         const float t = ap.d < ap.radius ? ap.t - std::sqrt(ap.radius * ap.radius - ap.d * ap.d) : ap.t;
         PixelHit& px = row[x];

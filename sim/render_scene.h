@@ -54,12 +54,14 @@ struct Primitive {
 struct Approach {
   float t;      // ray parameter of the closest point (metres from the camera centre)
   float s;      // axis parameter of the closest point, clamped to [0, length]
-  float d;      // distance between ray and axis at the closest approach
+  float d2;     // squared distance between ray and axis at the closest approach
+  float d;      // that distance (0 unless computed, see Closest)
   float radius; // primitive radius at s
   bool ok;      // false if behind the camera, or off the end of a flat-ended cylinder
 };
 
-inline Approach Closest(const Primitive& p, float rx, float ry, float rz) {
+// `with_distance` false leaves `d` for the caller to compute from `d2` when it needs it.
+inline Approach Closest(const Primitive& p, float rx, float ry, float rz, bool with_distance = true) {
   Approach out{};
   float s = 0.0f;
   float tc;
@@ -78,7 +80,8 @@ inline Approach Closest(const Primitive& p, float rx, float ry, float rz) {
   const float d2 = p.a2 + 2.0f * s * p.eu + s * s - tc * tc;
   out.t = tc;
   out.s = s;
-  out.d = d2 > 0.0f ? std::sqrt(d2) : 0.0f;
+  out.d2 = d2 > 0.0f ? d2 : 0.0f;
+  out.d = with_distance ? std::sqrt(out.d2) : 0.0f;
   out.radius = p.ra + p.drds * s;
   out.ok = true;
   return out;

@@ -7,7 +7,7 @@
 namespace vb::sim::render {
 namespace {
 
-constexpr float kCell = 0.005f;        // shadow map cell on the backdrop plane, metres (~2 px)
+constexpr float kCell = 0.006f;  // shadow map cell on the backdrop plane, metres (2-3 px; penumbrae are ~1 cm)
 constexpr float kShadowBias = 0.015f;  // casters must be this much nearer the light (y) to count
 
 inline float Clamp01(float v) { return v < 0.0f ? 0.0f : (v > 1.0f ? 1.0f : v); }

@@ -36,7 +36,7 @@ class ShadowMaps {
   // The cells of the maps: the visible part of the backdrop plane, x and z from (x0, z0) in steps
   // of `cell` metres. Defined even when shadows are off.
   struct Grid {
-    float x0 = 0, z0 = 0, cell = 0.005f;
+    float x0 = 0, z0 = 0, cell = 0.006f;
     int nx = 0, nz = 0;
   };
   const Grid& grid() const { return grid_; }

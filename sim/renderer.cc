@@ -157,6 +157,7 @@ absl::StatusOr<RenderedView> Render(const Scene& scene, const CameraCalibration&
   for (double cx : {0.0, w - 1.0}) {
     for (double cy : {0.0, h - 1.0}) corner2 = std::max(corner2, (cx - pcx) * (cx - pcx) + (cy - pcy) * (cy - pcy));
   }
+  const float pcx_f = static_cast<float>(pcx);
   const float vig_k = static_cast<float>(options.vignetting / corner2);
   const float gain = static_cast<float>(options.exposure) * 255.0f;
   const float read2 = static_cast<float>(options.read_noise_dn * options.read_noise_dn);
@@ -180,6 +181,9 @@ absl::StatusOr<RenderedView> Render(const Scene& scene, const CameraCalibration&
     const RayF* ray_row = rays.row(y);
     const render::PixelHit* hit_row = &hits[static_cast<size_t>(y) * w];
     const float dy2 = static_cast<float>((y - pcy) * (y - pcy));
+    uint16_t* label_row = &view.labels.data[static_cast<size_t>(y) * w];
+    uint8_t* image_row = &view.image.data[static_cast<size_t>(y) * w * view.image.channels()];
+    const int bayer_row[2] = {BayerChannel(format, 0, y), BayerChannel(format, 1, y)};
     for (int x = 0; x < w; ++x) {
       const RayF& r = ray_row[x];
       const render::PixelHit& hit = hit_row[x];
@@ -202,20 +206,18 @@ absl::StatusOr<RenderedView> Render(const Scene& scene, const CameraCalibration&
           if (c >= 0.5f) label = segments[p.seg].label;
         }
       }
-      view.labels.at(x, y) = label;
-      const float dx = static_cast<float>(x - pcx);
+      label_row[x] = label;
+      const float dx = static_cast<float>(x) - pcx_f;
       const float scale = gain * (1.0f - vig_k * (dx * dx + dy2));
-      uint8_t* out = view.image.at(x, y);
-      switch (format) {
-        case PixelFormat::kRgb8:
-          for (int k = 0; k < 3; ++k) out[k] = to_dn(rgb[k] * scale, rng);
-          break;
-        case PixelFormat::kMono8:
-          out[0] = to_dn((0.299f * rgb[0] + 0.587f * rgb[1] + 0.114f * rgb[2]) * scale, rng);
-          break;
-        default:
-          out[0] = to_dn(rgb[BayerChannel(format, x, y)] * scale, rng);
-          break;
+      if (format == PixelFormat::kRgb8) {
+        uint8_t* out = image_row + 3 * x;
+        out[0] = to_dn(rgb[0] * scale, rng);
+        out[1] = to_dn(rgb[1] * scale, rng);
+        out[2] = to_dn(rgb[2] * scale, rng);
+      } else if (format == PixelFormat::kMono8) {
+        image_row[x] = to_dn((0.299f * rgb[0] + 0.587f * rgb[1] + 0.114f * rgb[2]) * scale, rng);
+      } else {
+        image_row[x] = to_dn(rgb[bayer_row[x & 1]] * scale, rng);
       }
     }
   }
