@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // Renderer speed: one trinocular capture (three 1280x1024 cameras of the default rig) of a typical
-// scene on one core. Ray tables are built once, outside the timed loop (they are cached per
+// scene on one core (the hand-built demo scene; BM_RenderTrinocularGenerated uses the vine
+// generator). Ray tables are built once, outside the timed loop (they are cached per
 // calibration in normal use). Run: build/bench/vb_sim_bench --benchmark_repetitions=5
 #include <benchmark/benchmark.h>
 
@@ -12,6 +13,7 @@
 #include "sim/render_rays.h"
 #include "sim/renderer.h"
 #include "sim/rig.h"
+#include "sim/vine_generator.h"
 
 namespace vb::sim {
 namespace {
@@ -43,6 +45,26 @@ void BM_RenderTrinocular(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_RenderTrinocular)->Unit(benchmark::kMillisecond);
+
+// The same with a scene from the vine generator (seed 3, vine 2), for comparison.
+void BM_RenderTrinocularGenerated(benchmark::State& state) {
+  Fixture& f = GetFixture();
+  const auto scene = GenerateScene(3, 2);
+  if (!scene.ok()) {
+    state.SkipWithError("GenerateScene failed");
+    return;
+  }
+  RenderOptions options;
+  uint64_t seed = 0;
+  for (auto _ : state) {
+    for (size_t i = 0; i < f.rig.cameras.size(); ++i) {
+      auto view = Render(*scene, f.rig.cameras[i], *f.rays[i], options, ++seed);
+      if (!view.ok()) std::abort();
+      benchmark::DoNotOptimize(view->image.data.data());
+    }
+  }
+}
+BENCHMARK(BM_RenderTrinocularGenerated)->Unit(benchmark::kMillisecond);
 
 void BM_RenderOneCamera(benchmark::State& state) {
   Fixture& f = GetFixture();
