@@ -58,7 +58,14 @@ Eigen::Vector3d CameraCalibration::CentreInPlatform() const {
 std::optional<Eigen::Vector2d> CameraCalibration::Project(const Eigen::Vector3d& p_in_platform) const {
   const Eigen::Vector3d p = rotation_camera_from_platform * p_in_platform + translation_camera_from_platform;
   if (p.z() <= 1e-9) return std::nullopt;
-  return NormalisedToPixel(Eigen::Vector2d(p.x() / p.z(), p.y() / p.z()));
+  const double x = p.x() / p.z();
+  const double y = p.y() / p.z();
+  // Beyond the fold of the radial polynomial (where r * radial(r) stops increasing) the model
+  // maps points from outside the field of view back into the image; they are not seen.
+  const double u = x * x + y * y;
+  const auto& [k1, k2, p1, p2, k3] = distortion;
+  if (1.0 + u * (3.0 * k1 + u * (5.0 * k2 + u * 7.0 * k3)) <= 0.0) return std::nullopt;
+  return NormalisedToPixel(Eigen::Vector2d(x, y));
 }
 
 Eigen::Vector2d CameraCalibration::NormalisedToPixel(const Eigen::Vector2d& xy) const {

@@ -34,8 +34,9 @@ struct CameraCalibration {
   // Camera centre in the platform frame.
   Eigen::Vector3d CentreInPlatform() const;
 
-  // Pixel of a platform point; nullopt if it lies behind (or on) the image plane.
-  // Does not check the image bounds.
+  // Pixel of a platform point; nullopt if it lies behind (or on) the image plane, or beyond the
+  // fold of the radial distortion (where d(r * radial(r))/dr <= 0: the lens model would map a
+  // point outside the field of view back into the image). Does not check the image bounds.
   std::optional<Eigen::Vector2d> Project(const Eigen::Vector3d& p_in_platform) const;
   // Applies distortion to normalised coordinates (x/z, y/z) and returns pixel coordinates.
   Eigen::Vector2d NormalisedToPixel(const Eigen::Vector2d& xy) const;

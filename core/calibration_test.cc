@@ -34,6 +34,17 @@ TEST(CameraCalibration, ProjectsAlongOpticalAxisToPrincipalPoint) {
   EXPECT_FALSE(c.Project({0.1, -0.5, 1.0}).has_value());  // behind
 }
 
+TEST(CameraCalibration, PointsBeyondTheDistortionFoldAreNotProjected) {
+  const CameraCalibration c = WideCamera();
+  // r * (1 + k1 r^2 + k2 r^4 + k3 r^6) peaks near r = 1.8 for this lens: a point at r = 2.5
+  // would otherwise land back inside the image.
+  const Eigen::Vector3d far_out(0.1 + 2.5 * 0.8, 0.8, 1.0);
+  const Eigen::Vector2d folded = c.NormalisedToPixel({2.5, 0.0});
+  ASSERT_TRUE(c.InImage(folded));  // what the bare polynomial would claim
+  EXPECT_FALSE(c.Project(far_out).has_value());
+  EXPECT_TRUE(c.Project({0.1 + 1.2 * 0.8, 0.8, 1.0}).has_value());
+}
+
 TEST(CameraCalibration, PixelToNormalisedInvertsDistortion) {
   const CameraCalibration c = WideCamera();
   for (double x = -1.1; x <= 1.1; x += 0.1) {

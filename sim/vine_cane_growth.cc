@@ -46,6 +46,55 @@ struct Drape {
 
 }  // namespace
 
+namespace {
+
+// Wood does not pass through wire: a cane that would overlap a wire is displaced to rest against
+// it, away from the wire's axis (upward when it lies exactly on it). The displacement is spread
+// along the cane (triangular falloff over kSpreadM) so the cane bends smoothly around the wire
+// instead of kinking, and fades to zero at the base, which sits on its parent. The steering in
+// GrowCane only aims at a wire; this enforces contact without penetration.
+void RestOnWires(const TrellisRow& row, const VineGeneratorOptions& options, Polyline3* line) {
+  constexpr double kClearanceM = 0.0003;
+  constexpr double kSpreadM = 0.08;
+  constexpr double kBaseFadeM = 0.02;
+  const size_t n = line->points.size();
+  const std::vector<double> arc = line->ArcLengths();
+  for (int pass = 0; pass < 8; ++pass) {
+    std::vector<Eigen::Vector2d> need(n, Eigen::Vector2d::Zero());  // (dy, dz) per point
+    bool any = false;
+    for (size_t i = 1; i < n; ++i) {
+      const Eigen::Vector3d& q = line->points[i];
+      for (const TrellisWire& wire : row.wires) {
+        const double min_distance = line->radii[i] + options.wire_radius_m + kClearanceM;
+        const Eigen::Vector2d axis(wire.y_m, WireHeightAt(row, wire, q.x(), options));
+        const Eigen::Vector2d offset = Eigen::Vector2d(q.y(), q.z()) - axis;
+        const double distance = offset.norm();
+        if (distance >= min_distance) continue;
+        const Eigen::Vector2d dir =
+            distance > 1e-9 ? Eigen::Vector2d(offset / distance) : Eigen::Vector2d(0.0, 1.0);
+        const Eigen::Vector2d push = (min_distance - distance) * dir;
+        if (push.norm() > need[i].norm()) need[i] = push;
+        any = true;
+      }
+    }
+    if (!any) return;
+    for (size_t i = 1; i < n; ++i) {
+      Eigen::Vector2d best = Eigen::Vector2d::Zero();
+      for (size_t j = 1; j < n; ++j) {
+        const double w = 1.0 - std::abs(arc[i] - arc[j]) / kSpreadM;
+        if (w <= 0.0 || need[j].isZero()) continue;
+        if (w * need[j].norm() > best.norm()) best = w * need[j];
+      }
+      const double fade = std::min(1.0, arc[i] / kBaseFadeM);
+      // The point that needs the push gets all of it (w = 1 at j = i), fade permitting.
+      line->points[i].y() += fade * best.x();
+      line->points[i].z() += fade * best.y();
+    }
+  }
+}
+
+}  // namespace
+
 Polyline3 GrowCane(const CaneGrowth& g, const TrellisRow& row,
                    const VineGeneratorOptions& options, VineRng& rng) {
   const double length = std::max(g.length_m, 1e-3);
@@ -150,7 +199,25 @@ Polyline3 GrowCane(const CaneGrowth& g, const TrellisRow& row,
     line.points.push_back(p);
     line.radii.push_back(r);
   }
-  return line;
+  RestOnWires(row, options, &line);
+  // Resting on a wire can stretch a step; subdivide so sampling stays as dense as grown.
+  Polyline3 dense;
+  for (size_t i = 0; i < line.points.size(); ++i) {
+    if (i > 0) {
+      const double step = (line.points[i] - line.points[i - 1]).norm();
+      const int pieces = static_cast<int>(std::ceil(step / g.step_max_m - 1e-9));
+      for (int k = 1; k < pieces; ++k) {
+        const double f = static_cast<double>(k) / pieces;
+        dense.points.push_back(line.points[i - 1] + f * (line.points[i] - line.points[i - 1]));
+        dense.radii.push_back(line.radii[i - 1] + f * (line.radii[i] - line.radii[i - 1]));
+      }
+    }
+    dense.points.push_back(line.points[i]);
+    dense.radii.push_back(line.radii[i]);
+  }
+  // A chord between two pushed points can still cut through the wire; settle once more.
+  RestOnWires(row, options, &dense);
+  return dense;
 }
 
 }  // namespace vb::sim

@@ -234,6 +234,26 @@ TEST(VineGenerator, CanesAreSmoothAndDenselySampled) {
   }
 }
 
+TEST(VineGenerator, CanesRestOnWiresWithoutPassingThroughThem) {
+  for (int k = 0; k < 30; ++k) {
+    const Scene s = MustGenerate(kSeed, k);
+    for (const Cane& c : s.vine.canes) {
+      if (c.kind == CaneKind::kTrunk) continue;
+      const auto arc = c.polyline.ArcLengths();
+      for (size_t i = 0; i < c.polyline.points.size(); ++i) {
+        if (arc[i] < 0.02) continue;  // the base sits on its parent
+        for (const Wire& w : s.vine.wires) {
+          for (size_t j = 0; j + 1 < w.points.size(); ++j) {
+            EXPECT_GE(PointSegmentDistance(c.polyline.points[i], w.points[j], w.points[j + 1]),
+                      c.polyline.radii[i] + w.radius - 2e-4)
+                << "vine " << k << " cane " << c.id.value << " point " << i;
+          }
+        }
+      }
+    }
+  }
+}
+
 TEST(VineGenerator, CanesStayNearTheVinePlaneAndAboveGround) {
   const VineGeneratorOptions options;
   size_t inside = 0, total = 0;
