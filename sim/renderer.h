@@ -34,8 +34,9 @@ struct RenderOptions {
   PixelFormat pixel_format = PixelFormat::kRgb8;  // rgb8, mono8 or a Bayer mosaic
   double exposure = 1.0;          // relative exposure (scales all light)
   double read_noise_dn = 2.0;     // sensor read noise, standard deviation in digital numbers
-  double shot_noise = 0.04;       // photon noise scale: sd = shot_noise * sqrt(value * 255) DN,
-                                  // value = pixel value normalised to [0, 1]
+  double shot_noise = 0.16;       // photon noise scale: sd = shot_noise * sqrt(value * 255) DN,
+                                  // value = pixel value in [0, 1]; 0.16 gives ~1.8 DN at mid-grey
+                                  // (a ~10k e- full well at 8 bits)
   bool shadows = true;
   bool texture = true;            // bark texture and backdrop unevenness
   double ambient = 0.12;          // ambient light fraction (sunlight leaking under the cover)
