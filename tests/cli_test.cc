@@ -9,7 +9,9 @@
 
 #include "core/vine_model_json.h"
 #include "gtest/gtest.h"
+#include "sim/rig.h"
 #include "workers/capture/bundle.h"
+#include "workers/capture/fake_camera_process.h"
 
 namespace vb {
 namespace {
@@ -73,6 +75,41 @@ TEST(VinebotCli, CaptureFromSimulatorWritesAnImportableBundle) {
   const RunResult info = Vinebot("bundle info --bundle " + dir);
   EXPECT_EQ(info.exit_code, 0) << info.output;
   EXPECT_NE(info.output.find("\"valid\": true"), std::string::npos) << info.output;
+  std::filesystem::remove_all(dir);
+}
+
+TEST(VinebotCli, CaptureFromAravisFakeCameraWritesAnImportableBundle) {
+  auto fake = capture::fake_gv::FakeCameraProcess::Start({});  // 127.0.0.1, 512x512 frames
+  ASSERT_TRUE(fake.ok()) << fake.status();
+  sim::RigOptions rig_options;
+  rig_options.camera_count = 1;
+  rig_options.image_width = 512;
+  rig_options.image_height = 512;
+  auto rig = sim::MakeRig(rig_options);
+  ASSERT_TRUE(rig.ok()) << rig.status();
+  const std::string dir = FreshDir("aravis");
+  std::filesystem::create_directories(dir);
+  const std::string calibration = dir + "/rig.yaml";
+  ASSERT_TRUE(capture::WriteCalibrationYaml(calibration, *rig).ok());
+  const std::string out = dir + "/bundle";
+  const RunResult run = Vinebot("capture --source aravis --devices cam0=127.0.0.1 --calibration " +
+                                calibration + " --pixel-format bayer_rg8 --exposure-us 2000 --out " + out);
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  auto bundle = capture::ReadBundle(out);
+  ASSERT_TRUE(bundle.ok()) << bundle.status();
+  ASSERT_EQ(bundle->images.size(), 1u);
+  EXPECT_EQ(bundle->images[0].format, PixelFormat::kBayerRg8);
+  EXPECT_EQ(bundle->images[0].width, 512);
+  // A device whose frames disagree with the calibration is refused, naming both sizes.
+  rig_options.image_width = 640;
+  auto wrong = sim::MakeRig(rig_options);
+  ASSERT_TRUE(wrong.ok());
+  ASSERT_TRUE(capture::WriteCalibrationYaml(calibration, *wrong).ok());
+  const RunResult bad = Vinebot("capture --source aravis --devices cam0=127.0.0.1 --calibration " +
+                                calibration + " --out " + dir + "/bad");
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.output.find("512x512"), std::string::npos) << bad.output;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/bad/capture.json"));
   std::filesystem::remove_all(dir);
 }
 
