@@ -9,12 +9,12 @@
 #include "app/sim_flags.h"
 #include "core/status_macros.h"
 #include "core/vine_model_json.h"
-#include "sim/rig.h"
 #include "sim/vine_generator.h"
 #include "sim/world.h"
 #include "workers/capture/aravis_camera.h"
 #include "workers/capture/capture_session.h"
 #include "workers/capture/sim_camera.h"
+#include "workers/capture/sim_capture.h"
 
 namespace vb::app {
 namespace {
@@ -50,18 +50,16 @@ absl::Status CaptureFromSimulator(Flags& flags, const std::string& out) {
   VB_ASSIGN_OR_RETURN(sim::Scene scene, sim::GenerateScene(stop.seed, stop.vine, stop.generator));
   if (!flags.Has("position-m")) request.vine_position_m = scene.vine_position_m;
   sim::SimWorld world(std::move(scene));
-  VB_ASSIGN_OR_RETURN(const RigCalibration true_rig, sim::MakeRig(stop.capture.rig));
-  const RigCalibration reported = sim::PerturbCalibration(
-      true_rig, stop.capture.calibration_error_px, stop.noise_seed ^ 0xCA11B4A7Eull);
+  VB_ASSIGN_OR_RETURN(const capture::SimRig sim_rig, capture::MakeSimRig(stop.capture, stop.noise_seed));
   std::vector<std::unique_ptr<capture::Camera>> cameras =
-      capture::MakeSimulatedCameras(&world, true_rig, stop.capture.render, stop.noise_seed);
+      capture::MakeSimulatedCameras(&world, sim_rig.true_rig, stop.capture.render, stop.noise_seed);
   std::vector<capture::Camera*> rig;
   for (auto& c : cameras) {
     VB_RETURN_IF_ERROR(c->Open());
     rig.push_back(c.get());
   }
   VB_ASSIGN_OR_RETURN(const capture::CaptureBundle bundle,
-                      capture::CaptureStop(rig, reported, request));
+                      capture::CaptureStop(rig, sim_rig.reported, request));
   for (auto& c : cameras) c->Close();
   VB_RETURN_IF_ERROR(capture::WriteBundle(out, bundle));
   VB_RETURN_IF_ERROR(WriteVineModel(out + "/ground_truth.json", world.scene().vine));
@@ -74,13 +72,7 @@ absl::Status CaptureFromAravis(Flags& flags, const std::string& out) {
   VB_ASSIGN_OR_RETURN(const std::string devices, flags.RequiredString("devices"));
   VB_ASSIGN_OR_RETURN(const std::string calibration_path, flags.RequiredString("calibration"));
   VB_ASSIGN_OR_RETURN(capture::CaptureRequest request, ReadRequest(flags, "row"));
-  VB_ASSIGN_OR_RETURN(const std::string format_name, flags.String("pixel-format", "rgb8"));
-  auto format = ParsePixelFormat(format_name);
-  if (!format.ok()) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("--pixel-format: ", std::string(format.status().message())));
-  }
-  request.settings.pixel_format = *format;
+  VB_ASSIGN_OR_RETURN(request.settings.pixel_format, flags.Format("pixel-format", PixelFormat::kRgb8));
   VB_RETURN_IF_ERROR(flags.Finish());
 
   VB_ASSIGN_OR_RETURN(const RigCalibration calibration,

@@ -85,6 +85,17 @@ absl::StatusOr<bool> Flags::Bool(const std::string& name, bool fallback) {
   return absl::InvalidArgumentError(absl::StrCat("--", name, ": '", v, "' is not true or false"));
 }
 
+absl::StatusOr<PixelFormat> Flags::Format(const std::string& name, PixelFormat fallback) {
+  auto s = String(name, std::string(PixelFormatName(fallback)));
+  if (!s.ok()) return s.status();
+  auto format = ParsePixelFormat(*s);
+  if (!format.ok()) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("--", name, ": ", std::string(format.status().message())));
+  }
+  return *format;
+}
+
 absl::Status Flags::Finish() const {
   std::string unknown;
   for (const auto& [name, value] : values_) {

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "absl/status/statusor.h"
+#include "core/image.h"
 
 namespace vb::app {
 
@@ -30,6 +31,8 @@ class Flags {
   // `--name`, `--name=true|false|1|0`.
   absl::StatusOr<bool> Bool(const std::string& name, bool fallback);
   bool Has(const std::string& name);
+  // A vinebot pixel format name (rgb8, mono8, bayer_rg8, ...).
+  absl::StatusOr<PixelFormat> Format(const std::string& name, PixelFormat fallback);
 
   // INVALID_ARGUMENT listing flags that were given but not read by the command.
   absl::Status Finish() const;

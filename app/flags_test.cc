@@ -43,6 +43,17 @@ TEST(Flags, RejectsBadValuesNamingTheFlag) {
             std::string::npos);
 }
 
+TEST(Flags, PixelFormatParsesOrNamesTheFlag) {
+  auto flags = ParseAll({"--pixel-format", "bayer_gb8", "--other", "yuv"});
+  ASSERT_TRUE(flags.ok());
+  EXPECT_EQ(*flags->Format("pixel-format", PixelFormat::kRgb8), PixelFormat::kBayerGb8);
+  EXPECT_EQ(*flags->Format("absent", PixelFormat::kMono8), PixelFormat::kMono8);
+  auto bad = flags->Format("other", PixelFormat::kRgb8);
+  EXPECT_EQ(bad.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(bad.status().message().find("--other: pixel_format: unknown 'yuv'"), std::string::npos)
+      << bad.status().message();
+}
+
 TEST(Flags, FinishRejectsUnreadFlags) {
   auto flags = ParseAll({"--seed", "1", "--sede", "2"});
   ASSERT_TRUE(flags.ok());

@@ -20,10 +20,8 @@ absl::StatusOr<SimStopFlags> ReadSimStopFlags(Flags& flags) {
   VB_ASSIGN_OR_RETURN(const int64_t noise_seed,
                       flags.Int("noise-seed", static_cast<int64_t>(out.seed * 1000003 + out.vine)));
   out.noise_seed = static_cast<uint64_t>(noise_seed);
-  VB_ASSIGN_OR_RETURN(const std::string format_name, flags.String("pixel-format", "rgb8"));
-  auto format = ParsePixelFormat(format_name);
-  if (!format.ok()) return absl::InvalidArgumentError(absl::StrCat("--pixel-format: ", std::string(format.status().message())));
-  out.capture.render.pixel_format = *format;
+  VB_ASSIGN_OR_RETURN(out.capture.render.pixel_format,
+                      flags.Format("pixel-format", PixelFormat::kRgb8));
   VB_ASSIGN_OR_RETURN(out.capture.calibration_error_px, flags.Double("calibration-error-px", 0.0));
   VB_ASSIGN_OR_RETURN(const int64_t cameras, flags.Int("cameras", 3));
   out.capture.rig.camera_count = static_cast<int>(cameras);

@@ -18,14 +18,22 @@ absl::Status SimCaptureOptions::Validate() const {
   return absl::OkStatus();
 }
 
+absl::StatusOr<SimRig> MakeSimRig(const SimCaptureOptions& options, uint64_t noise_seed) {
+  VB_RETURN_IF_ERROR(options.Validate());
+  SimRig rig;
+  VB_ASSIGN_OR_RETURN(rig.true_rig, sim::MakeRig(options.rig));
+  rig.reported =
+      sim::PerturbCalibration(rig.true_rig, options.calibration_error_px, noise_seed ^ 0xCA11B4A7Eull);
+  return rig;
+}
+
 absl::StatusOr<SimCapture> RenderSimCapture(const sim::Scene& scene, const SimCaptureOptions& options,
                                             uint64_t noise_seed) {
-  VB_RETURN_IF_ERROR(options.Validate());
-  VB_ASSIGN_OR_RETURN(RigCalibration true_rig, sim::MakeRig(options.rig));
+  VB_ASSIGN_OR_RETURN(SimRig rig, MakeSimRig(options, noise_seed));
+  const RigCalibration& true_rig = rig.true_rig;
   SimCapture capture;
   capture.ground_truth = scene.vine;
-  capture.bundle.calibration =
-      sim::PerturbCalibration(true_rig, options.calibration_error_px, noise_seed ^ 0xCA11B4A7Eull);
+  capture.bundle.calibration = std::move(rig.reported);
   capture.bundle.metadata.row = options.row;
   capture.bundle.metadata.vine_position_m = scene.vine_position_m;
   capture.bundle.metadata.captured_at = UtcNowIso8601();

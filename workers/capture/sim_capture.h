@@ -26,6 +26,14 @@ struct SimCaptureOptions {
   absl::Status Validate() const;
 };
 
+// The simulated rig: where its cameras really are, and the calibration it reports (with
+// options.calibration_error_px of error, deterministic in `noise_seed`).
+struct SimRig {
+  RigCalibration true_rig;
+  RigCalibration reported;
+};
+absl::StatusOr<SimRig> MakeSimRig(const SimCaptureOptions& options, uint64_t noise_seed);
+
 struct SimCapture {
   CaptureBundle bundle;
   VineModel ground_truth;
