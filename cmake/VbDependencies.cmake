@@ -8,12 +8,13 @@ find_package(nlohmann_json 3.10 REQUIRED)
 find_package(absl REQUIRED)
 find_package(GTest REQUIRED)
 find_package(benchmark REQUIRED)
+find_package(Ceres REQUIRED)
 find_package(PkgConfig REQUIRED)
 
 # OpenCV: Debian's per-module -dev packages ship headers and libraries but no CMake
 # config (that comes with the much larger libopencv-dev), so declare the modules here.
 find_path(VB_OPENCV_INCLUDE_DIR opencv2/core.hpp PATH_SUFFIXES opencv4 REQUIRED)
-foreach(module core imgproc imgcodecs calib3d)
+foreach(module core imgproc imgcodecs calib3d ml)
   find_library(VB_OPENCV_${module}_LIBRARY opencv_${module} REQUIRED)
   add_library(vb_opencv_${module} INTERFACE IMPORTED)
   set_target_properties(vb_opencv_${module} PROPERTIES

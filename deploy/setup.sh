@@ -12,6 +12,9 @@ packages=(
   libeigen3-dev nlohmann-json3-dev libabsl-dev
   # vision (per-module OpenCV packages: the meta package pulls in far more than we use)
   libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev libopencv-calib3d-dev
+  libopencv-ml-dev
+  # reconstruction: joint 3D optimisation
+  libceres-dev
   # cameras: Aravis (GigE Vision / USB3 Vision); its pkg-config file needs libusb's;
   # aravis-tools provides arv-fake-gv-camera-0.8, which the camera tests start on loopback
   libaravis-dev libusb-1.0-0-dev aravis-tools
