@@ -18,4 +18,19 @@ absl::Status RunCapture(Flags& flags);
 // vinebot bundle info --bundle DIR: imports (validating everything) and prints a JSON summary.
 absl::Status RunBundleInfo(Flags& flags);
 
+// vinebot reconstruct --bundle DIR --out model.json [--deadline-s T]: one stop's images -> a
+// vine model (workers/reconstruct).
+absl::Status RunReconstruct(Flags& flags);
+
+// vinebot evaluate --model model.json --truth ground_truth.json: prints the accuracy metrics of
+// ARCHITECTURE.md as one JSON object.
+absl::Status RunEvaluate(Flags& flags);
+
+// vinebot bench reconstruct --vines N --seed-base S: renders, reconstructs and evaluates N
+// simulated vines; prints per-stage timings and mean metrics as JSON.
+absl::Status RunBenchReconstruct(Flags& flags);
+
+// vinebot train segmenter --out FILE [...]: trains the pixel classifier on simulated stops.
+absl::Status RunTrainSegmenter(Flags& flags);
+
 }  // namespace vb::app

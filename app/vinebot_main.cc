@@ -31,6 +31,11 @@ const std::vector<Command>& Commands() {
        "[--pixel-format F]",
        vb::app::RunCapture},
       {"bundle info", "--bundle DIR", vb::app::RunBundleInfo},
+      {"reconstruct", "--bundle DIR --out model.json [--deadline-s T]", vb::app::RunReconstruct},
+      {"evaluate", "--model model.json --truth ground_truth.json", vb::app::RunEvaluate},
+      {"bench reconstruct", "--vines N --seed-base S [--calibration-error-px X]",
+       vb::app::RunBenchReconstruct},
+      {"train segmenter", "--out FILE [--vines N --seed-base S]", vb::app::RunTrainSegmenter},
   };
   return commands;
 }
