@@ -1,0 +1,284 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "workers/reconstruct/correspondence.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <string>
+#include <tuple>
+
+#include "absl/strings/str_cat.h"
+#include "core/status_macros.h"
+
+namespace vb::reconstruct {
+namespace {
+
+absl::Status Invalid(const std::string& field, const std::string& message) {
+  return absl::InvalidArgumentError(absl::StrCat(field, ": ", message));
+}
+
+bool IsEmptyView(const View2D& view) {
+  return view.width == 0 && view.height == 0 && view.classes.data.empty() &&
+         view.segments.empty();
+}
+
+absl::Status ValidateInput(const std::vector<View2D>& views, const RigCalibration& rig) {
+  if (views.size() != rig.cameras.size()) {
+    return Invalid("views", absl::StrCat(views.size(), " views but ", rig.cameras.size(),
+                                         " cameras"));
+  }
+  if (views.size() < 2) return Invalid("views", "correspondence needs at least 2 views");
+  VB_RETURN_IF_ERROR(rig.Validate());
+  for (size_t i = 0; i < rig.cameras.size(); ++i) {
+    for (size_t j = i + 1; j < rig.cameras.size(); ++j) {
+      const double baseline =
+          (rig.cameras[i].CentreInPlatform() - rig.cameras[j].CentreInPlatform()).norm();
+      if (!(baseline >= 0.01)) {
+        return Invalid(absl::StrCat("cameras[", i, "], cameras[", j, "]"),
+                       absl::StrCat("camera centres ", baseline, " m apart (need >= 0.01 m)"));
+      }
+    }
+  }
+  for (size_t v = 0; v < views.size(); ++v) {
+    const View2D& view = views[v];
+    const std::string field = absl::StrCat("views[", v, "]");
+    if (IsEmptyView(view)) continue;
+    const CameraCalibration& camera = rig.cameras[v];
+    if (view.width != camera.image_width || view.height != camera.image_height) {
+      return Invalid(field, absl::StrCat("size ", view.width, "x", view.height, " but camera '",
+                                         camera.name, "' is ", camera.image_width, "x",
+                                         camera.image_height));
+    }
+    const size_t pixels = static_cast<size_t>(view.width) * view.height;
+    if (!view.classes.data.empty() &&
+        (view.classes.data.size() != pixels || view.classes.width != view.width ||
+         view.classes.height != view.height)) {
+      return Invalid(field + ".classes", "size differs from the view's");
+    }
+    if (!view.centreline_distance_px.empty() && view.centreline_distance_px.size() != pixels) {
+      return Invalid(field + ".centreline_distance_px", "size differs from the view's");
+    }
+    for (size_t s = 0; s < view.segments.size(); ++s) {
+      const Segment2D& segment = view.segments[s];
+      const std::string sf = absl::StrCat(field, ".segments[", s, "]");
+      if (segment.widths_px.size() != segment.points.size()) {
+        return Invalid(sf, absl::StrCat(segment.points.size(), " points but ",
+                                        segment.widths_px.size(), " widths"));
+      }
+      for (size_t k = 0; k < segment.points.size(); ++k) {
+        if (!segment.points[k].allFinite() || !std::isfinite(segment.widths_px[k]) ||
+            segment.widths_px[k] < 0.0) {
+          return Invalid(sf, absl::StrCat("point ", k, " not finite or negative width"));
+        }
+      }
+    }
+  }
+  return absl::OkStatus();
+}
+
+// Fraction of points on the foreground (1 px tolerance) of every view in which they are inside
+// the image.
+double Support(const std::vector<Eigen::Vector3d>& points, const std::vector<View2D>& views,
+               const RigCalibration& rig) {
+  if (points.empty()) return 0.0;
+  int supported = 0;
+  for (const Eigen::Vector3d& p : points) {
+    bool ok = true;
+    for (size_t v = 0; v < views.size() && ok; ++v) {
+      const View2D& view = views[v];
+      if (view.classes.data.size() != static_cast<size_t>(view.width) * view.height ||
+          view.width == 0) {
+        continue;
+      }
+      const auto uv = rig.cameras[v].Project(p);
+      if (!uv || !rig.cameras[v].InImage(*uv)) continue;
+      const int x = std::clamp(static_cast<int>(std::lround(uv->x())), 0, view.width - 1);
+      const int y = std::clamp(static_cast<int>(std::lround(uv->y())), 0, view.height - 1);
+      bool on = false;
+      for (int dy = -1; dy <= 1 && !on; ++dy) {
+        for (int dx = -1; dx <= 1 && !on; ++dx) {
+          on = view.IsForeground(std::clamp(x + dx, 0, view.width - 1),
+                                 std::clamp(y + dy, 0, view.height - 1));
+        }
+      }
+      ok = on;
+    }
+    supported += ok ? 1 : 0;
+  }
+  return static_cast<double>(supported) / points.size();
+}
+
+}  // namespace
+
+absl::Status CorrespondenceOptions::Validate() const {
+  if (!(volume.box.min().allFinite() && volume.box.max().allFinite()) ||
+      !(volume.box.min().array() < volume.box.max().array()).all()) {
+    return Invalid("volume", "empty or non-finite box");
+  }
+  if (!(sample_step_px >= 0.5 && sample_step_px <= 50.0)) {
+    return Invalid("sample_step_px", absl::StrCat("must be in [0.5, 50], got ", sample_step_px));
+  }
+  if (!(min_epipolar_sin >= 0.0 && min_epipolar_sin < 1.0)) {
+    return Invalid("min_epipolar_sin", absl::StrCat("must be in [0, 1), got ", min_epipolar_sin));
+  }
+  if (min_hits < 2) return Invalid("min_hits", absl::StrCat("must be >= 2, got ", min_hits));
+  if (max_gap_samples < 0) {
+    return Invalid("max_gap_samples", absl::StrCat("must be >= 0, got ", max_gap_samples));
+  }
+  if (!(fit.control_spacing_m > 0.0) || fit.max_control_points < 2 || fit.max_iterations < 0 ||
+      !(fit.smoothness_weight >= 0.0) || !std::isfinite(fit.control_spacing_m) ||
+      !std::isfinite(fit.smoothness_weight)) {
+    return Invalid("fit", "control_spacing_m > 0, max_control_points >= 2, max_iterations >= 0, "
+                          "smoothness_weight >= 0 (all finite)");
+  }
+  if (!(max_rms_px > 0.0)) return Invalid("max_rms_px", "must be > 0");
+  for (int i = 0; i < kMatchFeatureCount; ++i) {
+    if (!std::isfinite(classifier.multi_view[i]) || !std::isfinite(classifier.two_view[i])) {
+      return Invalid("classifier", absl::StrCat("weight ", i, " not finite"));
+    }
+  }
+  if (!(min_probability >= 0.0 && min_probability < 1.0)) {
+    return Invalid("min_probability", absl::StrCat("must be in [0, 1), got ", min_probability));
+  }
+  if (!(min_conflict_overlap_px >= 0.0) || !std::isfinite(min_conflict_overlap_px)) {
+    return Invalid("min_conflict_overlap_px", "must be finite and >= 0");
+  }
+  if (absl::Status s = gibbs.Validate(); !s.ok()) {
+    return Invalid("gibbs", std::string(s.message()));
+  }
+  if (!(alpha > 0.0)) return Invalid("alpha", absl::StrCat("must be > 0, got ", alpha));
+  return absl::OkStatus();
+}
+
+absl::StatusOr<std::vector<ScoredCandidate>> ScoreCandidates(
+    const std::vector<View2D>& views, const RigCalibration& rig,
+    const CorrespondenceOptions& options, const Deadline& deadline) {
+  VB_RETURN_IF_ERROR(options.Validate());
+  VB_RETURN_IF_ERROR(ValidateInput(views, rig));
+  VB_RETURN_IF_ERROR(deadline.Check("correspondence"));
+  std::vector<ViewSamples> samples;
+  samples.reserve(views.size());
+  for (size_t v = 0; v < views.size(); ++v) {
+    samples.emplace_back(views[v], rig.cameras[v], options.sample_step_px);
+  }
+  CandidateOptions candidate_options;
+  candidate_options.volume = options.volume;
+  candidate_options.min_epipolar_sin = options.min_epipolar_sin;
+  candidate_options.min_hits = options.min_hits;
+  candidate_options.max_gap_samples = options.max_gap_samples;
+  Eigen::AlignedBox3d margin_box = options.volume.box;
+  margin_box.min().array() -= 0.05;
+  margin_box.max().array() += 0.05;
+
+  std::vector<ScoredCandidate> scored;
+  const int n = static_cast<int>(views.size());
+  for (int a = 0; a < n; ++a) {
+    for (int b = a + 1; b < n; ++b) {
+      VB_RETURN_IF_ERROR(deadline.Check("correspondence"));
+      std::vector<MatchCandidate> candidates =
+          FindCandidates(a, samples[a], rig.cameras[a], b, samples[b], rig.cameras[b],
+                         candidate_options);
+      for (size_t i = 0; i < candidates.size(); ++i) {
+        if (i % 64 == 0) VB_RETURN_IF_ERROR(deadline.Check("correspondence"));
+        ScoredCandidate s;
+        s.candidate = std::move(candidates[i]);
+        s.fit = FitPolyline(s.candidate, rig.cameras[a], rig.cameras[b], options.fit);
+        if (!s.fit.ok || std::max(s.fit.rms_a_px, s.fit.rms_b_px) > options.max_rms_px) continue;
+        bool inside = true;
+        for (const Eigen::Vector3d& p : s.fit.control_points) inside = inside && margin_box.contains(p);
+        if (!inside) continue;
+        std::vector<ViewSupport> others;
+        for (int c = 0; c < n; ++c) {
+          if (c == a || c == b || IsEmptyView(views[c])) continue;
+          others.push_back(CheckInView(s.fit.points, views[c], samples[c], rig.cameras[c]));
+        }
+        s.two_view_features = ComputeMatchFeatures(s.candidate, s.fit, {});
+        s.multi_view = !others.empty();
+        s.features = s.multi_view ? ComputeMatchFeatures(s.candidate, s.fit, others)
+                                  : s.two_view_features;
+        s.probability = MatchProbability(
+            s.features, s.multi_view ? options.classifier.multi_view : options.classifier.two_view);
+        scored.push_back(std::move(s));
+      }
+    }
+  }
+  return scored;
+}
+
+std::vector<std::vector<int>> CandidateConflicts(const std::vector<ScoredCandidate>& candidates,
+                                                 double min_overlap_px) {
+  // Key: (view_a, view_b, which side, segment) -> candidates claiming that segment.
+  std::map<std::tuple<int, int, int, int>, std::vector<int>> claims;
+  for (int i = 0; i < static_cast<int>(candidates.size()); ++i) {
+    const MatchCandidate& c = candidates[i].candidate;
+    claims[{c.view_a, c.view_b, 0, c.segment_a}].push_back(i);
+    claims[{c.view_a, c.view_b, 1, c.segment_b}].push_back(i);
+  }
+  std::vector<std::vector<int>> conflicts(candidates.size());
+  for (const auto& [key, members] : claims) {
+    const bool side_b = std::get<2>(key) == 1;
+    for (size_t u = 0; u < members.size(); ++u) {
+      const MatchCandidate& p = candidates[members[u]].candidate;
+      const double p0 = side_b ? p.begin_b_px : p.begin_a_px;
+      const double p1 = side_b ? p.end_b_px : p.end_a_px;
+      for (size_t v = u + 1; v < members.size(); ++v) {
+        const MatchCandidate& q = candidates[members[v]].candidate;
+        const double q0 = side_b ? q.begin_b_px : q.begin_a_px;
+        const double q1 = side_b ? q.end_b_px : q.end_a_px;
+        const double overlap = std::min(p1, q1) - std::max(p0, q0);
+        if (overlap >= min_overlap_px) {
+          conflicts[members[u]].push_back(members[v]);
+          conflicts[members[v]].push_back(members[u]);
+        }
+      }
+    }
+  }
+  for (auto& list : conflicts) {
+    std::sort(list.begin(), list.end());
+    list.erase(std::unique(list.begin(), list.end()), list.end());
+  }
+  return conflicts;
+}
+
+absl::StatusOr<std::vector<Piece3D>> MatchSegments(const std::vector<View2D>& views,
+                                                   const RigCalibration& rig,
+                                                   const CorrespondenceOptions& options,
+                                                   const Deadline& deadline) {
+  VB_ASSIGN_OR_RETURN(std::vector<ScoredCandidate> all,
+                      ScoreCandidates(views, rig, options, deadline));
+  std::vector<ScoredCandidate> candidates;
+  for (ScoredCandidate& c : all) {
+    if (c.probability >= options.min_probability) candidates.push_back(std::move(c));
+  }
+  std::vector<double> probabilities;
+  probabilities.reserve(candidates.size());
+  for (const ScoredCandidate& c : candidates) probabilities.push_back(c.probability);
+  const std::vector<std::vector<int>> conflicts =
+      CandidateConflicts(candidates, options.min_conflict_overlap_px);
+  VB_RETURN_IF_ERROR(deadline.Check("correspondence"));
+  const std::vector<double> marginals = GibbsMarginals(probabilities, conflicts, options.gibbs);
+  const std::vector<int> kept = SelectMinimumExpectedLoss(marginals, options.alpha);
+  VB_RETURN_IF_ERROR(deadline.Check("correspondence"));
+
+  std::vector<Piece3D> pieces;
+  pieces.reserve(kept.size());
+  for (int i : kept) {
+    const ScoredCandidate& c = candidates[i];
+    Piece3D piece;
+    piece.polyline.points = c.fit.control_points;
+    piece.polyline.radii = c.fit.radii;
+    piece.probability = marginals[i];
+    piece.view_a = c.candidate.view_a;
+    piece.segment_a = c.candidate.segment_a;
+    piece.view_b = c.candidate.view_b;
+    piece.segment_b = c.candidate.segment_b;
+    piece.support = Support(c.fit.points, views, rig);
+    pieces.push_back(std::move(piece));
+  }
+  std::stable_sort(pieces.begin(), pieces.end(), [](const Piece3D& l, const Piece3D& r) {
+    return std::tie(l.view_a, l.view_b, l.segment_a) < std::tie(r.view_a, r.view_b, r.segment_a);
+  });
+  return pieces;
+}
+
+}  // namespace vb::reconstruct

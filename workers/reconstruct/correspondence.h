@@ -1,0 +1,90 @@
+// SPDX-License-Identifier: Apache-2.0
+// Correspondence: matches 2D cane segments across the views of one stop and reconstructs each
+// match as a piece of cane in 3D. After Botterill et al., "A Robot System for Pruning Grape
+// Vines" (J. Field Robotics 2017), sec. 3.2.3, adapted to simultaneous views:
+//  1. candidates: for every pair of views (a, b), a < b, samples along each segment of a are
+//     intersected, along their epipolar segments restricted to the working volume's depth range,
+//     with b's segments; runs of crossings of one segment of b at consistent depths are candidate
+//     matches (match_candidates.h). Samples whose segment runs nearly along the epipolar line
+//     are skipped: that pair is ill-conditioned there, and a triangle rig always has a better one.
+//  2. each candidate is triangulated and refined by a Levenberg-Marquardt fit of a 3D polyline
+//     minimising reprojection error in a and b, then checked in the other views
+//     (polyline_fit.h);
+//  3. a trained logistic model gives each candidate's probability (match_classifier.h);
+//  4. Gibbs sampling under the one-to-one constraint (candidates of the same view pair claiming
+//     overlapping parts of one 2D segment exclude each other) gives marginal probabilities, and
+//     the minimum expected loss selection keeps those above 1 / (1 + alpha) (gibbs.h).
+// Duplicate pieces of one cane from different view pairs are expected; cane assembly merges them.
+// Thread-safe (pure functions).
+#pragma once
+
+#include <vector>
+
+#include "absl/status/status.h"
+#include "absl/status/statusor.h"
+#include "core/calibration.h"
+#include "core/deadline.h"
+#include "workers/reconstruct/gibbs.h"
+#include "workers/reconstruct/match_candidates.h"
+#include "workers/reconstruct/match_classifier.h"
+#include "workers/reconstruct/piece3d.h"
+#include "workers/reconstruct/polyline_fit.h"
+#include "workers/reconstruct/view2d.h"
+
+namespace vb::reconstruct {
+
+struct CorrespondenceOptions {
+  WorkingVolume volume;                 // pieces must lie in it; bounds the epipolar search
+  double sample_step_px = 4.0;          // spacing of samples along segments
+  double min_epipolar_sin = 0.2;        // skip samples within ~12 deg of the epipolar line
+  int min_hits = 5;                     // shortest candidate, in samples
+  int max_gap_samples = 3;              // samples a candidate may skip
+  PolylineFitOptions fit;               // the 3D polyline fit
+  double max_rms_px = 8.0;              // candidates fitting worse are dropped before scoring
+  MatchClassifier classifier = DefaultMatchClassifier();  // candidate probabilities
+  double min_probability = 0.02;        // candidates below are dropped before Gibbs sampling
+  double min_conflict_overlap_px = 8.0; // overlap on a shared segment that makes a conflict
+  GibbsOptions gibbs;                   // marginal probabilities
+  double alpha = 1.0;                   // cost of a missed match relative to a wrong one
+
+  // INVALID_ARGUMENT naming the field for non-finite or out-of-range values (sample_step_px
+  // outside [0.5, 50], min_epipolar_sin outside [0, 1), min_hits < 2, max_gap_samples < 0,
+  // empty volume, alpha <= 0 or NaN, non-finite classifier weights, invalid gibbs options...).
+  absl::Status Validate() const;
+};
+
+// A candidate with its fit, features and classifier probability.
+struct ScoredCandidate {
+  MatchCandidate candidate;
+  PolylineFit fit;
+  MatchFeatures features{};           // with the other views' evidence (when there are any)
+  MatchFeatures two_view_features{};  // as if there were only views a and b
+  bool multi_view = false;            // `features` used other views
+  double probability = 0.0;           // classifier output for `features`
+};
+
+// Steps 1-3: every candidate that was fitted (finite, inside the volume, RMS <= max_rms_px),
+// scored with options.classifier. Same errors as MatchSegments. For MatchSegments and for
+// training the classifier.
+absl::StatusOr<std::vector<ScoredCandidate>> ScoreCandidates(
+    const std::vector<View2D>& views, const RigCalibration& rig,
+    const CorrespondenceOptions& options, const Deadline& deadline);
+
+// Conflict lists of the one-to-one constraint over `candidates` (symmetric).
+std::vector<std::vector<int>> CandidateConflicts(const std::vector<ScoredCandidate>& candidates,
+                                                 double min_overlap_px);
+
+// The selected pieces of cane, ordered by (view_a, view_b, segment_a, begin along segment_a).
+// rig.cameras[i] took views[i]. Views may have no segments (no pieces come from them); a view
+// whose width/height is 0 and has no class image counts as empty.
+// INVALID_ARGUMENT: fewer than 2 views; views.size() != rig.cameras.size(); an invalid camera
+// (non-finite calibration: RigCalibration::Validate); two camera centres closer than 1 cm; a
+// view whose size differs from its camera's, or whose class/distance images have the wrong
+// size; a segment with non-finite points or widths, or widths not one per point; invalid options.
+// DEADLINE_EXCEEDED (or CANCELLED) once `deadline` expires.
+absl::StatusOr<std::vector<Piece3D>> MatchSegments(const std::vector<View2D>& views,
+                                                   const RigCalibration& rig,
+                                                   const CorrespondenceOptions& options,
+                                                   const Deadline& deadline);
+
+}  // namespace vb::reconstruct

@@ -1,0 +1,145 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "workers/reconstruct/match_classifier.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "Eigen/Cholesky"
+#include "Eigen/Core"
+
+namespace vb::reconstruct {
+
+MatchClassifier DefaultMatchClassifier() {
+  // Placeholder weights until trained.
+  MatchClassifier c;
+  c.multi_view = {1.0, 0.5, -1.5, -1.5, -0.5, -2.0, -0.5, 2.0, 1.0, 0.5, 0.5,
+                  -1.0, 3.0, -1.0, 2.0, 0.0};
+  c.two_view = {3.0, 0.5, -1.5, -1.5, -0.5, -2.0, -0.5, 2.0, 1.0, 0.5, 0.5,
+                0.0, 0.0, 0.0, 0.0, 0.0};
+  return c;
+}
+
+MatchFeatures ComputeMatchFeatures(const MatchCandidate& candidate, const PolylineFit& fit,
+                                   const std::vector<ViewSupport>& others) {
+  MatchFeatures f{};
+  const auto& hits = candidate.hits;
+  const double n = std::max<double>(1.0, hits.size());
+  f[0] = 1.0;
+  f[1] = std::log(std::max(fit.length_m, 1e-3) / 0.1);
+  f[2] = std::log(0.25 + fit.rms_a_px);
+  f[3] = std::log(0.25 + fit.rms_b_px);
+  f[4] = std::log(0.25 + fit.max_residual_px);
+  f[5] = fit.width_log_ratio;
+  f[6] = std::log1p(fit.turning_rad / std::max(fit.length_m, 0.05));
+  double sin_a = 0.0, sin_b = 0.0, radius = 0.0;
+  for (const EpipolarHit& hit : hits) {
+    sin_a += hit.sin_a;
+    sin_b += hit.sin_b;
+  }
+  for (double r : fit.hit_radii) radius += r;
+  f[7] = std::min(sin_a, sin_b) / n;
+  if (!hits.empty()) f[8] = n / (hits.back().sample_a - hits.front().sample_a + 1.0);
+  f[9] = (candidate.end_a_px - candidate.begin_a_px) / std::max(1.0, candidate.length_a_px);
+  f[10] = (candidate.end_b_px - candidate.begin_b_px) / std::max(1.0, candidate.length_b_px);
+  double in_image = 0.0, foreground = 0.0, centreline = 0.0, tangent = 0.0;
+  for (const ViewSupport& s : others) {
+    in_image += s.in_image;
+    foreground += s.in_image * s.foreground;
+    centreline += s.in_image * s.centreline_px;
+    tangent += s.in_image * s.tangent;
+  }
+  if (in_image > 0.0) {
+    const double views = static_cast<double>(others.size());
+    f[11] = in_image / views;
+    f[12] = f[11] * foreground / in_image;
+    f[13] = f[11] * centreline / in_image / 10.0;
+    f[14] = f[11] * tangent / in_image;
+  }
+  f[15] = std::log(std::max(radius / std::max<size_t>(1, fit.hit_radii.size()), 1e-4) / 0.005);
+  for (double& v : f) {
+    if (!std::isfinite(v)) v = 0.0;
+  }
+  return f;
+}
+
+double MatchProbability(const MatchFeatures& features, const MatchFeatures& weights) {
+  double z = 0.0;
+  for (int i = 0; i < kMatchFeatureCount; ++i) z += features[i] * weights[i];
+  z = std::clamp(z, -40.0, 40.0);
+  return 1.0 / (1.0 + std::exp(-z));
+}
+
+absl::StatusOr<MatchFeatures> TrainMatchClassifier(const std::vector<LabelledMatch>& examples,
+                                                   const TrainOptions& options) {
+  if (examples.empty()) return absl::InvalidArgumentError("examples: empty");
+  int positives = 0;
+  for (size_t i = 0; i < examples.size(); ++i) {
+    positives += examples[i].right ? 1 : 0;
+    for (double v : examples[i].features) {
+      if (!std::isfinite(v)) {
+        return absl::InvalidArgumentError("examples[" + std::to_string(i) +
+                                          "]: non-finite feature");
+      }
+    }
+  }
+  if (positives == 0 || positives == static_cast<int>(examples.size())) {
+    return absl::InvalidArgumentError("examples: need both right and wrong matches");
+  }
+  constexpr int d = kMatchFeatureCount;
+  Eigen::Matrix<double, d, 1> w = Eigen::Matrix<double, d, 1>::Zero();
+  Eigen::Matrix<double, d, 1> ridge = Eigen::Matrix<double, d, 1>::Constant(options.l2);
+  ridge(0) = 1e-6;
+  for (int it = 0; it < options.iterations; ++it) {
+    Eigen::Matrix<double, d, d> h = ridge.asDiagonal();
+    Eigen::Matrix<double, d, 1> g = ridge.cwiseProduct(w);
+    for (const LabelledMatch& e : examples) {
+      const Eigen::Map<const Eigen::Matrix<double, d, 1>> x(e.features.data());
+      const double z = std::clamp(w.dot(x), -40.0, 40.0);
+      const double p = 1.0 / (1.0 + std::exp(-z));
+      g += (p - (e.right ? 1.0 : 0.0)) * x;
+      h += std::max(p * (1.0 - p), 1e-9) * x * x.transpose();
+    }
+    const Eigen::Matrix<double, d, 1> step = h.ldlt().solve(g);
+    if (!step.allFinite()) return absl::InternalError("TrainMatchClassifier: diverged");
+    w -= step;
+    if (step.norm() < 1e-8) break;
+  }
+  MatchFeatures out;
+  for (int i = 0; i < d; ++i) out[i] = w(i);
+  return out;
+}
+
+double DistanceToPolyline(const Eigen::Vector3d& p, const Polyline3& polyline) {
+  const auto& q = polyline.points;
+  if (q.empty()) return std::numeric_limits<double>::infinity();
+  if (q.size() == 1) return (p - q[0]).norm();
+  double best = std::numeric_limits<double>::infinity();
+  for (size_t i = 0; i + 1 < q.size(); ++i) best = std::min(best, PointSegmentDistance(p, q[i], q[i + 1]));
+  return best;
+}
+
+bool IsRightMatch(const std::vector<Eigen::Vector3d>& points,
+                  const std::vector<const Polyline3*>& truth, double tolerance_m,
+                  double min_fraction) {
+  if (points.empty()) return false;
+  Eigen::AlignedBox3d bounds;
+  for (const Eigen::Vector3d& p : points) bounds.extend(p);
+  const int allowed_misses =
+      static_cast<int>(std::floor((1.0 - min_fraction) * static_cast<double>(points.size())));
+  for (const Polyline3* cane : truth) {
+    Eigen::AlignedBox3d box;
+    for (const Eigen::Vector3d& q : cane->points) box.extend(q);
+    box.min().array() -= tolerance_m;
+    box.max().array() += tolerance_m;
+    if (!box.intersects(bounds)) continue;
+    int misses = 0;
+    for (const Eigen::Vector3d& p : points) {
+      if (DistanceToPolyline(p, *cane) > tolerance_m && ++misses > allowed_misses) break;
+    }
+    if (misses <= allowed_misses) return true;
+  }
+  return false;
+}
+
+}  // namespace vb::reconstruct

@@ -1,0 +1,70 @@
+// SPDX-License-Identifier: Apache-2.0
+// The probability that a candidate match of 2D cane segments is right, from the attributes of its
+// 3D reconstruction: a logistic model, as the classifiers of Botterill et al., "A Robot System for
+// Pruning Grape Vines" (J. Field Robotics 2017), sec. 3.2.3, with weights trained on labelled
+// candidates from simulated stops (TrainMatchClassifier). Pure functions; thread-safe.
+#pragma once
+
+#include <array>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "core/geometry.h"
+#include "workers/reconstruct/match_candidates.h"
+#include "workers/reconstruct/polyline_fit.h"
+
+namespace vb::reconstruct {
+
+// Feature vector of a candidate; index 0 is the constant 1 (bias). See ComputeMatchFeatures.
+inline constexpr int kMatchFeatureCount = 16;
+using MatchFeatures = std::array<double, kMatchFeatureCount>;
+
+// Weights of the logistic model: P(right) = 1 / (1 + exp(-w . features)). Two models: one for
+// candidates that can be checked in at least one other view, one for a two-camera rig (whose
+// other-view features are all 0).
+struct MatchClassifier {
+  MatchFeatures multi_view{};
+  MatchFeatures two_view{};
+};
+
+// The committed, trained weights (see match_classifier.cc for how they were produced).
+MatchClassifier DefaultMatchClassifier();
+
+// Features: 1, log(length / 0.1 m), log(0.25 + RMS reprojection error in a, px), the same in b,
+// log(0.25 + max residual px), mean |log| radius ratio between the views, log(1 + turning per
+// metre), min over the views of the mean |sin| epipolar angle, hit density (hits per sample
+// spanned), coverage of segment_a and of segment_b (covered fraction), and from the other views
+// (`others`, empty for none: all 0): fraction inside the image, and times that, foreground
+// fraction, mean centreline distance / 10 px and tangent agreement; last log(mean radius / 5 mm).
+MatchFeatures ComputeMatchFeatures(const MatchCandidate& candidate, const PolylineFit& fit,
+                                   const std::vector<ViewSupport>& others);
+
+// 1 / (1 + exp(-weights . features)), clamped against overflow.
+double MatchProbability(const MatchFeatures& features, const MatchFeatures& weights);
+
+struct LabelledMatch {
+  MatchFeatures features{};
+  bool right = false;
+};
+
+struct TrainOptions {
+  double l2 = 1.0;       // ridge penalty on every weight but the bias
+  int iterations = 50;   // Newton (IRLS) iterations at most
+};
+
+// Maximum a posteriori logistic regression (Newton's method with a ridge penalty).
+// INVALID_ARGUMENT if `examples` is empty, holds only one label, or a non-finite feature;
+// INTERNAL if the iteration diverges.
+absl::StatusOr<MatchFeatures> TrainMatchClassifier(const std::vector<LabelledMatch>& examples,
+                                                   const TrainOptions& options = {});
+
+// Labels a reconstructed piece against ground truth: right iff at least `min_fraction` of its
+// points lie within `tolerance_m` of one and the same polyline of `truth`.
+bool IsRightMatch(const std::vector<Eigen::Vector3d>& points,
+                  const std::vector<const Polyline3*>& truth, double tolerance_m = 0.01,
+                  double min_fraction = 0.9);
+
+// Distance from p to the polyline's axis (infinity for an empty polyline).
+double DistanceToPolyline(const Eigen::Vector3d& p, const Polyline3& polyline);
+
+}  // namespace vb::reconstruct
