@@ -1,0 +1,98 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "core/model_metrics.h"
+
+#include "gtest/gtest.h"
+
+namespace vb {
+namespace {
+
+Cane MakeCane(int id, std::optional<int> parent, CaneKind kind, Eigen::Vector3d a,
+              Eigen::Vector3d b) {
+  Cane c;
+  c.id = CaneId(id);
+  if (parent) c.parent_id = CaneId(*parent);
+  c.kind = kind;
+  c.polyline.points = {a, b};
+  c.polyline.radii = {0.005, 0.005};
+  return c;
+}
+
+VineModel Truth() {
+  VineModel m;
+  m.canes.push_back(MakeCane(1, std::nullopt, CaneKind::kTrunk, {0, 0.8, 0}, {0, 0.8, 1.0}));
+  m.canes.push_back(MakeCane(2, 1, CaneKind::kCane, {0, 0.8, 1.0}, {0.5, 0.8, 1.0}));
+  m.canes.push_back(MakeCane(3, 1, CaneKind::kCane, {0, 0.8, 1.0}, {-0.5, 0.8, 1.2}));
+  m.head.spheres.push_back({{0, 0.8, 1.0}, 0.05});
+  Wire w;
+  w.id = WireId(1);
+  w.points = {{-2.0, 0.8, 0.95}, {2.0, 0.8, 0.95}};
+  m.wires.push_back(w);
+  return m;
+}
+
+TEST(EvaluateReconstruction, PerfectModelScoresOne) {
+  const auto m = EvaluateReconstruction(Truth(), Truth());
+  ASSERT_TRUE(m.ok()) << m.status();
+  EXPECT_DOUBLE_EQ(m->cane_recall, 1.0);
+  EXPECT_DOUBLE_EQ(m->cane_precision, 1.0);
+  EXPECT_DOUBLE_EQ(m->connectivity, 1.0);
+  EXPECT_DOUBLE_EQ(m->wire_recall, 1.0);
+  EXPECT_NEAR(m->head_enclosed_fraction, 1.0, 1e-9);
+  EXPECT_NEAR(m->head_volume_ratio, 1.0, 1e-9);
+  EXPECT_NEAR(m->truth_cane_length_m, 1.0 + 0.5 + std::hypot(0.5, 0.2), 1e-9);
+}
+
+TEST(EvaluateReconstruction, CountsMissingShiftedAndDisconnectedLength) {
+  VineModel model = Truth();
+  model.canes.erase(model.canes.begin() + 2);  // cane 3 missing: recall loses its length
+  // A false cane, and cane 2 hung on it instead of on the trunk: recalled but not connected.
+  model.canes.push_back(MakeCane(9, 1, CaneKind::kCane, {0, 0.9, 0.5}, {0.3, 0.9, 0.5}));
+  model.canes[1].parent_id = CaneId(9);
+  const auto m = EvaluateReconstruction(model, Truth());
+  ASSERT_TRUE(m.ok()) << m.status();
+  const double total = 1.5 + std::hypot(0.5, 0.2);
+  EXPECT_NEAR(m->cane_recall, 1.5 / total, 0.01);
+  EXPECT_NEAR(m->connectivity, 1.0 / total, 0.01);
+  EXPECT_NEAR(m->cane_precision, 1.5 / 1.8, 0.01);
+  // Wires and head missing entirely.
+  model.wires.clear();
+  model.head.spheres.clear();
+  const auto m2 = EvaluateReconstruction(model, Truth());
+  ASSERT_TRUE(m2.ok());
+  EXPECT_EQ(m2->wire_recall, 0.0);
+  EXPECT_EQ(m2->head_enclosed_fraction, 0.0);
+}
+
+TEST(EvaluateReconstruction, HalfTheHeadIsHalfEnclosed) {
+  VineModel model = Truth();
+  // A huge sphere whose surface passes through the true head's centre plane x = 0.
+  model.head.spheres = {{{1.0, 0.8, 1.0}, 1.0}};
+  const auto m = EvaluateReconstruction(model, Truth());
+  ASSERT_TRUE(m.ok());
+  EXPECT_NEAR(m->head_enclosed_fraction, 0.5, 0.03);
+}
+
+TEST(EvaluateReconstruction, ToleranceIsTenMillimetres) {
+  VineModel model = Truth();
+  for (Cane& c : model.canes)
+    for (Eigen::Vector3d& p : c.polyline.points) p.y() += 0.009;
+  auto m = EvaluateReconstruction(model, Truth());
+  ASSERT_TRUE(m.ok());
+  EXPECT_GT(m->cane_recall, 0.99);
+  for (Cane& c : model.canes)
+    for (Eigen::Vector3d& p : c.polyline.points) p.y() += 0.002;
+  m = EvaluateReconstruction(model, Truth());
+  ASSERT_TRUE(m.ok());
+  EXPECT_LT(m->cane_recall, 0.01);
+}
+
+TEST(EvaluateReconstruction, RejectsInvalidModel) {
+  VineModel model = Truth();
+  model.canes[1].polyline.points[0].x() = std::nan("");
+  const auto m = EvaluateReconstruction(model, Truth());
+  ASSERT_FALSE(m.ok());
+  EXPECT_NE(std::string(m.status().message()).find("model:"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace vb
