@@ -1,0 +1,538 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "workers/reconstruct/cane_fit.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <exception>
+#include <memory>
+#include <optional>
+#include <unordered_map>
+
+#include "absl/strings/str_cat.h"
+#include "ceres/ceres.h"
+#include "ceres/cubic_interpolation.h"
+
+namespace vb::reconstruct {
+namespace {
+
+using Grid = ceres::Grid2D<float, 1>;
+using Interpolator = ceres::BiCubicInterpolator<Grid>;
+
+// Coordinates beyond this (metres) are garbage, not a vine; they would only produce overflow.
+constexpr double kMaxCoordinateM = 1000.0;
+// Passes of the [1 2 1] / 4 kernel that make the rest shape.
+constexpr int kRestSmoothingPasses = 3;
+
+// The camera model of core/calibration.h, templated for automatic differentiation.
+struct Projector {
+  double r[9];
+  double t[3];
+  double fx, fy, skew, cx, cy;
+  double k1, k2, p1, p2, k3;
+
+  explicit Projector(const CameraCalibration& c) {
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) r[3 * i + j] = c.rotation_camera_from_platform(i, j);
+      t[i] = c.translation_camera_from_platform[i];
+    }
+    fx = c.camera_matrix(0, 0);
+    fy = c.camera_matrix(1, 1);
+    skew = c.camera_matrix(0, 1);
+    cx = c.camera_matrix(0, 2);
+    cy = c.camera_matrix(1, 2);
+    std::tie(k1, k2, p1, p2, k3) =
+        std::tuple(c.distortion[0], c.distortion[1], c.distortion[2], c.distortion[3],
+                   c.distortion[4]);
+  }
+
+  // False if the point is (nearly) on or behind the image plane.
+  template <typename T>
+  bool operator()(const T* p, T* u, T* v) const {
+    T pc[3];
+    for (int i = 0; i < 3; ++i) pc[i] = r[3 * i] * p[0] + r[3 * i + 1] * p[1] + r[3 * i + 2] * p[2] + t[i];
+    if (!(pc[2] > T(1e-3))) return false;
+    const T x = pc[0] / pc[2];
+    const T y = pc[1] / pc[2];
+    const T r2 = x * x + y * y;
+    const T radial = T(1.0) + r2 * (k1 + r2 * (k2 + r2 * k3));
+    const T xd = x * radial + T(2.0 * p1) * x * y + p2 * (r2 + T(2.0) * x * x);
+    const T yd = y * radial + p1 * (r2 + T(2.0) * y * y) + T(2.0 * p2) * x * y;
+    *u = fx * xd + skew * yd + cx;
+    *v = fy * yd + cy;
+    return true;
+  }
+};
+
+// Distance in pixels from the projection of a point to the view's nearest skeleton point.
+struct CentrelineCost {
+  CentrelineCost(const Projector& projector, const Interpolator* interpolator, double inv_sd)
+      : projector(projector), interpolator(interpolator), inv_sd(inv_sd) {}
+  template <typename T>
+  bool operator()(const T* p, T* residual) const {
+    T u, v;
+    if (!projector(p, &u, &v)) return false;
+    T d2;
+    interpolator->Evaluate(v, u, &d2);  // (row, column)
+    // d2 can dip a hair below 0 between samples; the epsilon keeps the derivative finite at 0.
+    residual[0] = sqrt(fmax(d2, T(0.0)) + T(1e-6)) * inv_sd;
+    return true;
+  }
+  Projector projector;
+  const Interpolator* interpolator;
+  double inv_sd;
+};
+
+// Second difference of three consecutive points about that of the cane's rest shape.
+struct KinkCost {
+  KinkCost(const Eigen::Vector3d& rest, double inv_sd) : rest(rest), inv_sd(inv_sd) {}
+  template <typename T>
+  bool operator()(const T* a, const T* b, const T* c, T* residual) const {
+    for (int i = 0; i < 3; ++i) residual[i] = (a[i] - T(2.0) * b[i] + c[i] - rest[i]) * inv_sd;
+    return true;
+  }
+  Eigen::Vector3d rest;
+  double inv_sd;
+};
+
+// Keeps a point no view sees near where it started.
+struct PriorCost {
+  PriorCost(const Eigen::Vector3d& start, double inv_sd) : start(start), inv_sd(inv_sd) {}
+  template <typename T>
+  bool operator()(const T* p, T* residual) const {
+    for (int i = 0; i < 3; ++i) residual[i] = (p[i] - start[i]) * inv_sd;
+    return true;
+  }
+  Eigen::Vector3d start;
+  double inv_sd;
+};
+
+struct SpacingCost {
+  SpacingCost(double spacing, double inv_sd) : spacing(spacing), inv_sd(inv_sd) {}
+  template <typename T>
+  bool operator()(const T* a, const T* b, T* residual) const {
+    const T dx = b[0] - a[0], dy = b[1] - a[1], dz = b[2] - a[2];
+    // The epsilon keeps the derivative finite if two points ever coincide.
+    residual[0] = (sqrt(dx * dx + dy * dy + dz * dz + T(1e-12)) - spacing) * inv_sd;
+    return true;
+  }
+  double spacing, inv_sd;
+};
+
+// Base p of a child at a fixed fraction along parent segment [q0, q1], plus a fixed offset.
+struct PinCost {
+  PinCost(double fraction, const Eigen::Vector3d& offset, double inv_sd)
+      : fraction(fraction), offset(offset), inv_sd(inv_sd) {}
+  template <typename T>
+  bool operator()(const T* p, const T* q0, const T* q1, T* residual) const {
+    for (int i = 0; i < 3; ++i) {
+      residual[i] = (p[i] - (T(1.0 - fraction) * q0[i] + T(fraction) * q1[i]) - offset[i]) * inv_sd;
+    }
+    return true;
+  }
+  double fraction;
+  Eigen::Vector3d offset;
+  double inv_sd;
+};
+
+struct GroundCost {
+  explicit GroundCost(double inv_sd) : inv_sd(inv_sd) {}
+  template <typename T>
+  bool operator()(const T* p, T* residual) const {
+    residual[0] = p[2] * inv_sd;
+    return true;
+  }
+  double inv_sd;
+};
+
+class DeadlineCallback : public ceres::IterationCallback {
+ public:
+  explicit DeadlineCallback(const Deadline& deadline) : deadline_(deadline) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary&) override {
+    if (deadline_.Cancelled()) {
+      cancelled_ = true;
+      return ceres::SOLVER_ABORT;
+    }
+    if (deadline_.Expired()) {
+      expired_ = true;
+      return ceres::SOLVER_TERMINATE_SUCCESSFULLY;  // keeps the current (best) iterate
+    }
+    return ceres::SOLVER_CONTINUE;
+  }
+  bool cancelled() const { return cancelled_; }
+  bool expired() const { return expired_; }
+
+ private:
+  const Deadline& deadline_;
+  bool cancelled_ = false;
+  bool expired_ = false;
+};
+
+Polyline3 Resample(const Polyline3& line, double spacing) {
+  const double length = line.Length();
+  const int n = std::max(2, static_cast<int>(std::lround(length / spacing)) + 1);
+  Polyline3 out;
+  for (int k = 0; k < n; ++k) {
+    const double s = length * k / (n - 1);
+    out.points.push_back(line.PointAt(s));
+    out.radii.push_back(line.RadiusAt(s));
+  }
+  return out;
+}
+
+// The rest shape of a cane: its points with the noise smoothed away (three [1 2 1] / 4 passes;
+// a binomial kernel of sd ~1.2 points), which would otherwise inflate its length and curvature.
+std::vector<Eigen::Vector3d> RestShape(const Polyline3& line) {
+  std::vector<Eigen::Vector3d> p = line.points;
+  for (int pass = 0; pass < kRestSmoothingPasses; ++pass) {
+    std::vector<Eigen::Vector3d> q = p;
+    for (size_t i = 1; i + 1 < p.size(); ++i) q[i] = 0.25 * (p[i - 1] + 2.0 * p[i] + p[i + 1]);
+    p = std::move(q);
+  }
+  return p;
+}
+
+absl::Status ValidateViews(const std::vector<View2D>& views, const RigCalibration& rig) {
+  if (views.size() != rig.cameras.size()) {
+    return absl::InvalidArgumentError(absl::StrCat("views: ", views.size(), " views for ",
+                                                   rig.cameras.size(), " cameras"));
+  }
+  for (size_t v = 0; v < views.size(); ++v) {
+    const View2D& view = views[v];
+    const CameraCalibration& camera = rig.cameras[v];
+    const std::string what = absl::StrCat("views[", v, "]");
+    if (view.width != camera.image_width || view.height != camera.image_height) {
+      return absl::InvalidArgumentError(absl::StrCat(what, ": size ", view.width, "x", view.height,
+                                                     " differs from camera '", camera.name, "' (",
+                                                     camera.image_width, "x", camera.image_height,
+                                                     ")"));
+    }
+    const size_t pixels = static_cast<size_t>(view.width) * view.height;
+    if (view.centreline_distance_px.size() != pixels) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          what, ": centreline_distance_px has ", view.centreline_distance_px.size(),
+          " values, expected ", pixels));
+    }
+    if (view.classes.width != view.width || view.classes.height != view.height ||
+        view.classes.data.size() != pixels) {
+      return absl::InvalidArgumentError(absl::StrCat(what, ": classes image is missing or mis-sized"));
+    }
+    for (size_t i = 0; i < pixels; ++i) {
+      if (!std::isfinite(view.centreline_distance_px[i])) {
+        return absl::InvalidArgumentError(absl::StrCat(
+            what, ": centreline_distance_px is not finite at pixel (", i % view.width, ", ",
+            i / view.width, ")"));
+      }
+    }
+  }
+  return absl::OkStatus();
+}
+
+absl::Status ValidateModel(const VineModel& model) {
+  if (absl::Status s = model.Validate(); !s.ok()) return s;
+  for (size_t i = 0; i < model.canes.size(); ++i) {
+    const Cane& cane = model.canes[i];
+    for (size_t k = 0; k < cane.polyline.points.size(); ++k) {
+      if (cane.polyline.points[k].cwiseAbs().maxCoeff() > kMaxCoordinateM ||
+          cane.polyline.radii[k] > kMaxCoordinateM) {
+        return absl::InvalidArgumentError(absl::StrCat("canes[", i, "] (id ", cane.id.value,
+                                                       "): points[", k, "] is beyond 1 km"));
+      }
+    }
+  }
+  return absl::OkStatus();
+}
+
+// Fraction of a cane's in-image projections that land on (or near) foreground, and how many
+// projections were in an image.
+std::pair<double, int> ForegroundFraction(const Polyline3& line, const std::vector<View2D>& views,
+                                          const RigCalibration& rig, double tolerance_px) {
+  const int reach = static_cast<int>(std::ceil(tolerance_px));
+  int in_image = 0, on_wood = 0;
+  for (size_t v = 0; v < views.size(); ++v) {
+    const View2D& view = views[v];
+    for (const Eigen::Vector3d& p : line.points) {
+      const std::optional<Eigen::Vector2d> uv = rig.cameras[v].Project(p);
+      if (!uv || !rig.cameras[v].InImage(*uv)) continue;
+      ++in_image;
+      const int x0 = static_cast<int>(std::lround(uv->x()));
+      const int y0 = static_cast<int>(std::lround(uv->y()));
+      bool found = false;
+      for (int dy = -reach; dy <= reach && !found; ++dy) {
+        for (int dx = -reach; dx <= reach && !found; ++dx) {
+          const int x = x0 + dx, y = y0 + dy;
+          if (x < 0 || y < 0 || x >= view.width || y >= view.height) continue;
+          if (dx * dx + dy * dy > tolerance_px * tolerance_px) continue;
+          found = view.IsForeground(x, y);
+        }
+      }
+      on_wood += found;
+    }
+  }
+  return {in_image > 0 ? static_cast<double>(on_wood) / in_image : 0.0, in_image};
+}
+
+}  // namespace
+
+absl::Status FitOptions::Validate() const {
+  const std::pair<const char*, double> positive[] = {
+      {"point_spacing_m", point_spacing_m},       {"reprojection_sd_px", reprojection_sd_px},
+      {"pseudo_huber_t_sd", pseudo_huber_t_sd},   {"kink_sd_m", kink_sd_m},
+      {"spacing_sd_m", spacing_sd_m},             {"pin_sd_m", pin_sd_m},
+      {"detached_base_sd_m", detached_base_sd_m}, {"function_tolerance", function_tolerance},
+      {"unseen_prior_sd_m", unseen_prior_sd_m},
+      {"foreground_tolerance_px", foreground_tolerance_px}};
+  for (const auto& [name, value] : positive) {
+    if (!(std::isfinite(value) && value > 0.0)) {
+      return absl::InvalidArgumentError(absl::StrCat(name, ": must be finite and > 0, is ", value));
+    }
+  }
+  for (const auto& [name, value] : {std::pair{"attach_distance_m", attach_distance_m},
+                                    std::pair{"ground_snap_m", ground_snap_m}}) {
+    if (!(std::isfinite(value) && value >= 0.0)) {
+      return absl::InvalidArgumentError(absl::StrCat(name, ": must be finite and >= 0, is ", value));
+    }
+  }
+  for (const auto& [name, value] :
+       {std::pair{"max_outside_fraction", max_outside_fraction},
+        std::pair{"min_foreground_fraction", min_foreground_fraction}}) {
+    if (!(value >= 0.0 && value <= 1.0)) {
+      return absl::InvalidArgumentError(absl::StrCat(name, ": must be in [0, 1], is ", value));
+    }
+  }
+  if (max_iterations < 1) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("max_iterations: must be >= 1, is ", max_iterations));
+  }
+  if (min_visible_points < 1) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("min_visible_points: must be >= 1, is ", min_visible_points));
+  }
+  const Eigen::AlignedBox3d& box = working_volume.box;
+  if (!box.min().allFinite() || !box.max().allFinite() || box.isEmpty()) {
+    return absl::InvalidArgumentError("working_volume: box must be finite and non-empty");
+  }
+  return absl::OkStatus();
+}
+
+absl::Status RefineModel(VineModel* model, const std::vector<View2D>& views,
+                         const RigCalibration& rig, const FitOptions& options,
+                         const Deadline& deadline, FitSummary* summary) {
+  const auto start_time = std::chrono::steady_clock::now();
+  FitSummary local_summary;
+  FitSummary& out = summary != nullptr ? *summary : local_summary;
+  out = FitSummary();
+  if (model == nullptr) return absl::InvalidArgumentError("model: null");
+  if (absl::Status s = options.Validate(); !s.ok()) return s;
+  if (absl::Status s = rig.Validate(); !s.ok()) return s;
+  if (absl::Status s = ValidateViews(views, rig); !s.ok()) return s;
+  if (absl::Status s = ValidateModel(*model); !s.ok()) return s;
+  out.canes_in = out.canes_out = static_cast<int>(model->canes.size());
+  if (model->canes.empty()) return absl::OkStatus();
+  if (absl::Status s = deadline.Check("RefineModel"); !s.ok()) return s;
+
+  // Parameters: every resampled point is its own block of 3.
+  const size_t cane_count = model->canes.size();
+  std::vector<Polyline3> lines(cane_count);
+  for (size_t c = 0; c < cane_count; ++c) {
+    lines[c] = Resample(model->canes[c].polyline, options.point_spacing_m);
+  }
+  std::vector<std::vector<double>> params(cane_count);
+  for (size_t c = 0; c < cane_count; ++c) {
+    for (const Eigen::Vector3d& p : lines[c].points) params[c].insert(params[c].end(), {p.x(), p.y(), p.z()});
+  }
+  auto block = [&](size_t c, size_t i) { return params[c].data() + 3 * i; };
+  std::unordered_map<int64_t, size_t> index_of_id;
+  for (size_t c = 0; c < cane_count; ++c) index_of_id[model->canes[c].id.value] = c;
+
+  // Rejection runs before the fit (a ghost near real structure would otherwise be pulled onto
+  // it) and after it. remove: 0 keep, 1 rejected, 2 descendant of a rejected cane.
+  std::vector<char> remove(cane_count, 0);
+  auto reject = [&]() {
+    for (size_t c = 0; c < cane_count; ++c) {
+      if (remove[c] || !model->canes[c].parent_id.has_value()) continue;  // trunk carries all
+      size_t outside = 0;
+      for (const Eigen::Vector3d& p : lines[c].points) {
+        outside += !options.working_volume.Contains(p);
+      }
+      if (outside > options.max_outside_fraction * lines[c].points.size()) {
+        remove[c] = 1;
+        ++out.rejected_outside;
+        continue;
+      }
+      const auto [fraction, visible] =
+          ForegroundFraction(lines[c], views, rig, options.foreground_tolerance_px);
+      if (visible >= options.min_visible_points && fraction < options.min_foreground_fraction) {
+        remove[c] = 1;
+        ++out.rejected_background;
+      }
+    }
+    for (size_t c = 0; c < cane_count; ++c) {
+      if (remove[c] != 1) continue;
+      for (const CaneId& id : model->DescendantsOf(model->canes[c].id)) {
+        const size_t d = index_of_id.at(id.value);
+        if (!remove[d]) {
+          remove[d] = 2;
+          ++out.removed_with_parent;
+        }
+      }
+    }
+  };
+  reject();
+
+  // The cost reads the *squared* distance map: Keys' cubic convolution reproduces quadratics, so
+  // interpolating d^2 and taking the root gives the sub-pixel distance to the skeleton, where
+  // interpolating d itself gives a flat-bottomed bowl (d ~ 2 x^2 within a pixel of the
+  // centreline) in which the regularisers, not the images, would place the points.
+  std::vector<std::vector<float>> squared(views.size());
+  std::vector<std::unique_ptr<Grid>> grids;
+  std::vector<std::unique_ptr<Interpolator>> interpolators;
+  std::vector<Projector> projectors;
+  for (size_t v = 0; v < views.size(); ++v) {
+    squared[v].resize(views[v].centreline_distance_px.size());
+    std::transform(views[v].centreline_distance_px.begin(), views[v].centreline_distance_px.end(),
+                   squared[v].begin(), [](float d) { return d * d; });
+    grids.push_back(std::make_unique<Grid>(squared[v].data(), 0, views[v].height, 0,
+                                           views[v].width));
+    interpolators.push_back(std::make_unique<Interpolator>(*grids.back()));
+    projectors.emplace_back(rig.cameras[v]);
+  }
+
+  ceres::Problem::Options problem_options;
+  problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  ceres::Problem problem(problem_options);
+  ceres::SoftLOneLoss loss(options.pseudo_huber_t_sd);
+  const double inv_px = 1.0 / options.reprojection_sd_px;
+  // The bicubic interpolator reads a 4x4 neighbourhood; keep clear of the border.
+  constexpr double kMarginPx = 2.0;
+  for (size_t c = 0; c < cane_count; ++c) {
+    if (remove[c]) continue;
+    const Polyline3& line = lines[c];
+    const size_t n = line.points.size();
+    for (size_t i = 0; i < n; ++i) problem.AddParameterBlock(block(c, i), 3);
+    std::vector<int> seen_by(n, 0);
+    for (size_t v = 0; v < views.size(); ++v) {
+      const CameraCalibration& camera = rig.cameras[v];
+      for (size_t i = 0; i < n; ++i) {
+        const std::optional<Eigen::Vector2d> uv = camera.Project(line.points[i]);
+        if (!uv || uv->x() < kMarginPx || uv->y() < kMarginPx ||
+            uv->x() > camera.image_width - 1 - kMarginPx ||
+            uv->y() > camera.image_height - 1 - kMarginPx) {
+          continue;
+        }
+        problem.AddResidualBlock(
+            new ceres::AutoDiffCostFunction<CentrelineCost, 1, 3>(
+                new CentrelineCost(projectors[v], interpolators[v].get(), inv_px)),
+            &loss, block(c, i));
+        ++seen_by[i];
+      }
+    }
+    for (size_t i = 0; i < n; ++i) {
+      if (seen_by[i] > 0) continue;
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<PriorCost, 3, 3>(
+                                   new PriorCost(line.points[i], 1.0 / options.unseen_prior_sd_m)),
+                               nullptr, block(c, i));
+    }
+    const std::vector<Eigen::Vector3d> rest = RestShape(line);
+    for (size_t i = 1; i + 1 < n; ++i) {
+      problem.AddResidualBlock(
+          new ceres::AutoDiffCostFunction<KinkCost, 3, 3, 3, 3>(new KinkCost(
+              rest[i - 1] - 2.0 * rest[i] + rest[i + 1], 1.0 / options.kink_sd_m)),
+          nullptr, block(c, i - 1), block(c, i), block(c, i + 1));
+    }
+    double rest_length = 0.0;
+    for (size_t i = 1; i < n; ++i) rest_length += (rest[i] - rest[i - 1]).norm();
+    const double spacing = rest_length / static_cast<double>(n - 1);
+    for (size_t i = 0; i + 1 < n; ++i) {
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<SpacingCost, 1, 3, 3>(
+                                   new SpacingCost(spacing, 1.0 / options.spacing_sd_m)),
+                               nullptr, block(c, i), block(c, i + 1));
+    }
+    const Cane& cane = model->canes[c];
+    if (!cane.parent_id.has_value()) {
+      if (std::abs(line.points[0].z()) > options.ground_snap_m) continue;
+      problem.AddResidualBlock(
+          new ceres::AutoDiffCostFunction<GroundCost, 1, 3>(new GroundCost(1.0 / options.pin_sd_m)),
+          nullptr, block(c, 0));
+      continue;
+    }
+    // The nearest point of the parent, as a fixed segment and fraction.
+    const size_t parent = index_of_id.at(cane.parent_id->value);
+    const Polyline3& parent_line = lines[parent];
+    double best = std::numeric_limits<double>::infinity(), fraction = 0.0;
+    size_t segment = 0;
+    for (size_t k = 0; k + 1 < parent_line.points.size(); ++k) {
+      double t = 0.0;
+      const double d = PointSegmentDistance(line.points[0], parent_line.points[k],
+                                            parent_line.points[k + 1], &t);
+      if (d < best) best = d, segment = k, fraction = t;
+    }
+    const Eigen::Vector3d attach = (1.0 - fraction) * parent_line.points[segment] +
+                                   fraction * parent_line.points[segment + 1];
+    const bool on_parent = best <= options.attach_distance_m;
+    const Eigen::Vector3d offset = on_parent ? Eigen::Vector3d::Zero() : Eigen::Vector3d(line.points[0] - attach);
+    const double sd = on_parent ? options.pin_sd_m : options.detached_base_sd_m;
+    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<PinCost, 3, 3, 3, 3>(
+                                 new PinCost(fraction, offset, 1.0 / sd)),
+                             nullptr, block(c, 0), block(parent, segment),
+                             block(parent, segment + 1));
+  }
+
+  ceres::Solver::Options solver_options;
+  solver_options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+  solver_options.num_threads = 1;
+  solver_options.max_num_iterations = options.max_iterations;
+  solver_options.function_tolerance = options.function_tolerance;
+  solver_options.logging_type = ceres::SILENT;
+  solver_options.minimizer_progress_to_stdout = false;
+  const double remaining_s = deadline.RemainingS();
+  solver_options.max_solver_time_in_seconds = std::min(remaining_s, 1e6);
+  DeadlineCallback callback(deadline);
+  solver_options.callbacks.push_back(&callback);
+  ceres::Solver::Summary ceres_summary;
+  try {
+    ceres::Solve(solver_options, &problem, &ceres_summary);
+  } catch (const std::exception& e) {
+    return absl::InternalError(absl::StrCat("RefineModel: Ceres threw: ", e.what()));
+  }
+  if (callback.cancelled()) return absl::CancelledError("RefineModel: cancelled");
+  if (!ceres_summary.IsSolutionUsable()) {
+    return absl::InternalError(
+        absl::StrCat("RefineModel: Ceres failed: ", ceres_summary.message));
+  }
+  out.iterations = static_cast<int>(ceres_summary.iterations.size()) - 1;
+  out.initial_cost = ceres_summary.initial_cost;
+  out.final_cost = ceres_summary.final_cost;
+  out.message = ceres_summary.BriefReport();
+  if (callback.expired() || (ceres_summary.termination_type == ceres::NO_CONVERGENCE &&
+                             deadline.Expired())) {
+    out.termination = FitTermination::kDeadline;
+  } else if (ceres_summary.termination_type == ceres::NO_CONVERGENCE) {
+    out.termination = FitTermination::kIterationLimit;
+  } else {
+    out.termination = FitTermination::kConverged;
+  }
+
+  // Write back, then reject.
+  for (size_t c = 0; c < cane_count; ++c) {
+    if (remove[c]) continue;
+    for (size_t i = 0; i < lines[c].points.size(); ++i) {
+      lines[c].points[i] = Eigen::Vector3d(block(c, i)[0], block(c, i)[1], block(c, i)[2]);
+    }
+  }
+  reject();
+  std::vector<Cane> kept;
+  for (size_t c = 0; c < cane_count; ++c) {
+    if (remove[c]) continue;
+    Cane cane = model->canes[c];
+    cane.polyline = std::move(lines[c]);
+    kept.push_back(std::move(cane));
+  }
+  model->canes = std::move(kept);
+  out.canes_out = static_cast<int>(model->canes.size());
+  out.solve_time_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start_time).count();
+  return absl::OkStatus();
+}
+
+}  // namespace vb::reconstruct
