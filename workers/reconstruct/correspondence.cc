@@ -192,9 +192,9 @@ absl::StatusOr<std::vector<ScoredCandidate>> ScoreCandidates(
           if (c == a || c == b || IsEmptyView(views[c])) continue;
           others.push_back(CheckInView(s.fit.points, views[c], samples[c], rig.cameras[c]));
         }
-        s.two_view_features = ComputeMatchFeatures(s.candidate, s.fit, {});
+        s.two_view_features = ComputeMatchFeatures(s.candidate, s.fit, {}, options.volume);
         s.multi_view = !others.empty();
-        s.features = s.multi_view ? ComputeMatchFeatures(s.candidate, s.fit, others)
+        s.features = s.multi_view ? ComputeMatchFeatures(s.candidate, s.fit, others, options.volume)
                                   : s.two_view_features;
         s.probability = MatchProbability(
             s.features, s.multi_view ? options.classifier.multi_view : options.classifier.two_view);

@@ -8,6 +8,7 @@
 #include "gtest/gtest.h"
 #include "sim/rig.h"
 #include "sim/vine_generator.h"
+#include "workers/reconstruct/correspondence_test_util.h"
 #include "workers/reconstruct/synthetic_views.h"
 
 namespace vb::reconstruct {
@@ -29,28 +30,10 @@ RigCalibration Rig(int cameras) {
   return sim::MakeRig(options).value();
 }
 
-// Points of a piece, sampled along its polyline every 2 mm.
-std::vector<Eigen::Vector3d> PiecePoints(const Piece3D& piece) { return piece.polyline.Sample(0.002); }
-
 double MaxDistance(const Piece3D& piece, const Polyline3& truth) {
   double worst = 0.0;
   for (const Eigen::Vector3d& p : PiecePoints(piece)) worst = std::max(worst, DistanceToPolyline(p, truth));
   return worst;
-}
-
-// Fraction of `truth` (sampled every 5 mm) within `tolerance_m` of some piece.
-double Coverage(const Polyline3& truth, const std::vector<Piece3D>& pieces, double tolerance_m) {
-  const std::vector<Eigen::Vector3d> samples = truth.Sample(0.005);
-  int covered = 0;
-  for (const Eigen::Vector3d& s : samples) {
-    for (const Piece3D& piece : pieces) {
-      if (DistanceToPolyline(s, piece.polyline) <= tolerance_m) {
-        ++covered;
-        break;
-      }
-    }
-  }
-  return static_cast<double>(covered) / samples.size();
 }
 
 TEST(MatchSegments, StraightCaneInTwoViewsReconstructsWithin2mm) {
@@ -165,26 +148,10 @@ TEST(MatchSegments, ExpiredDeadlineFails) {
             absl::StatusCode::kCancelled);
 }
 
-// Part of each true cane seen by at least two cameras, as polylines (split where it is not).
-std::vector<Polyline3> SeenByTwo(const Polyline3& cane, const RigCalibration& rig) {
-  std::vector<Polyline3> parts;
-  Polyline3 current;
-  for (const Eigen::Vector3d& p : cane.Sample(0.005)) {
-    int seen = 0;
-    for (const CameraCalibration& camera : rig.cameras) {
-      const auto uv = camera.Project(p);
-      seen += uv && camera.InImage(*uv) ? 1 : 0;
-    }
-    if (seen >= 2) {
-      current.points.push_back(p);
-      current.radii.push_back(0.001);
-    } else if (!current.points.empty()) {
-      if (current.points.size() >= 2) parts.push_back(current);
-      current = {};
-    }
-  }
-  if (current.points.size() >= 2) parts.push_back(current);
-  return parts;
+size_t SegmentCount(const std::vector<View2D>& views) {
+  size_t n = 0;
+  for (const View2D& v : views) n += v.segments.size();
+  return n;
 }
 
 TEST(MatchSegments, SyntheticVineIsCoveredAndPrecise) {
@@ -198,40 +165,116 @@ TEST(MatchSegments, SyntheticVineIsCoveredAndPrecise) {
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   ASSERT_TRUE(pieces.ok()) << pieces.status();
-
-  double truth_length = 0.0, covered_length = 0.0;
-  for (const Cane& cane : scene.vine.canes) {
-    for (const Polyline3& part : SeenByTwo(cane.polyline, truth_rig)) {
-      truth_length += part.Length();
-      covered_length += part.Length() * Coverage(part, *pieces, 0.01);
-    }
-  }
-  double piece_length = 0.0, precise_length = 0.0;
-  for (const Piece3D& piece : *pieces) {
-    const std::vector<Eigen::Vector3d> points = PiecePoints(piece);
-    int near = 0;
-    for (const Eigen::Vector3d& p : points) {
-      for (const Cane& cane : scene.vine.canes) {
-        if (DistanceToPolyline(p, cane.polyline) <= 0.01) {
-          ++near;
-          break;
-        }
-      }
-    }
-    piece_length += piece.polyline.Length();
-    precise_length += piece.polyline.Length() * near / std::max<size_t>(1, points.size());
-  }
-  size_t segments = 0;
-  for (const View2D& v : views) segments += v.segments.size();
-  const double coverage = covered_length / truth_length;
-  const double precision = precise_length / std::max(piece_length, 1e-9);
+  const Metrics m = Evaluate(*pieces, scene.vine, scene.vine, truth_rig);
   std::printf("[ synthetic vine seed %llu ] %zu canes, %zu segments in 3 views, %zu pieces; "
               "coverage %.3f of %.2f m, precision %.3f of %.2f m; MatchSegments %.0f ms\n",
-              static_cast<unsigned long long>(seed), scene.vine.canes.size(), segments,
-              pieces->size(), coverage, truth_length, precision, piece_length, 1e3 * seconds);
-  EXPECT_GE(coverage, 0.8);
-  EXPECT_GE(precision, 0.9);
+              static_cast<unsigned long long>(seed), scene.vine.canes.size(), SegmentCount(views),
+              pieces->size(), m.coverage, m.truth_m, m.precision, m.pieces_m, 1e3 * seconds);
+  EXPECT_GE(m.coverage, 0.8);
+  EXPECT_GE(m.precision, 0.9);
 }
 
+// Harder: neighbours' canes intrude, segments are broken and wobble (correspondence_test_util.h).
+TEST(MatchSegments, DegradedStopWithNeighboursIsMostlyRight) {
+  for (uint64_t seed : {1500, 1501}) {
+    const SimulatedStop stop = MakeSimulatedStop(seed);
+    const auto start = std::chrono::steady_clock::now();
+    const auto pieces = MatchSegments(stop.views, stop.rig, {}, Deadline::Infinite());
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    ASSERT_TRUE(pieces.ok()) << pieces.status();
+    const Metrics m = Evaluate(*pieces, stop.scene.vine, stop.drawn, stop.true_rig);
+    std::printf("[ degraded stop seed %llu ] %zu canes drawn, %zu segments in 3 views, %zu "
+                "pieces; coverage %.3f of %.2f m, precision %.3f of %.2f m; MatchSegments "
+                "%.0f ms\n",
+                static_cast<unsigned long long>(seed), stop.drawn.canes.size(),
+                SegmentCount(stop.views), pieces->size(), m.coverage, m.truth_m, m.precision,
+                m.pieces_m, 1e3 * seconds);
+    EXPECT_GE(m.coverage, 0.7);
+    EXPECT_GE(m.precision, 0.85);
+  }
+}
+
+// Timing on a busy stop: canes broken every 25-125 px gives ~100-300 segments per view. Prints
+// the best of 3 runs (the machine is shared); speed is asserted nowhere (STYLE.md).
+TEST(MatchSegments, TimingOnABusyStop) {
+  for (uint64_t seed : {1600, 1601}) {
+    const SimulatedStop stop = MakeSimulatedStop(seed, 25.0);
+    double best = 1e9;
+    size_t count = 0;
+    for (int run = 0; run < 3; ++run) {
+      const auto start = std::chrono::steady_clock::now();
+      const auto pieces = MatchSegments(stop.views, stop.rig, {}, Deadline::Infinite());
+      best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() -
+                                                          start).count());
+      ASSERT_TRUE(pieces.ok()) << pieces.status();
+      count = pieces->size();
+    }
+    const Metrics m = Evaluate(count ? MatchSegments(stop.views, stop.rig, {}, Deadline::Infinite()).value() : std::vector<Piece3D>{}, stop.scene.vine, stop.drawn, stop.true_rig);
+    std::printf("[ busy stop seed %llu ] %zu segments per view (mean), %zu pieces, coverage %.3f "
+                "precision %.3f; MatchSegments best of 3: %.0f ms\n",
+                static_cast<unsigned long long>(seed), SegmentCount(stop.views) / 3, count,
+                m.coverage, m.precision, 1e3 * best);
+    EXPECT_GT(count, 0u);
+  }
+}
+
+TEST(MatchSegments, DISABLED_Diagnose) {
+  const char* env = std::getenv("VB_SEED");
+  const uint64_t seed = env ? std::atoi(env) : 1500;
+  const SimulatedStop stop = MakeSimulatedStop(seed);
+  std::vector<const Polyline3*> truth;
+  for (const Cane& cane : stop.drawn.canes) truth.push_back(&cane.polyline);
+  const auto scored = ScoreCandidates(stop.views, stop.rig, {}, Deadline::Infinite()).value();
+  auto as_pieces = [&](auto pred) {
+    std::vector<Piece3D> out;
+    for (const ScoredCandidate& c : scored) {
+      if (!pred(c)) continue;
+      Piece3D p;
+      p.polyline.points = c.fit.control_points;
+      p.polyline.radii = c.fit.radii;
+      out.push_back(p);
+    }
+    return out;
+  };
+  auto report = [&](const char* name, const std::vector<Piece3D>& pieces) {
+    const Metrics m = Evaluate(pieces, stop.scene.vine, stop.drawn, stop.true_rig);
+    std::printf("%-12s %4zu pieces coverage %.3f precision %.3f\n", name, pieces.size(), m.coverage, m.precision);
+  };
+  report("all", as_pieces([](const ScoredCandidate&) { return true; }));
+  report("right", as_pieces([&](const ScoredCandidate& c) { return IsRightMatch(c.fit.points, truth); }));
+  report("p>0.5", as_pieces([](const ScoredCandidate& c) { return c.probability > 0.5; }));
+  report("p>0.2", as_pieces([](const ScoredCandidate& c) { return c.probability > 0.2; }));
+  report("selected", MatchSegments(stop.views, stop.rig, {}, Deadline::Infinite()).value());
+  {
+    std::vector<double> probs;
+    std::vector<bool> right;
+    for (const ScoredCandidate& c : scored) { probs.push_back(c.probability); right.push_back(IsRightMatch(c.fit.points, truth)); }
+    const auto conflicts = CandidateConflicts(scored, 8.0);
+    const auto marg = GibbsMarginals(probs, conflicts, {});
+    int shown = 0;
+    for (size_t i = 0; i < scored.size() && shown < 12; ++i) {
+      if (!right[i] || probs[i] < 0.5 || marg[i] >= 0.5) continue;
+      ++shown;
+      const auto& c = scored[i].candidate;
+      std::printf("right %zu (v%d s%d v%d t%d [%.0f,%.0f] [%.0f,%.0f]) p %.2f m %.2f; conflicts:", i, c.view_a, c.segment_a, c.view_b, c.segment_b, c.begin_a_px, c.end_a_px, c.begin_b_px, c.end_b_px, probs[i], marg[i]);
+      for (int j : conflicts[i]) {
+        const auto& d = scored[j].candidate;
+        std::printf(" [%d %s p%.2f m%.2f s%d t%d a[%.0f,%.0f] b[%.0f,%.0f]]", j, right[j] ? "R" : "w", probs[j], marg[j], d.segment_a, d.segment_b, d.begin_a_px, d.end_a_px, d.begin_b_px, d.end_b_px);
+      }
+      std::printf("\n");
+    }
+  }
+  // Per view pair: right candidates.
+  for (int a = 0; a < 3; ++a) for (int b = a + 1; b < 3; ++b) {
+    int n = 0, r = 0;
+    for (const ScoredCandidate& c : scored) {
+      if (c.candidate.view_a != a || c.candidate.view_b != b) continue;
+      ++n;
+      r += IsRightMatch(c.fit.points, truth);
+    }
+    std::printf("pair %d%d: %d candidates, %d right\n", a, b, n, r);
+  }
+}
 }  // namespace
 }  // namespace vb::reconstruct

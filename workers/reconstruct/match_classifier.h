@@ -16,7 +16,7 @@
 namespace vb::reconstruct {
 
 // Feature vector of a candidate; index 0 is the constant 1 (bias). See ComputeMatchFeatures.
-inline constexpr int kMatchFeatureCount = 16;
+inline constexpr int kMatchFeatureCount = 19;
 using MatchFeatures = std::array<double, kMatchFeatureCount>;
 
 // Weights of the logistic model: P(right) = 1 / (1 + exp(-w . features)). Two models: one for
@@ -35,9 +35,13 @@ MatchClassifier DefaultMatchClassifier();
 // metre), min over the views of the mean |sin| epipolar angle, hit density (hits per sample
 // spanned), coverage of segment_a and of segment_b (covered fraction), and from the other views
 // (`others`, empty for none: all 0): fraction inside the image, and times that, foreground
-// fraction, mean centreline distance / 10 px and tangent agreement; last log(mean radius / 5 mm).
+// fraction, mean centreline distance / 10 px and tangent agreement; log(mean radius / 5 mm);
+// from the other views again, fraction inside times the near and aligned fractions; and the
+// squared offset of the piece's mean y (across the row) from the middle of `volume`, in units of
+// its half-depth (canes cluster about the trellis plane; wrong matches scatter in depth).
 MatchFeatures ComputeMatchFeatures(const MatchCandidate& candidate, const PolylineFit& fit,
-                                   const std::vector<ViewSupport>& others);
+                                   const std::vector<ViewSupport>& others,
+                                   const WorkingVolume& volume);
 
 // 1 / (1 + exp(-weights . features)), clamped against overflow.
 double MatchProbability(const MatchFeatures& features, const MatchFeatures& weights);

@@ -7,86 +7,24 @@
 #include <cstdlib>
 
 #include "gtest/gtest.h"
-#include "sim/rig.h"
-#include "sim/vine_generator.h"
 #include "workers/reconstruct/correspondence.h"
-#include "workers/reconstruct/synthetic_views.h"
+#include "workers/reconstruct/correspondence_test_util.h"
 
 namespace vb::reconstruct {
 namespace {
-
-// Portable noise for the training stops (std distributions differ between libraries).
-class Noise {
- public:
-  explicit Noise(uint64_t seed) : state_(seed * 0x9E3779B97F4A7C15ull + 1) {}
-  double Uniform() {
-    uint64_t z = (state_ += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return static_cast<double>((z ^ (z >> 31)) >> 11) * 0x1.0p-53;
-  }
-  double Gaussian() {
-    const double u = std::max(Uniform(), 1e-300);
-    return std::sqrt(-2.0 * std::log(u)) * std::cos(6.283185307179586 * Uniform());
-  }
-
- private:
-  uint64_t state_;
-};
-
-// What a real 2D stage does to perfect segments, roughly: smooth sub-pixel wobble of the
-// skeleton, noisy widths, and canes broken into pieces (at junctions, crossings, occlusions).
-void Degrade(View2D* view, Noise* noise) {
-  std::vector<Segment2D> out;
-  for (const Segment2D& s : view->segments) {
-    Segment2D current;
-    double wobble_x = 0.0, wobble_y = 0.0, width_scale = 1.0 + 0.1 * noise->Gaussian();
-    double next_break = 100.0 + 400.0 * noise->Uniform(), arc = 0.0;
-    for (size_t i = 0; i < s.points.size(); ++i) {
-      if (i > 0) arc += (s.points[i] - s.points[i - 1]).norm();
-      wobble_x = 0.9 * wobble_x + 0.13 * noise->Gaussian();
-      wobble_y = 0.9 * wobble_y + 0.13 * noise->Gaussian();
-      if (arc > next_break) {
-        if (current.points.size() >= 2) out.push_back(current);
-        current = {};
-        next_break = arc + 100.0 + 400.0 * noise->Uniform();
-        width_scale = 1.0 + 0.1 * noise->Gaussian();
-        i += 2;  // a small gap where the cane was broken
-        continue;
-      }
-      current.points.push_back(s.points[i] + Eigen::Vector2d(wobble_x, wobble_y));
-      current.widths_px.push_back(
-          std::max(1.0, s.widths_px[i] * width_scale * (1.0 + 0.05 * noise->Gaussian())));
-    }
-    if (current.points.size() >= 2) out.push_back(current);
-  }
-  view->segments = std::move(out);
-  view->nodes.clear();
-}
 
 struct TrainingStop {
   std::vector<LabelledMatch> multi_view;
   std::vector<LabelledMatch> two_view;
 };
 
-// A simulated stop from vineyard `seed` (the vine and its neighbours drawn with SyntheticViews,
-// degraded, matched through a 1 px-perturbed calibration), every fitted candidate labelled
+// Every fitted candidate of the degraded stop of vineyard `seed` (SimulatedStop), labelled
 // against ground truth: right iff >= 90% of its points lie within 1 cm of one true cane.
 TrainingStop MakeTrainingStop(uint64_t seed) {
-  const sim::Scene scene = sim::GenerateScene(seed, 0).value();
-  VineModel drawn = scene.vine;
-  for (const VineModel& neighbour : scene.neighbours) {
-    for (const Cane& cane : neighbour.canes) drawn.canes.push_back(cane);
-    for (const Sphere& s : neighbour.head.spheres) drawn.head.spheres.push_back(s);
-  }
+  const SimulatedStop sim_stop = MakeSimulatedStop(seed);
   std::vector<const Polyline3*> truth;
-  for (const Cane& cane : drawn.canes) truth.push_back(&cane.polyline);
-  const RigCalibration true_rig = sim::MakeRig().value();
-  std::vector<View2D> views = SyntheticViews(drawn, true_rig);
-  Noise noise(seed);
-  for (View2D& view : views) Degrade(&view, &noise);
-  const RigCalibration rig = sim::PerturbCalibration(true_rig, 1.0, seed);
-  const auto scored = ScoreCandidates(views, rig, {}, Deadline::Infinite());
+  for (const Cane& cane : sim_stop.drawn.canes) truth.push_back(&cane.polyline);
+  const auto scored = ScoreCandidates(sim_stop.views, sim_stop.rig, {}, Deadline::Infinite());
   TrainingStop stop;
   if (!scored.ok()) return stop;
   for (const ScoredCandidate& c : *scored) {
@@ -211,6 +149,25 @@ TEST(MatchClassifier, DISABLED_TrainOnSimulatedStops) {
   std::printf("training AUC multi %.3f two %.3f\n", Auc(multi, *w_multi), Auc(two, *w_two));
   PrintWeights("multi_view", *w_multi);
   PrintWeights("two_view", *w_two);
+  // Choose alpha on stops not trained on (seeds 1900-1909): coverage and precision of the
+  // selected pieces (correspondence_test_util.h Evaluate).
+  CorrespondenceOptions options;
+  options.classifier.multi_view = *w_multi;
+  options.classifier.two_view = *w_two;
+  for (double alpha : {0.5, 1.0, 1.5, 2.0, 3.0, 4.0}) {
+    options.alpha = alpha;
+    double coverage = 0.0, precision = 0.0;
+    const int held_out = 10;
+    for (int k = 0; k < held_out; ++k) {
+      const SimulatedStop stop = MakeSimulatedStop(1900 + k);
+      const auto pieces = MatchSegments(stop.views, stop.rig, options, Deadline::Infinite());
+      ASSERT_TRUE(pieces.ok()) << pieces.status();
+      const Metrics m = Evaluate(*pieces, stop.scene.vine, stop.drawn, stop.true_rig);
+      coverage += m.coverage / held_out;
+      precision += m.precision / held_out;
+    }
+    std::printf("alpha %.1f: held-out coverage %.3f precision %.3f\n", alpha, coverage, precision);
+  }
 }
 
 }  // namespace

@@ -33,16 +33,15 @@ struct Problem {
       g->setZero(dim);
     }
     double cost = 0.0;
-    auto add = [&](const Eigen::Matrix<double, Eigen::Dynamic, 3>& jx, const Eigen::VectorXd& r,
-                   int k, double w) {
+    auto add = [&](const auto& jx, const auto& r, int k, double w) {
       cost += r.squaredNorm();
       if (!h) return;
+      const Eigen::Matrix3d jtj = jx.transpose() * jx;
+      const Eigen::Vector3d jtr = jx.transpose() * r;
       const double wk[2] = {1.0 - w, w};
       for (int u = 0; u < 2; ++u) {
-        g->segment<3>(3 * (k + u)) += wk[u] * jx.transpose() * r;
-        for (int v = 0; v < 2; ++v) {
-          h->block<3, 3>(3 * (k + u), 3 * (k + v)) += wk[u] * wk[v] * jx.transpose() * jx;
-        }
+        g->segment<3>(3 * (k + u)) += wk[u] * jtr;
+        for (int v = 0; v < 2; ++v) h->block<3, 3>(3 * (k + u), 3 * (k + v)) += wk[u] * wk[v] * jtj;
       }
     };
     const auto& hits = candidate.hits;
@@ -63,12 +62,13 @@ struct Problem {
             -y.y() / (y.z() * y.z());
         const Eigen::Matrix<double, 2, 3> jx = f * dpi * r;
         if (view == 0) {
-          add(jx, f * (pi - hits[j].xa), k, w);
+          const Eigen::Vector2d res = f * (pi - hits[j].xa);
+          add(jx, res, k, w);
         } else {
           const Eigen::Vector2d& n = hits[j].normal_b;
-          Eigen::VectorXd res(1);
-          res(0) = f * n.dot(pi - hits[j].xb);
-          add(n.transpose() * jx, res, k, w);
+          const Eigen::Matrix<double, 1, 1> res(f * n.dot(pi - hits[j].xb));
+          const Eigen::Matrix<double, 1, 3> jn = n.transpose() * jx;
+          add(jn, res, k, w);
         }
       }
     }
@@ -245,6 +245,7 @@ ViewSupport CheckInView(const std::vector<Eigen::Vector3d>& points, const View2D
   const Eigen::Isometry3d from_platform = camera.camera_from_platform();
   int inside = 0, foreground = 0;
   double centreline = 0.0, tangent = 0.0;
+  int near = 0, aligned = 0;
   const size_t n = points.size();
   for (size_t j = 0; j < n; ++j) {
     const auto uv = camera.Project(points[j]);
@@ -263,9 +264,11 @@ ViewSupport CheckInView(const std::vector<Eigen::Vector3d>& points, const View2D
       }
     }
     foreground += on ? 1 : 0;
-    centreline += has_distance
-                      ? view.centreline_distance_px[static_cast<size_t>(y) * view.width + x]
-                      : kCentrelineDistanceCapPx;
+    const double distance_px =
+        has_distance ? view.centreline_distance_px[static_cast<size_t>(y) * view.width + x]
+                     : kCentrelineDistanceCapPx;
+    centreline += distance_px;
+    near += distance_px <= 2.5 ? 1 : 0;
     const Eigen::Vector3d y0 = from_platform * points[j == 0 ? 0 : j - 1];
     const Eigen::Vector3d y1 = from_platform * points[j + 1 == n ? n - 1 : j + 1];
     const Eigen::Vector3d yj = from_platform * points[j];
@@ -274,7 +277,9 @@ ViewSupport CheckInView(const std::vector<Eigen::Vector3d>& points, const View2D
     double distance;
     Eigen::Vector2d piece;
     if (dir.norm() > 0 && samples.NearestPiece(yj.hnormalized(), 6.0 / f, &distance, &piece)) {
-      tangent += std::abs(dir.normalized().dot(piece));
+      const double agreement = std::abs(dir.normalized().dot(piece));
+      tangent += agreement;
+      aligned += distance * f <= 3.0 && agreement > 0.95 ? 1 : 0;
     }
   }
   support.in_image = static_cast<double>(inside) / n;
@@ -282,6 +287,8 @@ ViewSupport CheckInView(const std::vector<Eigen::Vector3d>& points, const View2D
     support.foreground = static_cast<double>(foreground) / inside;
     support.centreline_px = centreline / inside;
     support.tangent = tangent / inside;
+    support.near = static_cast<double>(near) / inside;
+    support.aligned = static_cast<double>(aligned) / inside;
   }
   return support;
 }

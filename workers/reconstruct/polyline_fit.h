@@ -50,6 +50,9 @@ struct ViewSupport {
   double centreline_px = 0.0;   // of those, mean centreline_distance_px
   double tangent = 0.0;         // of those, mean |cos| between the projected tangent and the
                                 // nearest skeleton piece within 6 px (0 when none)
+  double near = 0.0;            // of those, fraction within 2.5 px of the centreline
+  double aligned = 0.0;         // of those, fraction with a skeleton piece within 3 px whose
+                                // direction agrees (|cos| > 0.95)
 };
 
 // `points` ordered along the piece. Views with no class image count as no evidence.

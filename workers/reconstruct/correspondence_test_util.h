@@ -1,0 +1,171 @@
+// SPDX-License-Identifier: Apache-2.0
+// Test support for correspondence: simulated stops drawn by SyntheticViews and degraded roughly
+// as a real 2D stage would degrade them. Header-only; tests and training only.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "sim/rig.h"
+#include "sim/vine_generator.h"
+#include "workers/reconstruct/match_classifier.h"
+#include "workers/reconstruct/piece3d.h"
+#include "workers/reconstruct/synthetic_views.h"
+
+namespace vb::reconstruct {
+
+// Portable noise for the simulated stops (std distributions differ between libraries).
+class Noise {
+ public:
+  explicit Noise(uint64_t seed) : state_(seed * 0x9E3779B97F4A7C15ull + 1) {}
+  double Uniform() {
+    uint64_t z = (state_ += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return static_cast<double>((z ^ (z >> 31)) >> 11) * 0x1.0p-53;
+  }
+  double Gaussian() {
+    const double u = std::max(Uniform(), 1e-300);
+    return std::sqrt(-2.0 * std::log(u)) * std::cos(6.283185307179586 * Uniform());
+  }
+
+ private:
+  uint64_t state_;
+};
+
+// What a real 2D stage does to perfect segments, roughly: smooth sub-pixel wobble of the
+// skeleton, noisy widths, and canes broken into pieces (at junctions, crossings, occlusions).
+inline void Degrade(View2D* view, Noise* noise, double break_px = 100.0) {
+  std::vector<Segment2D> out;
+  for (const Segment2D& s : view->segments) {
+    Segment2D current;
+    double wobble_x = 0.0, wobble_y = 0.0, width_scale = 1.0 + 0.1 * noise->Gaussian();
+    double next_break = break_px * (1.0 + 4.0 * noise->Uniform()), arc = 0.0;
+    for (size_t i = 0; i < s.points.size(); ++i) {
+      if (i > 0) arc += (s.points[i] - s.points[i - 1]).norm();
+      wobble_x = 0.9 * wobble_x + 0.13 * noise->Gaussian();
+      wobble_y = 0.9 * wobble_y + 0.13 * noise->Gaussian();
+      if (arc > next_break) {
+        if (current.points.size() >= 2) out.push_back(current);
+        current = {};
+        next_break = arc + break_px * (1.0 + 4.0 * noise->Uniform());
+        width_scale = 1.0 + 0.1 * noise->Gaussian();
+        i += 2;  // a small gap where the cane was broken
+        continue;
+      }
+      current.points.push_back(s.points[i] + Eigen::Vector2d(wobble_x, wobble_y));
+      current.widths_px.push_back(
+          std::max(1.0, s.widths_px[i] * width_scale * (1.0 + 0.05 * noise->Gaussian())));
+    }
+    if (current.points.size() >= 2) out.push_back(current);
+  }
+  view->segments = std::move(out);
+  view->nodes.clear();
+}
+
+struct SimulatedStop {
+  sim::Scene scene;
+  VineModel drawn;             // the vine plus its neighbours' canes and heads
+  RigCalibration true_rig;     // drew the views
+  RigCalibration rig;          // the 1 px-perturbed calibration the matching is given
+  std::vector<View2D> views;   // degraded
+};
+
+// The stop at vine 0 of vineyard `seed`: vine and neighbours drawn by SyntheticViews through
+// the true rig, then degraded (Degrade, canes broken every 1-5 x break_px); matching uses PerturbCalibration(rig, 1 px, seed).
+inline SimulatedStop MakeSimulatedStop(uint64_t seed, double break_px = 100.0) {
+  SimulatedStop stop;
+  stop.scene = sim::GenerateScene(seed, 0).value();
+  stop.drawn = stop.scene.vine;
+  for (const VineModel& neighbour : stop.scene.neighbours) {
+    for (const Cane& cane : neighbour.canes) stop.drawn.canes.push_back(cane);
+    for (const Sphere& s : neighbour.head.spheres) stop.drawn.head.spheres.push_back(s);
+  }
+  stop.true_rig = sim::MakeRig().value();
+  stop.views = SyntheticViews(stop.drawn, stop.true_rig);
+  Noise noise(seed);
+  for (View2D& view : stop.views) Degrade(&view, &noise, break_px);
+  stop.rig = sim::PerturbCalibration(stop.true_rig, 1.0, seed);
+  return stop;
+}
+
+// Points of a piece, sampled along its polyline every 2 mm.
+inline std::vector<Eigen::Vector3d> PiecePoints(const Piece3D& piece) { return piece.polyline.Sample(0.002); }
+
+// Fraction of `truth` (sampled every 5 mm) within `tolerance_m` of some piece.
+inline double Coverage(const Polyline3& truth, const std::vector<Piece3D>& pieces, double tolerance_m) {
+  const std::vector<Eigen::Vector3d> samples = truth.Sample(0.005);
+  int covered = 0;
+  for (const Eigen::Vector3d& s : samples) {
+    for (const Piece3D& piece : pieces) {
+      if (DistanceToPolyline(s, piece.polyline) <= tolerance_m) {
+        ++covered;
+        break;
+      }
+    }
+  }
+  return static_cast<double>(covered) / samples.size();
+}
+
+// Part of each true cane seen by at least two cameras, as polylines (split where it is not).
+inline std::vector<Polyline3> SeenByTwo(const Polyline3& cane, const RigCalibration& rig) {
+  std::vector<Polyline3> parts;
+  Polyline3 current;
+  for (const Eigen::Vector3d& p : cane.Sample(0.005)) {
+    int seen = 0;
+    for (const CameraCalibration& camera : rig.cameras) {
+      const auto uv = camera.Project(p);
+      seen += uv && camera.InImage(*uv) ? 1 : 0;
+    }
+    if (seen >= 2) {
+      current.points.push_back(p);
+      current.radii.push_back(0.001);
+    } else if (!current.points.empty()) {
+      if (current.points.size() >= 2) parts.push_back(current);
+      current = {};
+    }
+  }
+  if (current.points.size() >= 2) parts.push_back(current);
+  return parts;
+}
+
+struct Metrics {
+  double coverage = 0.0;   // of the vine's cane length seen by two cameras, within 1 cm of a piece
+  double precision = 0.0;  // of piece length, within 1 cm of a true cane
+  double truth_m = 0.0;
+  double pieces_m = 0.0;
+};
+
+inline Metrics Evaluate(const std::vector<Piece3D>& pieces, const VineModel& vine,
+                 const VineModel& drawn, const RigCalibration& rig) {
+  Metrics m;
+  double covered = 0.0;
+  for (const Cane& cane : vine.canes) {
+    for (const Polyline3& part : SeenByTwo(cane.polyline, rig)) {
+      m.truth_m += part.Length();
+      covered += part.Length() * Coverage(part, pieces, 0.01);
+    }
+  }
+  double precise = 0.0;
+  for (const Piece3D& piece : pieces) {
+    const std::vector<Eigen::Vector3d> points = PiecePoints(piece);
+    int near = 0;
+    for (const Eigen::Vector3d& p : points) {
+      for (const Cane& cane : drawn.canes) {
+        if (DistanceToPolyline(p, cane.polyline) <= 0.01) {
+          ++near;
+          break;
+        }
+      }
+    }
+    m.pieces_m += piece.polyline.Length();
+    precise += piece.polyline.Length() * near / std::max<size_t>(1, points.size());
+  }
+  m.coverage = covered / std::max(m.truth_m, 1e-9);
+  m.precision = precise / std::max(m.pieces_m, 1e-9);
+  return m;
+}
+
+}  // namespace vb::reconstruct
