@@ -1,9 +1,22 @@
 // SPDX-License-Identifier: Apache-2.0
-// Placeholder while the command is being written this session; replaced before the issue closes.
+#include <iostream>
+
 #include "app/commands.h"
+#include "core/model_metrics.h"
+#include "core/status_macros.h"
+#include "core/vine_model_json.h"
 
 namespace vb::app {
 
-absl::Status RunEvaluate(Flags&) { return absl::UnimplementedError("not built yet"); }
+absl::Status RunEvaluate(Flags& flags) {
+  VB_ASSIGN_OR_RETURN(const std::string model_path, flags.RequiredString("model"));
+  VB_ASSIGN_OR_RETURN(const std::string truth_path, flags.RequiredString("truth"));
+  VB_RETURN_IF_ERROR(flags.Finish());
+  VB_ASSIGN_OR_RETURN(const VineModel model, ReadVineModel(model_path));
+  VB_ASSIGN_OR_RETURN(const VineModel truth, ReadVineModel(truth_path));
+  VB_ASSIGN_OR_RETURN(const ReconstructionMetrics metrics, EvaluateReconstruction(model, truth));
+  std::cout << MetricsToJson(metrics).dump(1) << "\n";
+  return absl::OkStatus();
+}
 
 }  // namespace vb::app

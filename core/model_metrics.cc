@@ -97,10 +97,27 @@ std::vector<Eigen::Vector3d> ClipToSpan(const std::vector<Eigen::Vector3d>& poin
   return kept;
 }
 
-bool InsideAny(const std::vector<Sphere>& spheres, const Eigen::Vector3d& p) {
-  for (const Sphere& s : spheres)
-    if ((p - s.center).squaredNorm() <= s.radius * s.radius) return true;
-  return false;
+// Marks the cells of a grid (spacing h, origin lo, n cells a side) whose centres lie inside any
+// of `spheres`.
+std::vector<uint8_t> Rasterise(const std::vector<Sphere>& spheres, const Eigen::Vector3d& lo,
+                               const Eigen::Vector3i& n, double h) {
+  std::vector<uint8_t> inside(static_cast<size_t>(n.prod()), 0);
+  for (const Sphere& s : spheres) {
+    const Eigen::Vector3i a =
+        ((s.center.array() - s.radius - lo.array()) / h - 0.5).floor().cast<int>().max(0);
+    const Eigen::Vector3i b = ((s.center.array() + s.radius - lo.array()) / h - 0.5)
+                                  .ceil()
+                                  .cast<int>()
+                                  .min(n.array() - 1);
+    for (int z = a.z(); z <= b.z(); ++z)
+      for (int y = a.y(); y <= b.y(); ++y)
+        for (int x = a.x(); x <= b.x(); ++x) {
+          const Eigen::Vector3d p = lo + (Eigen::Vector3d(x, y, z).array() + 0.5).matrix() * h;
+          if ((p - s.center).squaredNorm() <= s.radius * s.radius)
+            inside[(static_cast<size_t>(z) * n.y() + y) * n.x() + x] = 1;
+        }
+  }
+  return inside;
 }
 
 // Volume of the union of `spheres` (grid integral) and the part of it inside `other`.
@@ -114,17 +131,16 @@ std::pair<double, double> UnionVolume(const std::vector<Sphere>& spheres,
   }
   // At most ~200 cells along the longest side, so a huge (wrong) model head stays cheap.
   h = std::max(h, (hi - lo).maxCoeff() / 200.0);
-  double total = 0.0, inside = 0.0;
+  const Eigen::Vector3i n = ((hi - lo) / h).array().ceil().cast<int>().max(1);
+  const std::vector<uint8_t> in_self = Rasterise(spheres, lo, n, h);
+  const std::vector<uint8_t> in_other = Rasterise(other, lo, n, h);
+  size_t total = 0, inside = 0;
+  for (size_t i = 0; i < in_self.size(); ++i) {
+    total += in_self[i];
+    inside += in_self[i] & in_other[i];
+  }
   const double cell = h * h * h;
-  for (double x = lo.x() + h / 2; x < hi.x(); x += h)
-    for (double y = lo.y() + h / 2; y < hi.y(); y += h)
-      for (double z = lo.z() + h / 2; z < hi.z(); z += h) {
-        const Eigen::Vector3d p(x, y, z);
-        if (!InsideAny(spheres, p)) continue;
-        total += cell;
-        if (InsideAny(other, p)) inside += cell;
-      }
-  return {total, inside};
+  return {total * cell, inside * cell};
 }
 
 }  // namespace

@@ -1,0 +1,385 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "workers/reconstruct/head.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "absl/strings/str_cat.h"
+#include "opencv2/imgproc.hpp"
+
+namespace vb::reconstruct {
+namespace {
+
+// Distances from every pixel to the silhouette (0 inside) and to the background (0 outside).
+struct SilhouetteMaps {
+  int width = 0;
+  int height = 0;
+  cv::Mat to_silhouette;   // CV_32F
+  cv::Mat to_background;   // CV_32F
+};
+
+SilhouetteMaps MakeMaps(const View2D& view) {
+  SilhouetteMaps maps;
+  maps.width = view.width;
+  maps.height = view.height;
+  cv::Mat mask(view.height, view.width, CV_8U, const_cast<uint8_t*>(view.thick_mask.data()));
+  cv::Mat inside = mask != 0;
+  cv::Mat outside = mask == 0;
+  cv::distanceTransform(outside, maps.to_silhouette, cv::DIST_L2, 3);
+  cv::distanceTransform(inside, maps.to_background, cv::DIST_L2, 3);
+  return maps;
+}
+
+enum class CubeVerdict { kOutside, kInside, kBoundary };
+
+struct Cube {
+  Eigen::Vector3d centre;
+  double side;
+};
+
+class Carver {
+ public:
+  Carver(const std::vector<View2D>& views, const RigCalibration& rig, const HeadOptions& options)
+      : rig_(rig), options_(options) {
+    for (const View2D& view : views) maps_.push_back(MakeMaps(view));
+  }
+
+  CubeVerdict Judge(const Cube& cube) const {
+    const double radius = 0.5 * std::sqrt(3.0) * cube.side;
+    int seen = 0;
+    bool all_inside = true;
+    for (size_t v = 0; v < maps_.size(); ++v) {
+      const CameraCalibration& camera = rig_.cameras[v];
+      const auto uv = camera.Project(cube.centre);
+      if (!uv || !camera.InImage(*uv)) continue;
+      const double depth = (camera.camera_from_platform() * cube.centre).z();
+      if (depth <= radius) continue;
+      ++seen;
+      // 10% slack for the lens distortion's change of scale across the image.
+      const double r_px = 1.1 * camera.camera_matrix(0, 0) * radius / depth;
+      const int x = std::clamp(static_cast<int>(std::lround(uv->x())), 0, maps_[v].width - 1);
+      const int y = std::clamp(static_cast<int>(std::lround(uv->y())), 0, maps_[v].height - 1);
+      if (maps_[v].to_silhouette.at<float>(y, x) > r_px + options_.silhouette_margin_px) {
+        return CubeVerdict::kOutside;
+      }
+      if (maps_[v].to_background.at<float>(y, x) < r_px) all_inside = false;
+    }
+    if (seen < options_.min_views) return CubeVerdict::kOutside;
+    return all_inside ? CubeVerdict::kInside : CubeVerdict::kBoundary;
+  }
+
+  void Carve(const Cube& cube, std::vector<Cube>* kept) const {
+    const CubeVerdict verdict = Judge(cube);
+    if (verdict == CubeVerdict::kOutside) return;
+    if (verdict == CubeVerdict::kInside || cube.side <= options_.min_cell_m * 1.0001) {
+      kept->push_back(cube);
+      return;
+    }
+    const double q = cube.side / 4.0;
+    for (int i = 0; i < 8; ++i) {
+      const Eigen::Vector3d offset((i & 1) ? q : -q, (i & 2) ? q : -q, (i & 4) ? q : -q);
+      Carve({cube.centre + offset, cube.side / 2.0}, kept);
+    }
+  }
+
+ private:
+  const RigCalibration& rig_;
+  const HeadOptions& options_;
+  std::vector<SilhouetteMaps> maps_;
+};
+
+// Voxels of side min_cell over the volume, for connected components of the kept cubes.
+class VoxelGrid {
+ public:
+  VoxelGrid(const Eigen::AlignedBox3d& box, double cell) : origin_(box.min()), cell_(cell) {
+    size_ = ((box.max() - box.min()) / cell).array().ceil().cast<int>().max(1);
+    labels_.assign(static_cast<size_t>(size_.prod()), 0);
+  }
+  bool Index(const Eigen::Vector3d& p, Eigen::Vector3i* ijk) const {
+    *ijk = ((p - origin_) / cell_).array().floor().cast<int>();
+    return (ijk->array() >= 0).all() && (ijk->array() < size_.array()).all();
+  }
+  size_t Flat(const Eigen::Vector3i& ijk) const {
+    return (static_cast<size_t>(ijk.z()) * size_.y() + ijk.y()) * size_.x() + ijk.x();
+  }
+  Eigen::Vector3d Centre(const Eigen::Vector3i& ijk) const {
+    return origin_ + (ijk.cast<double>().array() + 0.5).matrix() * cell_;
+  }
+  const Eigen::Vector3i& size() const { return size_; }
+  std::vector<int>& labels() { return labels_; }
+
+ private:
+  Eigen::Vector3d origin_;
+  double cell_;
+  Eigen::Vector3i size_;
+  std::vector<int> labels_;  // 0 empty, -1 occupied, >0 component id
+};
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+}  // namespace
+
+absl::Status HeadOptions::Validate() const {
+  auto positive = [](double v, const char* name) -> absl::Status {
+    if (!std::isfinite(v) || v <= 0)
+      return absl::InvalidArgumentError(absl::StrCat("head options: ", name, " must be > 0"));
+    return absl::OkStatus();
+  };
+  for (auto [v, name] : {std::pair{coarse_cell_m, "coarse_cell_m"}, {min_cell_m, "min_cell_m"},
+                         {slab_m, "slab_m"}, {head_width_factor, "head_width_factor"},
+                         {head_min_height_m, "head_min_height_m"}}) {
+    if (absl::Status s = positive(v, name); !s.ok()) return s;
+  }
+  if (min_cell_m > coarse_cell_m)
+    return absl::InvalidArgumentError("head options: min_cell_m must be <= coarse_cell_m");
+  if (!std::isfinite(silhouette_margin_px) || silhouette_margin_px < 0)
+    return absl::InvalidArgumentError("head options: silhouette_margin_px must be >= 0");
+  if (!std::isfinite(depth_margin_m) || depth_margin_m < 0)
+    return absl::InvalidArgumentError("head options: depth_margin_m must be >= 0");
+  if (min_views < 1) return absl::InvalidArgumentError("head options: min_views must be >= 1");
+  return absl::OkStatus();
+}
+
+absl::StatusOr<HeadAndTrunk> ReconstructHeadAndTrunk(const std::vector<View2D>& views,
+                                                     const RigCalibration& rig,
+                                                     const WorkingVolume& volume,
+                                                     const HeadOptions& options,
+                                                     const Deadline& deadline) {
+  if (absl::Status s = options.Validate(); !s.ok()) return s;
+  if (views.size() != rig.cameras.size()) {
+    return absl::InvalidArgumentError(absl::StrCat("head: ", views.size(), " views for ",
+                                                   rig.cameras.size(), " cameras"));
+  }
+  for (size_t v = 0; v < views.size(); ++v) {
+    if (views[v].width != rig.cameras[v].image_width ||
+        views[v].height != rig.cameras[v].image_height ||
+        views[v].thick_mask.size() != static_cast<size_t>(views[v].width) * views[v].height) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("head: view ", v, " (", rig.cameras[v].name,
+                       "): thick_mask size disagrees with the calibration"));
+    }
+  }
+  HeadAndTrunk result;
+  const Carver carver(views, rig, options);
+  std::vector<Cube> kept;
+  const Eigen::Vector3d extent = volume.box.max() - volume.box.min();
+  const Eigen::Vector3i roots = (extent / options.coarse_cell_m).array().ceil().cast<int>();
+  for (int k = 0; k < roots.z(); ++k) {
+    if (absl::Status s = deadline.Check("head"); !s.ok()) return s;
+    for (int j = 0; j < roots.y(); ++j)
+      for (int i = 0; i < roots.x(); ++i) {
+        const Eigen::Vector3d centre =
+            volume.box.min() + (Eigen::Vector3d(i, j, k).array() + 0.5).matrix() * options.coarse_cell_m;
+        carver.Carve({centre, options.coarse_cell_m}, &kept);
+      }
+  }
+  result.cells_kept = static_cast<int>(kept.size());
+  if (kept.empty()) return result;
+
+  // Rasterise the kept cubes and take the largest 26-connected component: this vine's head and
+  // trunk (neighbours' heads lie outside the working volume).
+  VoxelGrid grid(volume.box, options.min_cell_m);
+  std::vector<int>& labels = grid.labels();
+  std::vector<std::vector<size_t>> voxels_of_cube(kept.size());
+  for (size_t c = 0; c < kept.size(); ++c) {
+    const int n = std::max(1, static_cast<int>(std::lround(kept[c].side / options.min_cell_m)));
+    for (int a = 0; a < n; ++a)
+      for (int b = 0; b < n; ++b)
+        for (int d = 0; d < n; ++d) {
+          const Eigen::Vector3d p =
+              kept[c].centre +
+              (Eigen::Vector3d(a, b, d).array() + 0.5 - n / 2.0).matrix() * options.min_cell_m;
+          Eigen::Vector3i ijk;
+          if (!grid.Index(p, &ijk)) continue;
+          labels[grid.Flat(ijk)] = -1;
+          voxels_of_cube[c].push_back(grid.Flat(ijk));
+        }
+  }
+  const Eigen::Vector3i size = grid.size();
+  int best_label = 0;
+  size_t best_count = 0;
+  int next_label = 0;
+  std::vector<Eigen::Vector3i> stack;
+  for (int z = 0; z < size.z(); ++z)
+    for (int y = 0; y < size.y(); ++y)
+      for (int x = 0; x < size.x(); ++x) {
+        const Eigen::Vector3i seed(x, y, z);
+        if (labels[grid.Flat(seed)] != -1) continue;
+        ++next_label;
+        size_t count = 0;
+        stack.assign(1, seed);
+        labels[grid.Flat(seed)] = next_label;
+        while (!stack.empty()) {
+          const Eigen::Vector3i at = stack.back();
+          stack.pop_back();
+          ++count;
+          for (int dz = -1; dz <= 1; ++dz)
+            for (int dy = -1; dy <= 1; ++dy)
+              for (int dx = -1; dx <= 1; ++dx) {
+                const Eigen::Vector3i n = at + Eigen::Vector3i(dx, dy, dz);
+                if ((n.array() < 0).any() || (n.array() >= size.array()).any()) continue;
+                int& label = labels[grid.Flat(n)];
+                if (label != -1) continue;
+                label = next_label;
+                stack.push_back(n);
+              }
+        }
+        if (count > best_count) {
+          best_count = count;
+          best_label = next_label;
+        }
+      }
+
+  // Slabs of the component: x extent per slab, and the depth of the slab's widest row. Seen
+  // from a rig on one side, the hull of a trunk is a diamond long in depth whose widest point is
+  // at the trunk's true depth (perspective makes the back half longer, so the centroid is not).
+  const int voxels_per_slab = std::max(1, static_cast<int>(std::lround(options.slab_m / options.min_cell_m)));
+  const int slabs = (size.z() + voxels_per_slab - 1) / voxels_per_slab;
+  std::vector<double> min_x(slabs, 1e9), max_x(slabs, -1e9), sum_x(slabs, 0), sum_y(slabs, 0);
+  std::vector<int> count(slabs, 0);
+  std::vector<std::vector<int>> row_count(slabs, std::vector<int>(size.y(), 0));
+  std::vector<std::vector<double>> row_sum_x(slabs, std::vector<double>(size.y(), 0.0));
+  double top_z = -1e9, min_z = 1e9;
+  for (int z = 0; z < size.z(); ++z)
+    for (int y = 0; y < size.y(); ++y)
+      for (int x = 0; x < size.x(); ++x) {
+        const Eigen::Vector3i ijk(x, y, z);
+        if (labels[grid.Flat(ijk)] != best_label) continue;
+        const Eigen::Vector3d p = grid.Centre(ijk);
+        const int s = z / voxels_per_slab;
+        min_x[s] = std::min(min_x[s], p.x());
+        max_x[s] = std::max(max_x[s], p.x());
+        ++row_count[s][y];
+        row_sum_x[s][y] += p.x();
+        ++count[s];
+        top_z = std::max(top_z, p.z());
+        min_z = std::min(min_z, p.z());
+      }
+  for (int s = 0; s < slabs; ++s) {
+    if (count[s] == 0) continue;
+    const int widest = *std::max_element(row_count[s].begin(), row_count[s].end());
+    double n = 0;
+    for (int y = 0; y < size.y(); ++y) {
+      if (row_count[s][y] < widest) continue;
+      sum_y[s] += grid.Centre({0, y, 0}).y();
+      sum_x[s] += row_sum_x[s][y] / row_count[s][y];
+      ++n;
+    }
+    sum_x[s] *= count[s] / n;  // stored as sums over count[s] for the centroid below
+    sum_y[s] *= count[s] / n;
+  }
+  auto slab_z = [&](int s) {
+    return volume.box.min().z() + (s + 0.5) * voxels_per_slab * options.min_cell_m;
+  };
+  std::vector<int> occupied;
+  for (int s = 0; s < slabs; ++s)
+    if (count[s] > 0) occupied.push_back(s);
+  std::vector<double> lower_widths;
+  for (size_t i = 0; i < occupied.size() / 2; ++i)
+    lower_widths.push_back(max_x[occupied[i]] - min_x[occupied[i]] + options.min_cell_m);
+  const double trunk_width = lower_widths.empty() ? 0.0 : Median(lower_widths);
+
+  // Head bottom: scanning down from the top, the first of three consecutive trunk-wide slabs.
+  double head_bottom_z = top_z - options.head_min_height_m;
+  if (trunk_width > 0) {
+    for (int i = static_cast<int>(occupied.size()) - 1; i >= 2; --i) {
+      bool narrow = true;
+      for (int k = 0; k < 3; ++k) {
+        const int s = occupied[i - k];
+        narrow = narrow && (max_x[s] - min_x[s] + options.min_cell_m) <=
+                               options.head_width_factor * trunk_width;
+      }
+      if (narrow) {
+        head_bottom_z = std::min(head_bottom_z, slab_z(occupied[i]) + 0.5 * options.slab_m);
+        break;
+      }
+    }
+  }
+
+  // The lowest head slabs are often no wider than the trunk: reach a little lower, for safety.
+  head_bottom_z -= options.head_overlap_m;
+
+  // Trunk: slab centres below the head. Near the bottom of the images only the far part of the
+  // views' cones remains, which drags the widest row backwards: keep slabs near the median depth,
+  // then extend the trunk straight down to the ground (where trunks grow from), along the line
+  // fitted to the kept centres.
+  Polyline3 trunk;
+  std::vector<double> trunk_y;
+  for (int s : occupied) {
+    if (slab_z(s) > head_bottom_z) break;
+    trunk.points.push_back({sum_x[s] / count[s], sum_y[s] / count[s], slab_z(s)});
+    trunk_y.push_back(trunk.points.back().y());
+  }
+  // Reference depth: the upper half of the trunk, which every view sees whole.
+  const double reference_y =
+      Median(std::vector<double>(trunk_y.begin() + trunk_y.size() / 2, trunk_y.end()));
+  std::erase_if(trunk.points,
+                [&](const Eigen::Vector3d& p) { return std::abs(p.y() - reference_y) > 0.025; });
+  const double trunk_radius = std::max(0.01, 0.5 * (trunk_width - options.min_cell_m));
+  if (trunk.points.size() >= 3) {
+    std::vector<Eigen::Vector3d> smooth = trunk.points;
+    for (size_t i = 1; i + 1 < smooth.size(); ++i)
+      smooth[i].head<2>() = (trunk.points[i - 1] + trunk.points[i] + trunk.points[i + 1]).head<2>() / 3.0;
+    trunk.points = smooth;
+    // Least-squares line x(z), y(z) through the kept centres, for the extension to the ground.
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    for (const Eigen::Vector3d& p : trunk.points) mean += p;
+    mean /= trunk.points.size();
+    double szz = 0, sxz = 0, syz = 0;
+    for (const Eigen::Vector3d& p : trunk.points) {
+      const Eigen::Vector3d d = p - mean;
+      szz += d.z() * d.z();
+      sxz += d.x() * d.z();
+      syz += d.y() * d.z();
+    }
+    if (szz > 0 && trunk.points.front().z() > volume.box.min().z() + options.slab_m) {
+      const double ground_z = std::max(0.0, volume.box.min().z());
+      const double dz = ground_z - mean.z();
+      const Eigen::Vector3d ground(mean.x() + sxz / szz * dz, mean.y() + syz / szz * dz, ground_z);
+      trunk.points.insert(trunk.points.begin(), ground);
+    }
+    trunk.radii.assign(trunk.points.size(), trunk_radius);
+    result.trunk = trunk;
+  }
+
+  // Head: kept cubes of the component above the head bottom, depth bounded about its centre.
+  double head_min_x = 1e9, head_max_x = -1e9;
+  double head_y = 0.0;
+  int head_n = 0;
+  bool any_head = false;
+  for (size_t c = 0; c < kept.size(); ++c) {
+    bool in_component = false;
+    for (size_t flat : voxels_of_cube[c]) in_component = in_component || labels[flat] == best_label;
+    if (!in_component || kept[c].centre.z() + 0.5 * kept[c].side < head_bottom_z) continue;
+    any_head = true;
+    head_min_x = std::min(head_min_x, kept[c].centre.x() - 0.5 * kept[c].side);
+    head_max_x = std::max(head_max_x, kept[c].centre.x() + 0.5 * kept[c].side);
+  }
+  // The head's depth: the widest rows of its slabs, as for the trunk.
+  for (int s = 0; s < slabs; ++s) {
+    if (count[s] == 0 || slab_z(s) + 0.5 * options.slab_m < head_bottom_z) continue;
+    head_y += sum_y[s] / count[s];
+    ++head_n;
+  }
+  if (!any_head || head_n == 0) return result;
+  // The trunk's top is well seen and lies under the head; it gives the head's depth where there
+  // is a trunk (the widest rows of the head's slabs are dragged backwards like the trunk's).
+  head_y = result.trunk ? result.trunk->points.back().y() : head_y / head_n;
+  const double half_depth =
+      0.5 * std::max(head_max_x - head_min_x, top_z - head_bottom_z) + options.depth_margin_m;
+  for (size_t c = 0; c < kept.size(); ++c) {
+    bool in_component = false;
+    for (size_t flat : voxels_of_cube[c]) in_component = in_component || labels[flat] == best_label;
+    if (!in_component || kept[c].centre.z() + 0.5 * kept[c].side < head_bottom_z) continue;
+    if (std::abs(kept[c].centre.y() - head_y) > half_depth + 0.5 * kept[c].side) continue;
+    result.head.spheres.push_back({kept[c].centre, 0.5 * std::sqrt(3.0) * kept[c].side});
+  }
+  return result;
+}
+
+}  // namespace vb::reconstruct

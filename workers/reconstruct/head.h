@@ -1,0 +1,62 @@
+// SPDX-License-Identifier: Apache-2.0
+// The head and trunk by shape from silhouette (Botterill et al., "A Robot System for Pruning
+// Grape Vines", J. Field Robotics 2017, sec. 3.2.4: the head as spheres carved by the views'
+// silhouettes). The silhouette is each view's thick foreground (View2D::thick_mask): what
+// survives an opening wider than any cane, i.e. the head and the trunk.
+//
+// Method: an octree of cubes over the working volume. A cube whose bounding sphere projects
+// entirely outside the (dilated) silhouette of some view is removed; one that projects entirely
+// inside every view is kept whole; the rest are split down to `min_cell_m` and then kept. Kept
+// cubes become their bounding spheres, so the union of spheres contains the visual hull, which
+// contains the true head and trunk: enclosure is the property the arm's safety needs. The
+// largest connected part of the hull is this vine's head and trunk; the slabs where it is as
+// narrow as a trunk give the trunk axis, the wider top gives the head.
+//
+// A trinocular rig looks at the vine from nearly one direction (+-8 deg), so a visual hull is
+// long in depth (y). The head's depth is therefore bounded by its measured width and height,
+// centred on the trunk axis: an assumption (heads are about as deep as wide) stated in
+// docs/reconstruction.md. Thread-safe (pure function).
+#pragma once
+
+#include <optional>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "core/calibration.h"
+#include "core/deadline.h"
+#include "core/vine_model.h"
+#include "workers/reconstruct/piece3d.h"
+#include "workers/reconstruct/view2d.h"
+
+namespace vb::reconstruct {
+
+struct HeadOptions {
+  double coarse_cell_m = 0.04;          // octree root cube side
+  double min_cell_m = 0.01;             // smallest cube side
+  double silhouette_margin_px = 3.0;    // silhouettes grow by this (calibration error, blur)
+  int min_views = 3;                    // a cube must be inside the image of at least this many
+  double slab_m = 0.02;                 // height of the slabs used to split trunk from head
+  double head_width_factor = 1.6;       // a slab wider than this x trunk width is head
+  double depth_margin_m = 0.03;         // head depth = max(width, height) + 2 x this margin
+  double head_min_height_m = 0.08;      // the head spans at least this far below the hull top
+  double head_overlap_m = 0.04;         // the head reaches this far below the widening
+
+  absl::Status Validate() const;
+};
+
+struct HeadAndTrunk {
+  HeadModel head;                 // empty if no thick structure was found
+  std::optional<Polyline3> trunk; // base (lowest) to top, at the head; nullopt if none
+  int cells_kept = 0;             // octree leaves kept (diagnostics)
+};
+
+// rig.cameras[i] belongs to views[i]. INVALID_ARGUMENT for a count mismatch, invalid options or
+// a view whose thick_mask size disagrees with its calibration; DEADLINE_EXCEEDED. No thick
+// foreground anywhere gives an empty result (not an error).
+absl::StatusOr<HeadAndTrunk> ReconstructHeadAndTrunk(const std::vector<View2D>& views,
+                                                     const RigCalibration& rig,
+                                                     const WorkingVolume& volume,
+                                                     const HeadOptions& options,
+                                                     const Deadline& deadline);
+
+}  // namespace vb::reconstruct
