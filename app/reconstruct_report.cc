@@ -1,0 +1,37 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "app/reconstruct_report.h"
+
+namespace vb::app {
+
+nlohmann::json TimingsToJson(const reconstruct::StageTimings& t) {
+  return {{"segment_s", t.segment_s},       {"structure_s", t.structure_s},
+          {"correspondence_s", t.correspondence_s}, {"assembly_s", t.assembly_s},
+          {"head_s", t.head_s},             {"connect_s", t.connect_s},
+          {"refine_s", t.refine_s},         {"trellis_s", t.trellis_s},
+          {"total_s", t.total_s}};
+}
+
+nlohmann::json ReconstructReport(const reconstruct::ReconstructResult& result) {
+  int canes = 0, spurs = 0;
+  for (const Cane& c : result.model.canes) {
+    canes += c.kind == CaneKind::kCane;
+    spurs += c.kind == CaneKind::kSpur;
+  }
+  nlohmann::json report = {
+      {"canes", canes},
+      {"spurs", spurs},
+      {"trunk", !result.model.canes.empty()},
+      {"head_spheres", result.model.head.spheres.size()},
+      {"wires", result.model.wires.size()},
+      {"posts", result.model.posts.size()},
+      {"pieces", result.pieces},
+      {"assembled_canes", result.assembled_canes},
+      {"unattached_canes", result.connect.unattached},
+      {"rejected_canes", result.fit.rejected_outside + result.fit.rejected_background +
+                             result.fit.removed_with_parent},
+      {"timings", TimingsToJson(result.timings)}};
+  if (!result.empty_reason.empty()) report["empty_reason"] = result.empty_reason;
+  return report;
+}
+
+}  // namespace vb::app

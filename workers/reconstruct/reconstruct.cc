@@ -1,0 +1,190 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "workers/reconstruct/reconstruct.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <thread>
+
+#include "absl/strings/str_cat.h"
+#include "core/status_macros.h"
+
+namespace vb::reconstruct {
+namespace {
+
+double SecondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+// Runs fn(i) for i in [0, n) on up to `threads` threads; returns the first error.
+template <typename Fn>
+absl::Status ParallelFor(int n, int threads, Fn fn) {
+  std::vector<absl::Status> status(n);
+  std::atomic<int> next{0};
+  auto work = [&] {
+    for (int i = next++; i < n; i = next++) status[i] = fn(i);
+  };
+  std::vector<std::thread> pool;
+  for (int t = 1; t < std::min(threads, n); ++t) pool.emplace_back(work);
+  work();
+  for (std::thread& t : pool) t.join();
+  for (const absl::Status& s : status)
+    if (!s.ok()) return s;
+  return absl::OkStatus();
+}
+
+absl::Status CheckRig(const RigCalibration& rig) {
+  if (rig.cameras.size() < 2) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "reconstruction needs at least two cameras, the calibration has ", rig.cameras.size()));
+  }
+  VB_RETURN_IF_ERROR(rig.Validate());
+  for (size_t a = 0; a < rig.cameras.size(); ++a)
+    for (size_t b = a + 1; b < rig.cameras.size(); ++b) {
+      const double baseline =
+          (rig.cameras[a].CentreInPlatform() - rig.cameras[b].CentreInPlatform()).norm();
+      if (!(baseline >= 0.01)) {
+        return absl::InvalidArgumentError(
+            absl::StrCat("cameras ", rig.cameras[a].name, " and ", rig.cameras[b].name,
+                         " are coincident (baseline ", baseline, " m): no depth can be measured"));
+      }
+    }
+  return absl::OkStatus();
+}
+
+}  // namespace
+
+absl::Status ReconstructOptions::Validate() const {
+  if (volume.box.isEmpty()) return absl::InvalidArgumentError("options.volume: empty box");
+  VB_RETURN_IF_ERROR(structure.Validate());
+  VB_RETURN_IF_ERROR(correspondence.Validate());
+  VB_RETURN_IF_ERROR(assembly.Validate());
+  VB_RETURN_IF_ERROR(head.Validate());
+  VB_RETURN_IF_ERROR(connect.Validate());
+  VB_RETURN_IF_ERROR(fit.Validate());
+  VB_RETURN_IF_ERROR(trellis.Validate());
+  if (threads < 1) return absl::InvalidArgumentError("options.threads must be >= 1");
+  return absl::OkStatus();
+}
+
+absl::StatusOr<ReconstructResult> ReconstructFromViews(const std::vector<View2D>& views,
+                                                       const RigCalibration& rig,
+                                                       const ReconstructOptions& options,
+                                                       const Deadline& deadline) {
+  VB_RETURN_IF_ERROR(options.Validate());
+  VB_RETURN_IF_ERROR(CheckRig(rig));
+  ReconstructResult result;
+  auto t = std::chrono::steady_clock::now();
+  VB_ASSIGN_OR_RETURN(const std::vector<Piece3D> pieces,
+                      MatchSegments(views, rig, options.correspondence, deadline));
+  result.pieces = static_cast<int>(pieces.size());
+  result.timings.correspondence_s = SecondsSince(t);
+
+  t = std::chrono::steady_clock::now();
+  VB_ASSIGN_OR_RETURN(std::vector<Polyline3> canes,
+                      AssembleCanes(pieces, options.assembly, deadline));
+  std::erase_if(canes, [&](const Polyline3& cane) {
+    size_t outside = 0;
+    for (const Eigen::Vector3d& p : cane.points) outside += !options.volume.Contains(p);
+    return outside * 2 > cane.points.size();
+  });
+  result.assembled_canes = static_cast<int>(canes.size());
+  result.timings.assembly_s = SecondsSince(t);
+
+  t = std::chrono::steady_clock::now();
+  VB_ASSIGN_OR_RETURN(const HeadAndTrunk head,
+                      ReconstructHeadAndTrunk(views, rig, options.volume, options.head, deadline));
+  result.timings.head_s = SecondsSince(t);
+
+  t = std::chrono::steady_clock::now();
+  VB_ASSIGN_OR_RETURN(result.model, ConnectCanes(canes, head.trunk, head.head, options.connect,
+                                                 &result.connect));
+  result.timings.connect_s = SecondsSince(t);
+
+  if (options.refine && !result.model.canes.empty()) {
+    t = std::chrono::steady_clock::now();
+    VB_RETURN_IF_ERROR(
+        RefineModel(&result.model, views, rig, options.fit, deadline, &result.fit));
+    result.timings.refine_s = SecondsSince(t);
+  }
+
+  t = std::chrono::steady_clock::now();
+  VB_ASSIGN_OR_RETURN(const Trellis trellis,
+                      ReconstructTrellis(views, rig, options.volume, options.trellis));
+  result.model.wires = trellis.wires;
+  result.model.posts = trellis.posts;
+  result.timings.trellis_s = SecondsSince(t);
+
+  if (result.model.canes.empty()) {
+    result.empty_reason = pieces.empty() ? "no cane was matched across the views"
+                                         : "no cane connects to a trunk or head";
+  }
+  VB_RETURN_IF_ERROR(result.model.Validate());
+  return result;
+}
+
+absl::StatusOr<ReconstructResult> Reconstruct(const std::vector<Image>& images,
+                                              const RigCalibration& rig,
+                                              const SegmenterModel& segmenter,
+                                              const ReconstructOptions& options,
+                                              const Deadline& deadline) {
+  const auto start = std::chrono::steady_clock::now();
+  VB_RETURN_IF_ERROR(options.Validate());
+  VB_RETURN_IF_ERROR(CheckRig(rig));
+  if (images.size() != rig.cameras.size()) {
+    return absl::InvalidArgumentError(absl::StrCat(images.size(), " images for ",
+                                                   rig.cameras.size(), " calibrated cameras"));
+  }
+  for (size_t i = 0; i < images.size(); ++i) {
+    const CameraCalibration& camera = rig.cameras[i];
+    if (images[i].format != PixelFormat::kRgb8) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          camera.name, ": image must be rgb8 (demosaic first), is ",
+          std::string(PixelFormatName(images[i].format))));
+    }
+    if (images[i].width != camera.image_width || images[i].height != camera.image_height) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          camera.name, ": image is ", images[i].width, "x", images[i].height,
+          " but the calibration says ", camera.image_width, "x", camera.image_height));
+    }
+  }
+
+  const int n = static_cast<int>(images.size());
+  std::vector<ClassImage> classes(n);
+  std::vector<View2D> views(n);
+  std::vector<double> segment_s(n, 0.0), structure_s(n, 0.0);
+  VB_RETURN_IF_ERROR(ParallelFor(n, options.threads, [&](int i) -> absl::Status {
+    VB_RETURN_IF_ERROR(deadline.Check("reconstruct"));
+    auto t = std::chrono::steady_clock::now();
+    VB_ASSIGN_OR_RETURN(classes[i], Segment(images[i], segmenter));
+    segment_s[i] = SecondsSince(t);
+    t = std::chrono::steady_clock::now();
+    VB_ASSIGN_OR_RETURN(views[i],
+                        ExtractStructure(classes[i], rig.cameras[i], options.structure, deadline));
+    structure_s[i] = SecondsSince(t);
+    return absl::OkStatus();
+  }));
+  // Per-view steps ran side by side: report their share of the wall time.
+  const double per_view_wall = SecondsSince(start);
+  double seg = 0, str = 0;
+  for (int i = 0; i < n; ++i) {
+    seg += segment_s[i];
+    str += structure_s[i];
+  }
+  const double scale = seg + str > 0 ? per_view_wall / (seg + str) : 0.0;
+
+  bool any_wood = false;
+  for (const View2D& view : views) any_wood = any_wood || !view.segments.empty();
+  ReconstructResult result;
+  if (any_wood) {
+    VB_ASSIGN_OR_RETURN(result, ReconstructFromViews(views, rig, options, deadline));
+  } else {
+    result.empty_reason = "no wood (cane, trunk or head) was found in any image";
+  }
+  result.timings.segment_s = seg * scale;
+  result.timings.structure_s = str * scale;
+  result.timings.total_s = SecondsSince(start);
+  return result;
+}
+
+}  // namespace vb::reconstruct

@@ -1,0 +1,81 @@
+// SPDX-License-Identifier: Apache-2.0
+// The reconstruction stage: one stop's calibrated images -> a vine model in the platform frame
+// (issue 3; docs/reconstruction.md). After Botterill et al., "A Robot System for Pruning Grape
+// Vines" (J. Field Robotics 2017) sec. 3.2, adapted to a stop where all views are simultaneous:
+//   1. segment each image (segmenter.h)             5. head and trunk by shape from silhouette
+//   2. 2D structure per view (structure2d.h)           (head.h)
+//   3. correspondence across views, Gibbs sampling  6. connect canes into one tree (connect.h)
+//      and minimum expected loss (correspondence.h) 7. joint Ceres refinement (cane_fit.h)
+//   4. assemble 3D pieces into canes (cane_assembly.h) 8. wires and posts (trellis3d.h)
+// Steps 1-2 run per view on up to `threads` threads. Thread-safe (no shared state).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "core/calibration.h"
+#include "core/deadline.h"
+#include "core/image.h"
+#include "core/vine_model.h"
+#include "workers/reconstruct/cane_assembly.h"
+#include "workers/reconstruct/cane_fit.h"
+#include "workers/reconstruct/connect.h"
+#include "workers/reconstruct/correspondence.h"
+#include "workers/reconstruct/head.h"
+#include "workers/reconstruct/piece3d.h"
+#include "workers/reconstruct/segmenter.h"
+#include "workers/reconstruct/structure2d.h"
+#include "workers/reconstruct/trellis3d.h"
+
+namespace vb::reconstruct {
+
+struct ReconstructOptions {
+  WorkingVolume volume;                  // structure outside it is rejected
+  Structure2DOptions structure;
+  CorrespondenceOptions correspondence;
+  AssemblyOptions assembly;
+  HeadOptions head;
+  ConnectOptions connect;
+  FitOptions fit;
+  TrellisOptions trellis;
+  bool refine = true;                    // run the joint Ceres refinement (step 7)
+  int threads = 2;                       // threads for the per-view steps
+
+  absl::Status Validate() const;
+};
+
+// Wall-clock seconds per step (per-view steps: the wall time of all views together).
+struct StageTimings {
+  double segment_s = 0, structure_s = 0, correspondence_s = 0, assembly_s = 0, head_s = 0,
+         connect_s = 0, refine_s = 0, trellis_s = 0, total_s = 0;
+};
+
+struct ReconstructResult {
+  VineModel model;
+  StageTimings timings;
+  std::string empty_reason;      // why the model has no canes ("" if it has some)
+  int pieces = 0;                // 3D pieces from correspondence
+  int assembled_canes = 0;       // canes after assembly
+  ConnectSummary connect;
+  FitSummary fit;
+};
+
+// images[i] (rgb8) was taken by rig.cameras[i]. Errors, each naming the camera or field:
+// INVALID_ARGUMENT for fewer than two cameras, an image count or size that disagrees with the
+// calibration, a non-rgb8 image, an invalid calibration (NaN, singular), camera centres closer
+// than 1 cm, invalid options; DEADLINE_EXCEEDED / CANCELLED when `deadline` passes (nothing is
+// returned then). Images without wood give an OK result with an empty model and empty_reason.
+absl::StatusOr<ReconstructResult> Reconstruct(const std::vector<Image>& images,
+                                              const RigCalibration& rig,
+                                              const SegmenterModel& segmenter,
+                                              const ReconstructOptions& options,
+                                              const Deadline& deadline);
+
+// Steps 3-8 from given views (for tests and benchmarks of the 3D stages on SyntheticViews).
+absl::StatusOr<ReconstructResult> ReconstructFromViews(const std::vector<View2D>& views,
+                                                       const RigCalibration& rig,
+                                                       const ReconstructOptions& options,
+                                                       const Deadline& deadline);
+
+}  // namespace vb::reconstruct

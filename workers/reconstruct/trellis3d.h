@@ -1,0 +1,41 @@
+// SPDX-License-Identifier: Apache-2.0
+// Wires and posts in 3D from their 2D lines (View2D::wires, View2D::posts). A line in one view
+// back-projects to a plane through the camera centre; two views' planes meet in the 3D line.
+// Candidates from every pair of views are checked against the other views' lines, then chosen
+// greedily, best first, each 2D line used once. Pairs whose planes meet at a grazing angle
+// (horizontal wires seen by horizontally separated cameras) are skipped: the trinocular rig's
+// upper camera gives every wire a well-conditioned pair. Thread-safe (pure functions).
+#pragma once
+
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "core/calibration.h"
+#include "core/vine_model.h"
+#include "workers/reconstruct/piece3d.h"
+#include "workers/reconstruct/view2d.h"
+
+namespace vb::reconstruct {
+
+struct TrellisOptions {
+  double min_plane_angle_deg = 3.0;   // planes meeting at less than this are not intersected
+  double max_residual_px = 3.0;       // a third view's line must lie this close (RMS) to the
+                                      // candidate's projection to confirm it
+  double duplicate_distance_m = 0.02; // candidates this close to a chosen wire are duplicates
+  double max_wire_slope = 0.2;        // wires run along the row: |dz|, |dy| per metre of x
+  double max_post_tilt = 0.3;         // posts stand up: |dx|, |dy| per metre of z
+
+  absl::Status Validate() const;
+};
+
+struct Trellis {
+  std::vector<Wire> wires;  // ids 1, 2, ... from the lowest; two points at the volume's x ends
+  std::vector<Post> posts;  // ids 1, 2, ... along x; from the ground to the volume's top
+};
+
+// rig.cameras[i] belongs to views[i]. INVALID_ARGUMENT for a count mismatch or bad options.
+absl::StatusOr<Trellis> ReconstructTrellis(const std::vector<View2D>& views,
+                                           const RigCalibration& rig, const WorkingVolume& volume,
+                                           const TrellisOptions& options = {});
+
+}  // namespace vb::reconstruct
