@@ -91,8 +91,8 @@ class Assembler {
     return t;
   }
 
+  // Callers check the tracks' boxes (inflated by merge_distance_m) intersect first.
   std::optional<Overlap> FindOverlap(const Track& a, const Track& b) const {
-    if (!BoxOf(a, options_.merge_distance_m).intersects(BoxOf(b, 0.0))) return std::nullopt;
     const std::vector<double> arc_a = ArcLengths(a.points);
     const std::vector<double> arc_b = ArcLengths(b.points);
     const double length_a = arc_a.back();
@@ -100,7 +100,10 @@ class Assembler {
     ov.s_on_a.assign(b.size(), 0.0);
     std::vector<char> close(b.size(), 0);
     std::vector<double> orientation(b.size(), 0.0);
+    // Samples far outside a's box cannot be close, nor inside a run of close ones.
+    const Eigen::AlignedBox3d reach = BoxOf(a, options_.merge_distance_m + 4 * options_.step_m);
     for (size_t j = 0; j < b.size(); ++j) {
+      if (!reach.contains(b.points[j])) continue;
       double best = std::numeric_limits<double>::infinity();
       size_t best_k = 0;
       double best_t = 0.0;
@@ -250,12 +253,14 @@ class Assembler {
   // One sweep of duplicate fusion; true if anything was fused.
   bool FuseDuplicates(std::vector<Track>* tracks) const {
     bool changed = false;
+    std::vector<Eigen::AlignedBox3d> boxes;
+    for (const Track& t : *tracks) boxes.push_back(BoxOf(t, options_.merge_distance_m));
     for (size_t i = 0; i < tracks->size(); ++i) {
       if (!(*tracks)[i].alive) continue;
       for (size_t j = 0; j < tracks->size(); ++j) {
         Track& a = (*tracks)[i];
         Track& b = (*tracks)[j];
-        if (j == i || !b.alive) continue;
+        if (j == i || !b.alive || !boxes[i].intersects(boxes[j])) continue;
         std::optional<Overlap> ov = FindOverlap(a, b);
         if (!ov) continue;
         Track oriented = b;
@@ -268,6 +273,7 @@ class Assembler {
           ov->b_begin = begin;
         }
         FuseInto(&a, oriented, ParamsFromOverlap(oriented, *ov));
+        boxes[i] = BoxOf(a, options_.merge_distance_m);
         b.alive = false;
         changed = true;
       }
