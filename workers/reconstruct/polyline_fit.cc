@@ -22,6 +22,7 @@ struct Problem {
   const CameraCalibration& a;
   const CameraCalibration& b;
   std::vector<double> t;  // curve parameter of each hit
+  std::vector<int> used;  // hits in the fit: all, or an even subset of long candidates
   int k_count = 2;
   double smooth_scale = 0.0;  // smoothness weight in pixels per metre
 
@@ -45,7 +46,7 @@ struct Problem {
       }
     };
     const auto& hits = candidate.hits;
-    for (size_t j = 0; j < hits.size(); ++j) {
+    for (const int j : used) {
       int k;
       double w;
       Basis(t[j], k_count, &k, &w);
@@ -102,9 +103,14 @@ PolylineFit FitPolyline(const MatchCandidate& candidate, const CameraCalibration
   for (const EpipolarHit& hit : hits) {
     if (!hit.point.allFinite()) return fit;
   }
-  Problem problem{candidate, camera_a, camera_b, {}, 2, 0.0};
+  Problem problem{candidate, camera_a, camera_b, {}, {}, 2, 0.0};
   problem.t.resize(n);
   for (int j = 0; j < n; ++j) problem.t[j] = (hits[j].arc_a_px - hits.front().arc_a_px) / span;
+  // Long candidates are fitted through an even subset of their hits (the curve has at most
+  // max_control_points points, so ~4 hits per span are plenty); residuals are reported on all.
+  const int stride = std::max(1, n / (4 * options.max_control_points));
+  for (int j = 0; j < n; j += stride) problem.used.push_back(j);
+  if (problem.used.back() != n - 1) problem.used.push_back(n - 1);
 
   // Length through every third triangulated point (less inflated by depth noise).
   double length = 0.0;

@@ -39,7 +39,8 @@ struct PolylineFit {
 // Fits a polyline to a candidate: initialised from the triangulated hits, then refined by
 // Levenberg-Marquardt on 2D residuals in view a (hit sample points, fixed curve parameters from
 // the arc length along segment_a) and 1D residuals across segment_b in view b, plus a small
-// smoothness term. Residuals are in normalised coordinates scaled by fx (pixels).
+// smoothness term. Residuals are in normalised coordinates scaled by fx (pixels). Candidates
+// with more than 4 * max_control_points hits are fitted through an even subset of them.
 PolylineFit FitPolyline(const MatchCandidate& candidate, const CameraCalibration& camera_a,
                         const CameraCalibration& camera_b, const PolylineFitOptions& options = {});
 
