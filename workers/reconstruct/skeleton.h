@@ -10,20 +10,9 @@
 #include <vector>
 
 #include "Eigen/Core"
+#include "workers/reconstruct/mask_ops.h"
 
 namespace vb::reconstruct {
-
-// A binary image, 0 or 1 per pixel, row-major.
-struct BinaryImage {
-  int width = 0;
-  int height = 0;
-  std::vector<uint8_t> data;
-
-  BinaryImage() = default;
-  BinaryImage(int w, int h) : width(w), height(h), data(static_cast<size_t>(w) * h, 0) {}
-  uint8_t at(int x, int y) const { return data[static_cast<size_t>(y) * width + x]; }
-  void set(int x, int y, uint8_t v) { data[static_cast<size_t>(y) * width + x] = v; }
-};
 
 // Thins `mask` in place to an 8-connected skeleton one pixel wide. Zhang & Suen, "A fast parallel
 // algorithm for thinning digital patterns" (CACM 1984), with the B >= 3 end condition of Lu & Wang

@@ -9,6 +9,7 @@
 #include "absl/strings/str_cat.h"
 #include "opencv2/core.hpp"
 #include "opencv2/imgproc.hpp"
+#include "workers/reconstruct/mask_ops.h"
 #include "workers/reconstruct/skeleton.h"
 #include "workers/reconstruct/trellis2d.h"
 
@@ -22,15 +23,12 @@ constexpr uint8_t kWireValue = static_cast<uint8_t>(PixelClass::kWire);
 // Foreground (0/1) with the gaps that wires in front cut into canes filled: a wire pixel becomes
 // foreground if, along one of four directions, the run of wire pixels through it is at most
 // max_gap long and ends in foreground on both sides.
-cv::Mat BridgedForeground(const ClassImage& classes, int max_gap) {
+BinaryImage BridgedForeground(const ClassImage& classes, int max_gap) {
   const int w = classes.width;
   const int h = classes.height;
-  cv::Mat fg(h, w, CV_8U);
+  BinaryImage fg(w, h);
   const uint8_t* c = classes.data.data();
-  for (int y = 0; y < h; ++y) {
-    uint8_t* row = fg.ptr<uint8_t>(y);
-    for (int x = 0; x < w; ++x) row[x] = c[static_cast<size_t>(y) * w + x] == kForegroundValue;
-  }
+  for (size_t i = 0; i < fg.data.size(); ++i) fg.data[i] = c[i] == kForegroundValue;
   if (max_gap <= 0) return fg;
   const auto cls = [&](int x, int y) -> int {
     if (x < 0 || y < 0 || x >= w || y >= h) return kBackgroundValue;
@@ -54,59 +52,13 @@ cv::Mat BridgedForeground(const ClassImage& classes, int max_gap) {
         int run = 1;
         if (reaches(x, y, d[0], d[1], &run) && reaches(x, y, -d[0], -d[1], &run) &&
             run <= max_gap) {
-          fg.at<uint8_t>(y, x) = 1;
+          fg.set(x, y, 1);
           break;
         }
       }
     }
   }
   return fg;
-}
-
-// Drops foreground components smaller than min_area (8-connected) and fills non-foreground
-// components up to max_hole (4-connected) that do not touch the image border.
-void CleanForeground(int min_area, int max_hole, cv::Mat* fg) {
-  cv::Mat labels;
-  cv::Mat stats;
-  cv::Mat centroids;
-  if (min_area > 1) {
-    const int n = cv::connectedComponentsWithStats(*fg, labels, stats, centroids, 8, CV_32S);
-    std::vector<uint8_t> keep(n, 1);
-    bool any = false;
-    for (int i = 1; i < n; ++i) {
-      keep[i] = stats.at<int>(i, cv::CC_STAT_AREA) >= min_area;
-      any = any || !keep[i];
-    }
-    if (any) {
-      for (int y = 0; y < fg->rows; ++y) {
-        uint8_t* row = fg->ptr<uint8_t>(y);
-        const int* label = labels.ptr<int>(y);
-        for (int x = 0; x < fg->cols; ++x) row[x] = row[x] && keep[label[x]];
-      }
-    }
-  }
-  if (max_hole > 0) {
-    cv::Mat holes = (*fg == 0);
-    const int n = cv::connectedComponentsWithStats(holes, labels, stats, centroids, 4, CV_32S);
-    std::vector<uint8_t> fill(n, 0);
-    bool any = false;
-    for (int i = 1; i < n; ++i) {
-      const int left = stats.at<int>(i, cv::CC_STAT_LEFT);
-      const int top = stats.at<int>(i, cv::CC_STAT_TOP);
-      const bool border = left == 0 || top == 0 ||
-                          left + stats.at<int>(i, cv::CC_STAT_WIDTH) == fg->cols ||
-                          top + stats.at<int>(i, cv::CC_STAT_HEIGHT) == fg->rows;
-      fill[i] = !border && stats.at<int>(i, cv::CC_STAT_AREA) <= max_hole;
-      any = any || fill[i];
-    }
-    if (any) {
-      for (int y = 0; y < fg->rows; ++y) {
-        uint8_t* row = fg->ptr<uint8_t>(y);
-        const int* label = labels.ptr<int>(y);
-        for (int x = 0; x < fg->cols; ++x) row[x] = row[x] || fill[label[x]];
-      }
-    }
-  }
 }
 
 // Opening of `fg` with a disc of `radius`: erosion is {distance to background > radius}, and the
@@ -266,7 +218,11 @@ Segment2D BuildSegment(const SkeletonGraph& graph, const SkeletonGraph::Path& pa
 
 std::vector<float> CentrelineDistance(const std::vector<Segment2D>& segments, int width,
                                       int height) {
-  cv::Mat skeleton(height, width, CV_8U, cv::Scalar(255));
+  if (segments.empty()) {
+    return std::vector<float>(static_cast<size_t>(width) * height, kCentrelineDistanceCapPx);
+  }
+  BinaryImage sites(width, height);
+  cv::Mat skeleton(height, width, CV_8U, sites.data.data());
   constexpr int kShift = 4;  // sub-pixel line end points
   const auto fixed = [](const Eigen::Vector2d& p) {
     return cv::Point(static_cast<int>(std::lround(p.x() * (1 << kShift))),
@@ -274,20 +230,12 @@ std::vector<float> CentrelineDistance(const std::vector<Segment2D>& segments, in
   };
   for (const Segment2D& segment : segments) {
     for (size_t i = 0; i + 1 < segment.points.size(); ++i) {
-      cv::line(skeleton, fixed(segment.points[i]), fixed(segment.points[i + 1]), cv::Scalar(0), 1,
+      cv::line(skeleton, fixed(segment.points[i]), fixed(segment.points[i + 1]), cv::Scalar(1), 1,
                cv::LINE_8, kShift);
     }
   }
-  std::vector<float> out(static_cast<size_t>(width) * height, kCentrelineDistanceCapPx);
-  if (segments.empty()) return out;
-  cv::Mat distance;
-  cv::distanceTransform(skeleton, distance, cv::DIST_L2, cv::DIST_MASK_5);
-  for (int y = 0; y < height; ++y) {
-    const float* row = distance.ptr<float>(y);
-    float* dst = &out[static_cast<size_t>(y) * width];
-    for (int x = 0; x < width; ++x) dst[x] = std::min(row[x], kCentrelineDistanceCapPx);
-  }
-  return out;
+  static_assert(kCentrelineDistanceCapPx == 30.0f, "CappedDistanceTransform takes an integer cap");
+  return CappedDistanceTransform(sites, static_cast<int>(kCentrelineDistanceCapPx));
 }
 
 absl::Status ValidateInput(const ClassImage& classes, const CameraCalibration& camera) {
@@ -320,15 +268,18 @@ absl::StatusOr<View2D> Extract(const ClassImage& classes, const CameraCalibratio
   view.height = classes.height;
   view.classes = classes;
 
-  cv::Mat fg = BridgedForeground(classes, options.max_wire_gap_px);
-  CleanForeground(options.min_speck_area_px, options.max_pinhole_area_px, &fg);
+  BinaryImage fg_mask = BridgedForeground(classes, options.max_wire_gap_px);
+  FlipSmallComponents(1, options.min_speck_area_px - 1, /*eight_connected=*/true,
+                      /*border_is_large=*/false, &fg_mask);
+  FlipSmallComponents(0, options.max_pinhole_area_px, /*eight_connected=*/false,
+                      /*border_is_large=*/true, &fg_mask);
+  const cv::Mat fg(fg_mask.height, fg_mask.width, CV_8U, fg_mask.data.data());
   cv::Mat distance;
   cv::distanceTransform(fg, distance, cv::DIST_L2, cv::DIST_MASK_5);
   view.thick_mask = ThickMask(fg, distance, options.thick_radius_px);
   if (absl::Status s = deadline.Check(kWhat); !s.ok()) return s;
 
-  BinaryImage mask(fg.cols, fg.rows);
-  std::copy(fg.datastart, fg.dataend, mask.data.begin());
+  BinaryImage mask = fg_mask;
   ThinMask(&mask);
   if (absl::Status s = deadline.Check(kWhat); !s.ok()) return s;
 

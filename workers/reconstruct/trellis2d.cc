@@ -85,17 +85,50 @@ std::vector<Line2D> ExtractWires(const ClassImage& classes, const CameraCalibrat
                                  const Structure2DOptions& options) {
   const Regions regions = RegionsOf(classes, PixelClass::kWire, options.min_wire_piece_px);
   if (regions.kept.empty()) return {};
+  // Each piece is summarised by the centroids of its pixels in bins of kBin columns (rows, for
+  // pieces taller than wide): sub-pixel points along the wire, and few calls to the iterative
+  // undistortion.
+  constexpr int kBin = 2;
+  struct Bins {
+    cv::Rect box;
+    bool by_column = true;
+    std::vector<double> sum_x, sum_y;
+    std::vector<int> count;
+  };
   std::vector<int> slot(regions.stats.rows, -1);
-  std::vector<std::vector<int>> members(regions.kept.size());
-  for (size_t k = 0; k < regions.kept.size(); ++k) slot[regions.kept[k]] = static_cast<int>(k);
-  std::vector<Eigen::Vector2d> points;
+  std::vector<Bins> bins(regions.kept.size());
+  for (size_t k = 0; k < regions.kept.size(); ++k) {
+    slot[regions.kept[k]] = static_cast<int>(k);
+    Bins& b = bins[k];
+    b.box = BoxOf(regions, regions.kept[k]);
+    b.by_column = b.box.width >= b.box.height;
+    const int n = (b.by_column ? b.box.width : b.box.height) / kBin + 1;
+    b.sum_x.assign(n, 0.0);
+    b.sum_y.assign(n, 0.0);
+    b.count.assign(n, 0);
+  }
   for (int y = 0; y < classes.height; ++y) {
     const int* label = regions.labels.ptr<int>(y);
     for (int x = 0; x < classes.width; ++x) {
-      if (label[x] > 0 && slot[label[x]] >= 0) {
-        members[slot[label[x]]].push_back(static_cast<int>(points.size()));
-        points.push_back(camera.PixelToNormalised(Eigen::Vector2d(x, y)));
-      }
+      if (label[x] <= 0 || slot[label[x]] < 0) continue;
+      Bins& b = bins[slot[label[x]]];
+      const int i = (b.by_column ? x - b.box.x : y - b.box.y) / kBin;
+      b.sum_x[i] += x;
+      b.sum_y[i] += y;
+      ++b.count[i];
+    }
+  }
+  std::vector<Eigen::Vector2d> points;
+  std::vector<int> weights;  // wire pixels summarised by each point
+  std::vector<std::vector<int>> members(regions.kept.size());
+  for (size_t k = 0; k < bins.size(); ++k) {
+    const Bins& b = bins[k];
+    for (size_t i = 0; i < b.count.size(); ++i) {
+      if (b.count[i] == 0) continue;
+      members[k].push_back(static_cast<int>(points.size()));
+      points.push_back(camera.PixelToNormalised(
+          Eigen::Vector2d(b.sum_x[i] / b.count[i], b.sum_y[i] / b.count[i])));
+      weights.push_back(b.count[i]);
     }
   }
   std::vector<LinePiece> pieces;
@@ -103,7 +136,7 @@ std::vector<Line2D> ExtractWires(const ClassImage& classes, const CameraCalibrat
     const double scale = LocalScale(camera, CentroidOf(regions, regions.kept[k]));
     RansacOptions ransac;
     ransac.inlier_distance = options.wire_inlier_px * scale;
-    ransac.min_support = std::max(2, options.min_wire_piece_px);
+    ransac.min_support = 3;  // bins: a few pixels of length; short lines go by length below
     ransac.iterations = options.ransac_iterations;
     ransac.max_lines = 3;
     ransac.seed = options.seed + k;
@@ -116,9 +149,12 @@ std::vector<Line2D> ExtractWires(const ClassImage& classes, const CameraCalibrat
       points, std::move(pieces), options.wire_merge_px, options.wire_merge_angle_deg * M_PI / 180);
   std::vector<Line2D> wires;
   for (const LinePiece& piece : merged) {
-    const double length_px = CoveredLength(points, piece, 3.0 * piece.scale) / piece.scale;
+    // Runs of bins cover their length plus one bin.
+    const double length_px =
+        CoveredLength(points, piece, 2.5 * kBin * piece.scale) / piece.scale + kBin;
     if (length_px < std::max(1.0, options.min_wire_length_px)) continue;
-    const int support = static_cast<int>(piece.inliers.size());
+    int support = 0;
+    for (int i : piece.inliers) support += weights[i];
     wires.push_back(ToLine2D(piece, support / length_px, support));
   }
   return wires;
@@ -147,10 +183,9 @@ std::vector<Line2D> ExtractPosts(const ClassImage& classes, const CameraCalibrat
         ++count;
       }
       if (count == 0 || lo == 0 || hi == classes.width - 1) continue;
-      const Eigen::Vector2d a = camera.PixelToNormalised(Eigen::Vector2d(lo - 0.5, y));
-      const Eigen::Vector2d b = camera.PixelToNormalised(Eigen::Vector2d(hi + 0.5, y));
+      // The pixel midpoint: the lens bends a post's width by far less than a pixel.
       members.push_back(static_cast<int>(centres.size()));
-      centres.push_back(0.5 * (a + b));
+      centres.push_back(camera.PixelToNormalised(Eigen::Vector2d(0.5 * (lo + hi), y)));
       spans_px.push_back(hi - lo + 1);
       counts.push_back(count);
     }
