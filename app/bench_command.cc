@@ -15,6 +15,7 @@
 #include "sim/vine_generator.h"
 #include "workers/capture/sim_capture.h"
 #include "workers/reconstruct/reconstruct.h"
+#include "workers/reconstruct/synthetic_views.h"
 
 namespace vb::app {
 namespace {
@@ -40,6 +41,12 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   VB_ASSIGN_OR_RETURN(const PixelFormat format, flags.Format("pixel-format", PixelFormat::kBayerRg8));
   VB_ASSIGN_OR_RETURN(const int64_t threads, flags.Int("threads", 2));
   VB_ASSIGN_OR_RETURN(const bool per_vine, flags.Bool("per-vine", false));
+  // --input images (the real pipeline), labels (perfect segmentation: the renderer's label
+  // images replace step 1) or truth (perfect 2D: views drawn from the true model replace steps
+  // 1-2). The last two locate where accuracy is lost.
+  VB_ASSIGN_OR_RETURN(const std::string input, flags.String("input", "images"));
+  if (input != "images" && input != "labels" && input != "truth")
+    return absl::InvalidArgumentError("--input must be images, labels or truth");
   VB_RETURN_IF_ERROR(flags.Finish());
   if (vines < 1 || vines > 10000) return absl::InvalidArgumentError("--vines must be in [1, 10000]");
   if (seed_base < 0) return absl::InvalidArgumentError("--seed-base must be >= 0");
@@ -75,8 +82,25 @@ absl::Status RunBenchReconstruct(Flags& flags) {
     RigCalibration rig;
     for (size_t c = 0; c < capture.bundle.images.size(); ++c)
       rig.cameras.push_back(capture.bundle.CalibrationOf(c));
-    const auto result =
-        reconstruct::Reconstruct(images, rig, segmenter, options, Deadline::In(60.0));
+    absl::StatusOr<reconstruct::ReconstructResult> result;
+    if (input == "images") {
+      result = reconstruct::Reconstruct(images, rig, segmenter, options, Deadline::In(60.0));
+    } else {
+      std::vector<reconstruct::View2D> views;
+      if (input == "truth") {
+        // Drawn through the reported calibration: the 3D stages see consistent 2D evidence.
+        views = reconstruct::SyntheticViews(capture.ground_truth, rig);
+      } else {
+        for (size_t c = 0; c < capture.labels.size(); ++c) {
+          VB_ASSIGN_OR_RETURN(reconstruct::View2D view,
+                              reconstruct::ExtractStructure(
+                                  reconstruct::ClassesOfSimLabels(capture.labels[c]),
+                                  rig.cameras[c], options.structure, Deadline::In(60.0)));
+          views.push_back(std::move(view));
+        }
+      }
+      result = reconstruct::ReconstructFromViews(views, rig, options, Deadline::In(60.0));
+    }
     nlohmann::json entry = {{"seed", seed}, {"vine", vine}};
     if (!result.ok()) {
       ++failures;
@@ -134,6 +158,7 @@ absl::Status RunBenchReconstruct(Flags& flags) {
                         {"pixel_format", std::string(PixelFormatName(format))},
                         {"calibration_error_px", calibration_error_px},
                         {"threads", threads},
+                        {"input", input},
                         {"failures", failures},
                         {"empty_models", empty},
                         {"mean", mean},

@@ -214,6 +214,8 @@ absl::StatusOr<ReconstructionMetrics> EvaluateReconstruction(const VineModel& mo
       const auto parent = model.IndexOf(*c.parent_id);
       if (!parent) return false;
       at = *parent;
+      // The trunk is the root by definition; its own accuracy is scored by recall.
+      if (model.canes[at].kind == CaneKind::kTrunk) return true;
       if (std::find(ancestry.begin(), ancestry.end(), majority[at]) == ancestry.end()) return false;
     }
     return false;

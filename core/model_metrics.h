@@ -27,8 +27,8 @@ struct ReconstructionMetrics {
   // cane (any kind, old spurs included).
   double cane_precision = 0.0;
   // Fraction of ground-truth trunk + cane length that is recalled by a reconstructed cane whose
-  // route to the trunk is the true one: every cane on its parent chain (the trunk included) is
-  // mostly (by length) a reconstruction of the true cane's own ancestors. A cane hung on a
+  // route to the trunk is the true one: every cane on its parent chain below the trunk is mostly
+  // (by length) a reconstruction of the true cane's own ancestors (or of the cane itself). A cane hung on a
   // neighbour it merely crosses is not connected. Unmatched length counts as unconnected, so
   // connectivity <= cane_recall.
   double connectivity = 0.0;

@@ -112,7 +112,12 @@ absl::StatusOr<VineModel> ConnectCanes(const std::vector<Polyline3>& input,
   const double trunk_radius = *std::max_element(trunk->radii.begin(), trunk->radii.end());
 
   // Drop canes that mostly lie inside the trunk or head: they are those structures seen again.
+  // The longest of them inside the trunk, triangulated from the trunk's centre lines, is a more
+  // accurate axis than the silhouettes' slab centres: it becomes the trunk, reaching the ground
+  // along the silhouette trunk's base.
   std::vector<Polyline3> kept;
+  const Polyline3 silhouette_trunk = *trunk;
+  double best_trunk_length = options.trunk_axis_min_fraction * silhouette_trunk.Length();
   for (const Polyline3& cane : canes) {
     const std::vector<Eigen::Vector3d> samples = cane.Sample(options.sample_step_m);
     size_t inside = 0;
@@ -124,6 +129,24 @@ absl::StatusOr<VineModel> ConnectCanes(const std::vector<Polyline3>& input,
     }
     if (!samples.empty() && inside >= options.inside_fraction * samples.size()) {
       ++sum.inside_trunk_or_head;
+      size_t in_trunk = 0;
+      for (const Eigen::Vector3d& p : samples)
+        in_trunk += DistanceToPolyline(p, silhouette_trunk, nullptr) <= trunk_radius + 0.01;
+      if (in_trunk >= options.inside_fraction * samples.size() && trunk_in &&
+          cane.Length() > best_trunk_length) {
+        best_trunk_length = cane.Length();
+        Polyline3 axis = cane;
+        if (axis.points.front().z() > axis.points.back().z()) {
+          std::reverse(axis.points.begin(), axis.points.end());
+          std::reverse(axis.radii.begin(), axis.radii.end());
+        }
+        if (silhouette_trunk.points.front().z() < axis.points.front().z() - 0.02) {
+          axis.points.insert(axis.points.begin(), silhouette_trunk.points.front());
+          axis.radii.insert(axis.radii.begin(), axis.radii.front());
+        }
+        axis.radii.assign(axis.points.size(), trunk_radius);
+        trunk = axis;
+      }
       continue;
     }
     kept.push_back(cane);

@@ -23,6 +23,8 @@ struct ConnectOptions {
   double inside_fraction = 0.7;      // canes with this much of their length inside the trunk or
                                      // head are duplicates of them and dropped
   double spur_length_m = 0.08;       // canes on the head or trunk shorter than this are spurs
+  double trunk_axis_min_fraction = 0.3;  // a stereo cane inside the silhouette trunk at least
+                                         // this fraction of its length replaces its axis
   double sample_step_m = 0.01;       // spacing of samples along canes for distances
 
   absl::Status Validate() const;

@@ -17,6 +17,7 @@ struct SilhouetteMaps {
   int height = 0;
   cv::Mat to_silhouette;   // CV_32F
   cv::Mat to_background;   // CV_32F
+  cv::Mat to_thick;        // CV_32F: distance to thick foreground alone (posts excluded)
 };
 
 SilhouetteMaps MakeMaps(const View2D& view) {
@@ -24,10 +25,15 @@ SilhouetteMaps MakeMaps(const View2D& view) {
   maps.width = view.width;
   maps.height = view.height;
   cv::Mat mask(view.height, view.width, CV_8U, const_cast<uint8_t*>(view.thick_mask.data()));
+  // A post in front hides whatever is behind it: its pixels may not carve (they count as
+  // silhouette for the outside test), but neither do they prove a cube whole.
+  cv::Mat classes(view.height, view.width, CV_8U, const_cast<uint8_t*>(view.classes.data.data()));
   cv::Mat inside = mask != 0;
-  cv::Mat outside = mask == 0;
+  cv::Mat outside = (mask == 0) & (classes != static_cast<int>(PixelClass::kPost));
   cv::distanceTransform(outside, maps.to_silhouette, cv::DIST_L2, 3);
   cv::distanceTransform(inside, maps.to_background, cv::DIST_L2, 3);
+  cv::Mat not_thick = mask == 0;
+  cv::distanceTransform(not_thick, maps.to_thick, cv::DIST_L2, 3);
   return maps;
 }
 
@@ -49,6 +55,7 @@ class Carver {
     const double radius = 0.5 * std::sqrt(3.0) * cube.side;
     int seen = 0;
     bool all_inside = true;
+    bool touches_wood = false;  // behind posts in every view is not evidence of a head
     for (size_t v = 0; v < maps_.size(); ++v) {
       const CameraCalibration& camera = rig_.cameras[v];
       const auto uv = camera.Project(cube.centre);
@@ -64,8 +71,10 @@ class Carver {
         return CubeVerdict::kOutside;
       }
       if (maps_[v].to_background.at<float>(y, x) < r_px) all_inside = false;
+      if (maps_[v].to_thick.at<float>(y, x) <= r_px + options_.silhouette_margin_px)
+        touches_wood = true;
     }
-    if (seen < options_.min_views) return CubeVerdict::kOutside;
+    if (seen < options_.min_views || !touches_wood) return CubeVerdict::kOutside;
     return all_inside ? CubeVerdict::kInside : CubeVerdict::kBoundary;
   }
 
@@ -149,7 +158,8 @@ absl::StatusOr<HeadAndTrunk> ReconstructHeadAndTrunk(const std::vector<View2D>& 
                                                      const RigCalibration& rig,
                                                      const WorkingVolume& volume,
                                                      const HeadOptions& options,
-                                                     const Deadline& deadline) {
+                                                     const Deadline& deadline,
+                                                     const std::vector<Eigen::Vector3d>& depth_hints) {
   if (absl::Status s = options.Validate(); !s.ok()) return s;
   if (views.size() != rig.cameras.size()) {
     return absl::InvalidArgumentError(absl::StrCat("head: ", views.size(), " views for ",
@@ -158,10 +168,11 @@ absl::StatusOr<HeadAndTrunk> ReconstructHeadAndTrunk(const std::vector<View2D>& 
   for (size_t v = 0; v < views.size(); ++v) {
     if (views[v].width != rig.cameras[v].image_width ||
         views[v].height != rig.cameras[v].image_height ||
-        views[v].thick_mask.size() != static_cast<size_t>(views[v].width) * views[v].height) {
+        views[v].thick_mask.size() != static_cast<size_t>(views[v].width) * views[v].height ||
+        views[v].classes.data.size() != views[v].thick_mask.size()) {
       return absl::InvalidArgumentError(
           absl::StrCat("head: view ", v, " (", rig.cameras[v].name,
-                       "): thick_mask size disagrees with the calibration"));
+                       "): thick_mask or class image size disagrees with the calibration"));
     }
   }
   HeadAndTrunk result;
@@ -284,18 +295,14 @@ absl::StatusOr<HeadAndTrunk> ReconstructHeadAndTrunk(const std::vector<View2D>& 
     lower_widths.push_back(max_x[occupied[i]] - min_x[occupied[i]] + options.min_cell_m);
   const double trunk_width = lower_widths.empty() ? 0.0 : Median(lower_widths);
 
-  // Head bottom: scanning down from the top, the first of three consecutive trunk-wide slabs.
+  // Head bottom: the lowest wide slab above the lower half of the trunk (heads carry lobes
+  // that hang down beside the trunk top; scanning from below keeps them in the head).
   double head_bottom_z = top_z - options.head_min_height_m;
   if (trunk_width > 0) {
-    for (int i = static_cast<int>(occupied.size()) - 1; i >= 2; --i) {
-      bool narrow = true;
-      for (int k = 0; k < 3; ++k) {
-        const int s = occupied[i - k];
-        narrow = narrow && (max_x[s] - min_x[s] + options.min_cell_m) <=
-                               options.head_width_factor * trunk_width;
-      }
-      if (narrow) {
-        head_bottom_z = std::min(head_bottom_z, slab_z(occupied[i]) + 0.5 * options.slab_m);
+    for (size_t i = occupied.size() / 2; i < occupied.size(); ++i) {
+      const int s = occupied[i];
+      if (max_x[s] - min_x[s] + options.min_cell_m > options.head_width_factor * trunk_width) {
+        head_bottom_z = std::min(head_bottom_z, slab_z(s) - 0.5 * options.slab_m);
         break;
       }
     }
@@ -315,9 +322,19 @@ absl::StatusOr<HeadAndTrunk> ReconstructHeadAndTrunk(const std::vector<View2D>& 
     trunk.points.push_back({sum_x[s] / count[s], sum_y[s] / count[s], slab_z(s)});
     trunk_y.push_back(trunk.points.back().y());
   }
-  // Reference depth: the upper half of the trunk, which every view sees whole.
-  const double reference_y =
+  // Reference depth: triangulated wood inside the trunk's silhouette columns if there is enough,
+  // else the upper half of the trunk, which every view sees whole.
+  double reference_y =
       Median(std::vector<double>(trunk_y.begin() + trunk_y.size() / 2, trunk_y.end()));
+  if (!trunk.points.empty()) {
+    std::vector<double> hinted;
+    for (const Eigen::Vector3d& p : depth_hints) {
+      if (p.z() < trunk.points.front().z() || p.z() > head_bottom_z) continue;
+      const int s = std::clamp(static_cast<int>((p.z() - volume.box.min().z()) / options.slab_m), 0, slabs - 1);
+      if (count[s] > 0 && p.x() >= min_x[s] - 0.01 && p.x() <= max_x[s] + 0.01) hinted.push_back(p.y());
+    }
+    if (hinted.size() >= 5) reference_y = Median(hinted);
+  }
   std::erase_if(trunk.points,
                 [&](const Eigen::Vector3d& p) { return std::abs(p.y() - reference_y) > 0.025; });
   const double trunk_radius = std::max(0.01, 0.5 * (trunk_width - options.min_cell_m));
@@ -370,6 +387,15 @@ absl::StatusOr<HeadAndTrunk> ReconstructHeadAndTrunk(const std::vector<View2D>& 
   // The trunk's top is well seen and lies under the head; it gives the head's depth where there
   // is a trunk (the widest rows of the head's slabs are dragged backwards like the trunk's).
   head_y = result.trunk ? result.trunk->points.back().y() : head_y / head_n;
+  // Better still: the depth of triangulated wood (cane bases) within the head's extent.
+  std::vector<double> hinted;
+  for (const Eigen::Vector3d& p : depth_hints) {
+    if (p.x() >= head_min_x && p.x() <= head_max_x && p.z() >= head_bottom_z &&
+        p.z() <= top_z + options.depth_margin_m && volume.Contains(p)) {
+      hinted.push_back(p.y());
+    }
+  }
+  if (hinted.size() >= 5) head_y = Median(hinted);
   const double half_depth =
       0.5 * std::max(head_max_x - head_min_x, top_z - head_bottom_z) + options.depth_margin_m;
   for (size_t c = 0; c < kept.size(); ++c) {

@@ -50,13 +50,17 @@ struct HeadAndTrunk {
   int cells_kept = 0;             // octree leaves kept (diagnostics)
 };
 
-// rig.cameras[i] belongs to views[i]. INVALID_ARGUMENT for a count mismatch, invalid options or
+// rig.cameras[i] belongs to views[i]. `depth_hints` are 3D points of wood triangulated from
+// centre lines (the assembled canes' points): where enough fall inside the head's or trunk's
+// extent, their median depth centres the head and trunk (more accurate than the hull, whose
+// depth is poorly constrained). INVALID_ARGUMENT for a count mismatch, invalid options or
 // a view whose thick_mask size disagrees with its calibration; DEADLINE_EXCEEDED. No thick
 // foreground anywhere gives an empty result (not an error).
 absl::StatusOr<HeadAndTrunk> ReconstructHeadAndTrunk(const std::vector<View2D>& views,
                                                      const RigCalibration& rig,
                                                      const WorkingVolume& volume,
                                                      const HeadOptions& options,
-                                                     const Deadline& deadline);
+                                                     const Deadline& deadline,
+                                                     const std::vector<Eigen::Vector3d>& depth_hints = {});
 
 }  // namespace vb::reconstruct

@@ -92,8 +92,12 @@ absl::StatusOr<ReconstructResult> ReconstructFromViews(const std::vector<View2D>
   result.timings.assembly_s = SecondsSince(t);
 
   t = std::chrono::steady_clock::now();
+  std::vector<Eigen::Vector3d> depth_hints;
+  for (const Polyline3& cane : canes)
+    depth_hints.insert(depth_hints.end(), cane.points.begin(), cane.points.end());
   VB_ASSIGN_OR_RETURN(const HeadAndTrunk head,
-                      ReconstructHeadAndTrunk(views, rig, options.volume, options.head, deadline));
+                      ReconstructHeadAndTrunk(views, rig, options.volume, options.head, deadline,
+                                              depth_hints));
   result.timings.head_s = SecondsSince(t);
 
   t = std::chrono::steady_clock::now();
