@@ -336,12 +336,11 @@ namespace segmenter_internal {
 absl::StatusOr<ClassImage> SegmentCounting(const Image& rgb, const SegmenterModel& model,
                                            int64_t* stage2_pixels) {
   VB_RETURN_IF_ERROR(ValidateSegmenterModel(model));
-  VB_ASSIGN_OR_RETURN(const FeatureExtractor fx, FeatureExtractor::Create(rgb));
+  VB_ASSIGN_OR_RETURN(FeatureExtractor fx, FeatureExtractor::Create(rgb));
   const int w = fx.width(), h = fx.height();
   const FoldedStage s1 = Fold(model.stage1);
   const bool cascade = model.cascade_margin > 0.0f;
   const FoldedStage s2 = cascade ? Fold(model.stage2) : FoldedStage{};
-  std::vector<float> scratch(static_cast<size_t>(FeatureExtractor::kScratchRows) * w);
   const float* rows[kFeatureCount];
   std::vector<float> input(cascade ? s2.inputs : 0);
   float pixel[kFeatureCount];
@@ -350,23 +349,29 @@ absl::StatusOr<ClassImage> SegmentCounting(const Image& rgb, const SegmenterMode
   constexpr int kChunk = 256;
   float scores[kM][kChunk];
   for (int y = 0; y < h; ++y) {
-    fx.Row(y, scratch.data(), rows);
+    fx.Next(rows);
     uint8_t* dst = out.data.data() + static_cast<size_t>(y) * w;
     for (int x0 = 0; x0 < w; x0 += kChunk) {
       const int n = std::min(kChunk, w - x0);
       ScoreChunk(s1, rows, x0, n, scores);
+      // Best and second-best scores, vectorised over the chunk.
+      int best_of[kChunk];
+      float margin[kChunk];
       for (int i = 0; i < n; ++i) {
+        float top = scores[0][i];
         int best = 0;
-        float top = scores[0][i], second = -1e30f;
         for (int c = 1; c < kM; ++c) {
-          const float v = scores[c][i];
-          if (v > top) {
-            second = top, top = v, best = c;
-          } else if (v > second) {
-            second = v;
-          }
+          best = scores[c][i] > top ? c : best;
+          top = std::max(top, scores[c][i]);
         }
-        if (cascade && top - second < model.cascade_margin) {
+        float second = -1e30f;
+        for (int c = 0; c < kM; ++c) second = std::max(second, c == best ? -1e30f : scores[c][i]);
+        best_of[i] = best;
+        margin[i] = top - second;
+      }
+      for (int i = 0; i < n; ++i) {
+        int best = best_of[i];
+        if (cascade && margin[i] < model.cascade_margin) {
           ++hard;
           for (int f = 0; f < kFeatureCount; ++f) pixel[f] = rows[f][x0 + i];
           Stage2Input(model, pixel, input.data());

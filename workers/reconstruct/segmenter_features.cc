@@ -2,51 +2,51 @@
 #include "workers/reconstruct/segmenter_features.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 
 #include "absl/strings/str_cat.h"
-#include "workers/reconstruct/segmenter.h"
-#include "opencv2/core.hpp"
-#include "opencv2/imgproc.hpp"
 
 namespace vb::reconstruct::segmenter_internal {
 namespace {
 
-constexpr int kScales[] = {1, 3, 7, 15, 63};
-constexpr int kScaleCount = 5;
+constexpr int kBoxSizes[] = {3, 7, 15, 63};
 constexpr float kDarkOffsetDn = 24.0f;
+constexpr int kRingRows = 16;  // >= 2 * 7 + 1: rows y - 7 .. y + 7 for the ridges
+constexpr int kPad = 8;        // padding of ring rows: ridge offsets up to 7, gradient 1
+constexpr int kSidePad = 40;   // padding of the cb15 row for side_cb40
+constexpr int kLeadPlanes = 6; // lum1 cb1 cr1 lum3 cb3 cr3
+constexpr int kLead = 7;       // rows computed ahead of the current one
+constexpr int kOwnRows = kFeatureCount - kLeadPlanes;  // features computed per row in Next()
 
-// Plane indices: 3 * scale index + {0 lum, 1 cb, 2 cr}.
-constexpr int kLum1 = 0, kCb1 = 1, kLum3 = 3, kCb3 = 4, kCb15 = 10;
+// Feature indices (FeatureNames order).
+enum : int {
+  kLum1, kCb1, kCr1, kLum3, kCb3, kCr3, kLum7, kCb7, kCr7, kLum15, kCb15, kCr15, kLum63, kCb63,
+  kCr63, kRidgeCb2, kRidgeCb4, kRidgeCb7, kRidgeLum2, kValleyLum3, kGradCb, kSideCb40, kRow
+};
+static_assert(kRow + 1 == kFeatureCount);
 
-// Writes lum, cb, cr of interleaved float RGB (values in DN) into three planes.
-void ChromaOf(const float* rgb, size_t n, float* lum, float* cb, float* cr) {
-  for (size_t i = 0; i < n; ++i) {
-    const float r = rgb[3 * i], g = rgb[3 * i + 1], b = rgb[3 * i + 2];
-    const float s = r + g + b;
-    const float inv = 1.0f / (s + kDarkOffsetDn);
-    lum[i] = s * (1.0f / 765.0f);
-    cb[i] = (b - 0.5f * (r + g)) * inv;
-    cr[i] = (r - g) * inv;
-  }
+
+// BORDER_REFLECT_101 index for any i (repeated reflection for tiny n).
+inline int Reflect(int i, int n) {
+  if (n == 1) return 0;
+  while (i < 0 || i >= n) i = i < 0 ? -i : 2 * n - 2 - i;
+  return i;
 }
 
-// dst[x] = row clamp(y + dy) of `plane`, at column clamp(x + dx): the plane shifted, with the
-// border pixels repeated (close enough to the reflection of the box filters for a few pixels).
-void ShiftedRow(const float* plane, int w, int h, int y, int dx, int dy, float* dst) {
-  const int yy = std::clamp(y + dy, 0, h - 1);
-  const float* row = plane + static_cast<size_t>(yy) * w;
-  if (dx >= w || -dx >= w) {
-    std::fill(dst, dst + w, row[dx > 0 ? w - 1 : 0]);
-    return;
-  }
-  if (dx >= 0) {
-    std::memcpy(dst, row + dx, sizeof(float) * (w - dx));
-    std::fill(dst + (w - dx), dst + w, row[w - 1]);
-  } else {
-    std::fill(dst, dst - dx, row[0]);
-    std::memcpy(dst - dx, row, sizeof(float) * (w + dx));
-  }
+// lum, cb, cr of mean colours (DN) r, g, b.
+inline void Chroma(float r, float g, float b, float* lum, float* cb, float* cr) {
+  const float s = r + g + b;
+  const float inv = 1.0f / (s + kDarkOffsetDn);
+  *lum = s * (1.0f / 765.0f);
+  *cb = (b - 0.5f * (r + g)) * inv;
+  *cr = (r - g) * inv;
+}
+
+// Repeats the first and last of the w values at row[0..w) into `pad` cells either side.
+inline void PadRow(float* row, int w, int pad) {
+  std::fill(row - pad, row, row[0]);
+  std::fill(row + w, row + w + pad, row[w - 1]);
 }
 
 constexpr int kDirs[4][2] = {{1, 0}, {0, 1}, {1, 1}, {1, -1}};
@@ -56,7 +56,7 @@ constexpr int kDirs[4][2] = {{1, 0}, {0, 1}, {1, 1}, {1, -1}};
 const std::vector<std::string>& FeatureNames() {
   static const std::vector<std::string>* names = [] {
     auto* n = new std::vector<std::string>;
-    for (int s : kScales) {
+    for (int s : {1, 3, 7, 15, 63}) {
       n->push_back(absl::StrCat("lum", s));
       n->push_back(absl::StrCat("cb", s));
       n->push_back(absl::StrCat("cr", s));
@@ -85,99 +85,148 @@ absl::StatusOr<FeatureExtractor> FeatureExtractor::Create(const Image& rgb) {
                                                    rgb.width, "x", rgb.height, " rgb8"));
   }
   FeatureExtractor fx;
+  fx.rgb_ = &rgb;
   fx.width_ = rgb.width;
   fx.height_ = rgb.height;
-  fx.planes_.resize(n * 3 * kScaleCount);
-  try {
-    // cv::Mat over the caller's bytes; never written.
-    const cv::Mat src(rgb.height, rgb.width, CV_8UC3, const_cast<uint8_t*>(rgb.data.data()));
-    cv::Mat mean;
-    for (int si = 0; si < kScaleCount; ++si) {
-      const int s = kScales[si];
-      if (s == 1) {
-        src.convertTo(mean, CV_32F);
-      } else {
-        cv::boxFilter(src, mean, CV_32F, cv::Size(s, s), cv::Point(-1, -1), true,
-                      cv::BORDER_REFLECT_101);
-      }
-      float* base = fx.planes_.data() + n * 3 * si;
-      ChromaOf(mean.ptr<float>(0), n, base, base + n, base + 2 * n);
-    }
-  } catch (const cv::Exception& e) {
-    return absl::InternalError(absl::StrCat("segmenter features: OpenCV: ", e.what()));
-  }
+  const size_t w = rgb.width;
+  for (int s : kBoxSizes) fx.boxes_.push_back({s, -1, std::vector<int32_t>(3 * w)});
+  fx.ring_.assign(static_cast<size_t>(kRingRows) * kLeadPlanes * (w + 2 * kPad), 0.0f);
+  fx.own_.assign(static_cast<size_t>(kOwnRows) * (w + 2 * kSidePad), 0.0f);
+  fx.prefix_.assign(3 * (w + 2 * 32 + 1), 0);  // box sizes up to 65
+  fx.mean_.assign(3 * w, 0.0f);
   return fx;
 }
 
-static_assert(FeatureExtractor::kScratchRows == kFeatureCount - 3 * kScaleCount + 2);
+float* FeatureExtractor::Ring(int plane, int row) {
+  row = std::clamp(row, 0, height_ - 1);
+  const size_t stride = static_cast<size_t>(width_) + 2 * kPad;
+  return ring_.data() + (static_cast<size_t>(row % kRingRows) * kLeadPlanes + plane) * stride +
+         kPad;
+}
 
-void FeatureExtractor::Row(int y, float* scratch, const float* rows[kFeatureCount]) const {
-  const int w = width_, h = height_;
-  const size_t row_off = static_cast<size_t>(y) * w;
-  for (int k = 0; k < 3 * kScaleCount; ++k) rows[k] = Plane(k) + row_off;
-  for (int k = 3 * kScaleCount; k < kFeatureCount; ++k) {
-    rows[k] = scratch + static_cast<size_t>(k - 3 * kScaleCount) * w;
+// Moves the column sums of `box` to be centred on `row`, then leaves the row's box mean colour in
+// mean_ (interleaved RGB, DN).
+void FeatureExtractor::AdvanceBox(BoxScale& box, int row) {
+  const int w = width_, h = height_, r = box.size / 2;
+  auto add_row = [&](int y, int sign) {
+    const uint8_t* src = rgb_->data.data() + static_cast<size_t>(Reflect(y, h)) * w * 3;
+    int32_t* col = box.column.data();
+    for (int i = 0; i < 3 * w; ++i) col[i] += sign * src[i];
+  };
+  if (box.row < 0 || row != box.row + 1) {
+    std::fill(box.column.begin(), box.column.end(), 0);
+    for (int y = row - r; y <= row + r; ++y) add_row(y, 1);
+  } else {
+    add_row(row + r, 1);
+    add_row(row - r - 1, -1);
   }
-  const float* lum1 = Plane(kLum1) + row_off;
-  const float* cb1 = Plane(kCb1) + row_off;
-  float* a = scratch + static_cast<size_t>(kScratchRows - 2) * w;
-  float* b = scratch + static_cast<size_t>(kScratchRows - 1) * w;
-  float* f = scratch;
+  box.row = row;
+  // Horizontal box over the column sums: prefix sums over the row extended by reflection.
+  const int n = w + 2 * r;
+  int32_t* p = prefix_.data();
+  p[0] = p[1] = p[2] = 0;
+  const int32_t* col = box.column.data();
+  for (int i = 0; i < n; ++i) {
+    const int x = i - r;
+    const int32_t* c = col + 3 * static_cast<size_t>(x >= 0 && x < w ? x : Reflect(x, w));
+    p[3 * i + 3] = p[3 * i] + c[0];
+    p[3 * i + 4] = p[3 * i + 1] + c[1];
+    p[3 * i + 5] = p[3 * i + 2] + c[2];
+  }
+  const float inv = 1.0f / static_cast<float>(box.size * box.size);
+  const int32_t* hi = p + 3 * box.size;
+  float* mean = mean_.data();
+  for (int i = 0; i < 3 * w; ++i) mean[i] = static_cast<float>(hi[i] - p[i]) * inv;
+}
+
+void FeatureExtractor::ComputeLead(int row) {
+  const int w = width_;
+  const uint8_t* src = rgb_->data.data() + static_cast<size_t>(row) * w * 3;
+  float* lum1 = Ring(0, row);
+  float* cb1 = Ring(1, row);
+  float* cr1 = Ring(2, row);
+  for (int x = 0; x < w; ++x) {
+    Chroma(src[3 * x], src[3 * x + 1], src[3 * x + 2], &lum1[x], &cb1[x], &cr1[x]);
+  }
+  AdvanceBox(boxes_[0], row);
+  float* lum3 = Ring(3, row);
+  float* cb3 = Ring(4, row);
+  float* cr3 = Ring(5, row);
+  for (int x = 0; x < w; ++x) {
+    Chroma(mean_[3 * x], mean_[3 * x + 1], mean_[3 * x + 2], &lum3[x], &cb3[x], &cr3[x]);
+  }
+  for (int plane = 0; plane < kLeadPlanes; ++plane) PadRow(Ring(plane, row), w, kPad);
+}
+
+int FeatureExtractor::Next(const float* rows[kFeatureCount]) {
+  const int w = width_, y = next_++;
+  while (lead_done_ < std::min(height_ - 1, y + kLead)) ComputeLead(++lead_done_);
+  for (int plane = 0; plane < kLeadPlanes; ++plane) rows[plane] = Ring(plane, y);
+
+  const size_t stride = static_cast<size_t>(w) + 2 * kSidePad;
+  auto own = [&](int feature) { return own_.data() + (feature - kLeadPlanes) * stride + kSidePad; };
+  for (int b = 1; b < 4; ++b) {
+    AdvanceBox(boxes_[b], y);
+    const int base = 3 * (b + 1);
+    float* lum = own(base);
+    float* cb = own(base + 1);
+    float* cr = own(base + 2);
+    for (int x = 0; x < w; ++x) {
+      Chroma(mean_[3 * x], mean_[3 * x + 1], mean_[3 * x + 2], &lum[x], &cb[x], &cr[x]);
+    }
+  }
+  const float* lum1 = Ring(0, y);
+  const float* cb1 = Ring(1, y);
 
   // ridge_cb{k}
-  for (int k : {2, 4, 7}) {
-    float* dst = f;
+  const int ks[3] = {2, 4, 7};
+  for (int i = 0; i < 3; ++i) {
+    const int k = ks[i];
+    float* dst = own(kRidgeCb2 + i);
     std::fill(dst, dst + w, -1e9f);
     for (const auto& d : kDirs) {
-      ShiftedRow(Plane(kCb3), w, h, y, k * d[0], k * d[1], a);
-      ShiftedRow(Plane(kCb3), w, h, y, -k * d[0], -k * d[1], b);
+      const float* a = Ring(4, y + k * d[1]) + k * d[0];
+      const float* b = Ring(4, y - k * d[1]) - k * d[0];
       for (int x = 0; x < w; ++x) dst[x] = std::max(dst[x], std::min(a[x], b[x]) - cb1[x]);
     }
-    f += w;
   }
-  // ridge_lum2
   {
-    float* dst = f;
+    float* dst = own(kRidgeLum2);
     std::fill(dst, dst + w, -1e9f);
     for (const auto& d : kDirs) {
-      ShiftedRow(Plane(kLum3), w, h, y, 2 * d[0], 2 * d[1], a);
-      ShiftedRow(Plane(kLum3), w, h, y, -2 * d[0], -2 * d[1], b);
+      const float* a = Ring(3, y + 2 * d[1]) + 2 * d[0];
+      const float* b = Ring(3, y - 2 * d[1]) - 2 * d[0];
       for (int x = 0; x < w; ++x) dst[x] = std::max(dst[x], lum1[x] - std::max(a[x], b[x]));
     }
-    f += w;
   }
-  // valley_lum3
   {
-    float* dst = f;
+    float* dst = own(kValleyLum3);
     std::fill(dst, dst + w, -1e9f);
     for (const auto& d : kDirs) {
-      ShiftedRow(Plane(kLum3), w, h, y, 3 * d[0], 3 * d[1], a);
-      ShiftedRow(Plane(kLum3), w, h, y, -3 * d[0], -3 * d[1], b);
+      const float* a = Ring(3, y + 3 * d[1]) + 3 * d[0];
+      const float* b = Ring(3, y - 3 * d[1]) - 3 * d[0];
       for (int x = 0; x < w; ++x) dst[x] = std::max(dst[x], std::min(a[x], b[x]) - lum1[x]);
     }
-    f += w;
   }
-  // grad_cb
   {
-    float* dst = f;
-    ShiftedRow(Plane(kCb3), w, h, y, 1, 0, a);
-    ShiftedRow(Plane(kCb3), w, h, y, -1, 0, b);
-    for (int x = 0; x < w; ++x) dst[x] = std::abs(a[x] - b[x]);
-    ShiftedRow(Plane(kCb3), w, h, y, 0, 1, a);
-    ShiftedRow(Plane(kCb3), w, h, y, 0, -1, b);
-    for (int x = 0; x < w; ++x) dst[x] += std::abs(a[x] - b[x]);
-    f += w;
+    float* dst = own(kGradCb);
+    const float* c = Ring(4, y);
+    const float* up = Ring(4, y - 1);
+    const float* down = Ring(4, y + 1);
+    for (int x = 0; x < w; ++x) dst[x] = std::abs(c[x + 1] - c[x - 1]) + std::abs(down[x] - up[x]);
   }
-  // side_cb40
   {
-    float* dst = f;
-    ShiftedRow(Plane(kCb15), w, h, y, 40, 0, a);
-    ShiftedRow(Plane(kCb15), w, h, y, -40, 0, b);
-    for (int x = 0; x < w; ++x) dst[x] = std::max(a[x], b[x]);
-    f += w;
+    float* cb15 = own(kCb15);
+    PadRow(cb15, w, kSidePad);
+    float* dst = own(kSideCb40);
+    for (int x = 0; x < w; ++x) dst[x] = std::max(cb15[x - 40], cb15[x + 40]);
   }
-  // row
-  std::fill(f, f + w, (static_cast<float>(y) + 0.5f) / static_cast<float>(h));
+  {
+    float* dst = own(kRow);
+    std::fill(dst, dst + w, (static_cast<float>(y) + 0.5f) / static_cast<float>(height_));
+  }
+  for (int f = kLeadPlanes; f < kFeatureCount; ++f) rows[f] = own(f);
+  return y;
 }
 
 }  // namespace vb::reconstruct::segmenter_internal

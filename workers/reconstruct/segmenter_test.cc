@@ -1,7 +1,9 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "workers/reconstruct/segmenter.h"
 
+#include <algorithm>
 #include <cstdio>
+#include <random>
 #include <fstream>
 #include <string>
 
@@ -12,6 +14,7 @@
 #include "sim/rig.h"
 #include "sim/scene.h"
 #include "sim/vine_generator.h"
+#include "workers/reconstruct/segmenter_features.h"
 
 namespace vb::reconstruct {
 namespace {
@@ -57,6 +60,82 @@ TEST(Segmenter, BuiltinModelSegmentsARenderedStop) {
   EXPECT_GT(r.wide_foreground_recall, 0.95);
   EXPECT_GT(Of(r, PixelClass::kBackground).recall, 0.97);
   if (Of(r, PixelClass::kWire).true_px > 500) EXPECT_GT(Of(r, PixelClass::kWire).recall, 0.6);
+}
+
+// Brute-force features of one pixel, straight from the definitions in segmenter_features.h.
+std::vector<float> ReferenceFeatures(const Image& rgb, int x, int y) {
+  const int w = rgb.width, h = rgb.height;
+  auto reflect = [](int i, int n) {
+    if (n == 1) return 0;
+    while (i < 0 || i >= n) i = i < 0 ? -i : 2 * n - 2 - i;
+    return i;
+  };
+  // lum, cb, cr of the s x s box mean at (px, py).
+  auto box = [&](int s, int px, int py) {
+    double sum[3] = {0, 0, 0};
+    for (int dy = -s / 2; dy <= s / 2; ++dy) {
+      for (int dx = -s / 2; dx <= s / 2; ++dx) {
+        const uint8_t* p = rgb.at(reflect(px + dx, w), reflect(py + dy, h));
+        for (int c = 0; c < 3; ++c) sum[c] += p[c];
+      }
+    }
+    const double r = sum[0] / (s * s), g = sum[1] / (s * s), b = sum[2] / (s * s);
+    return std::array<double, 3>{(r + g + b) / 765.0, (b - 0.5 * (r + g)) / (r + g + b + 24.0),
+                                 (r - g) / (r + g + b + 24.0)};
+  };
+  auto at = [&](int s, int px, int py, int k) {  // clamped sample of feature k of scale s
+    return box(s, std::clamp(px, 0, w - 1), std::clamp(py, 0, h - 1))[k];
+  };
+  std::vector<float> f;
+  for (int s : {1, 3, 7, 15, 63}) {
+    for (double v : box(s, x, y)) f.push_back(static_cast<float>(v));
+  }
+  const int dirs[4][2] = {{1, 0}, {0, 1}, {1, 1}, {1, -1}};
+  const double lum1 = f[0], cb1 = f[1];
+  for (int k : {2, 4, 7}) {
+    double best = -1e9;
+    for (const auto& d : dirs) {
+      best = std::max(best, std::min(at(3, x + k * d[0], y + k * d[1], 1),
+                                     at(3, x - k * d[0], y - k * d[1], 1)) - cb1);
+    }
+    f.push_back(static_cast<float>(best));
+  }
+  double ridge = -1e9, valley = -1e9;
+  for (const auto& d : dirs) {
+    ridge = std::max(ridge, lum1 - std::max(at(3, x + 2 * d[0], y + 2 * d[1], 0),
+                                            at(3, x - 2 * d[0], y - 2 * d[1], 0)));
+    valley = std::max(valley, std::min(at(3, x + 3 * d[0], y + 3 * d[1], 0),
+                                       at(3, x - 3 * d[0], y - 3 * d[1], 0)) - lum1);
+  }
+  f.push_back(static_cast<float>(ridge));
+  f.push_back(static_cast<float>(valley));
+  f.push_back(static_cast<float>(std::abs(at(3, x + 1, y, 1) - at(3, x - 1, y, 1)) +
+                                 std::abs(at(3, x, y + 1, 1) - at(3, x, y - 1, 1))));
+  f.push_back(static_cast<float>(std::max(at(15, x - 40, y, 1), at(15, x + 40, y, 1))));
+  f.push_back(static_cast<float>((y + 0.5) / h));
+  return f;
+}
+
+TEST(SegmenterFeatures, MatchTheirDefinitions) {
+  std::mt19937 rng(5);
+  for (const auto& [w, h] : std::vector<std::pair<int, int>>{{90, 75}, {23, 9}, {1, 1}}) {
+    Image rgb(w, h, PixelFormat::kRgb8);
+    for (uint8_t& v : rgb.data) v = static_cast<uint8_t>(rng() % 256);
+    auto fx = segmenter_internal::FeatureExtractor::Create(rgb);
+    ASSERT_TRUE(fx.ok()) << fx.status();
+    ASSERT_EQ(SegmenterFeatureNames().size(), static_cast<size_t>(segmenter_internal::kFeatureCount));
+    const float* rows[segmenter_internal::kFeatureCount];
+    for (int y = 0; y < h; ++y) {
+      ASSERT_EQ(fx->Next(rows), y);
+      for (int x = 0; x < w; x += std::max(1, w / 13)) {
+        const std::vector<float> want = ReferenceFeatures(rgb, x, y);
+        for (int f = 0; f < segmenter_internal::kFeatureCount; ++f) {
+          ASSERT_NEAR(rows[f][x], want[f], 2e-5)
+              << SegmenterFeatureNames()[f] << " at " << x << "," << y << " of " << w << "x" << h;
+        }
+      }
+    }
+  }
 }
 
 TEST(Segmenter, ClassOfSimLabelFollowsTheSimulatorsValues) {

@@ -144,15 +144,14 @@ std::vector<uint32_t> Draw(std::vector<uint32_t> from, size_t count, std::mt1993
 // Calls fn(index, features) for every listed pixel (sorted pixel indices) of the view.
 template <typename Fn>
 absl::Status ForPixels(const Image& rgb, const std::vector<uint32_t>& pixels, Fn fn) {
-  VB_ASSIGN_OR_RETURN(const FeatureExtractor fx, FeatureExtractor::Create(rgb));
+  VB_ASSIGN_OR_RETURN(FeatureExtractor fx, FeatureExtractor::Create(rgb));
   const int w = fx.width();
-  std::vector<float> scratch(static_cast<size_t>(FeatureExtractor::kScratchRows) * w);
   const float* rows[kFeatureCount];
   float f[kFeatureCount];
   int loaded = -1;
   for (uint32_t p : pixels) {
     const int y = static_cast<int>(p / w), x = static_cast<int>(p % w);
-    if (y != loaded) fx.Row(y, scratch.data(), rows), loaded = y;
+    while (loaded < y) loaded = fx.Next(rows);
     for (int k = 0; k < kFeatureCount; ++k) f[k] = rows[k][x];
     fn(p, f);
   }
