@@ -150,3 +150,53 @@ TEST(VinebotCli, BundleInfoNamesTheBrokenFile) {
 
 }  // namespace
 }  // namespace vb
+
+namespace vb {
+namespace {
+
+// The reconstruction commands end to end: a Bayer stop with 1 px of calibration error is
+// reconstructed into a valid model, evaluated against its ground truth with the documented keys,
+// and the benchmark command prints its summary.
+TEST(VinebotCli, ReconstructAndEvaluateASimulatedStop) {
+  const std::string dir = FreshDir("reconstruct");
+  ASSERT_EQ(Vinebot("sim render --seed 1013 --vine 1 --pixel-format bayer_rg8 "
+                    "--calibration-error-px 1 --out " + dir).exit_code, 0);
+  const RunResult run = Vinebot("reconstruct --bundle " + dir + " --out " + dir + "/model.json");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_NE(run.output.find("\"timings\""), std::string::npos) << run.output;
+  const auto model = ReadVineModel(dir + "/model.json");
+  ASSERT_TRUE(model.ok()) << model.status();
+  EXPECT_GE(model->canes.size(), 3u);
+  const RunResult eval =
+      Vinebot("evaluate --model " + dir + "/model.json --truth " + dir + "/ground_truth.json");
+  ASSERT_EQ(eval.exit_code, 0) << eval.output;
+  for (const char* key : {"\"cane_recall\"", "\"cane_precision\"", "\"connectivity\"",
+                          "\"wire_recall\"", "\"head_enclosed_fraction\""}) {
+    EXPECT_NE(eval.output.find(key), std::string::npos) << key << " in " << eval.output;
+  }
+  const RunResult bench = Vinebot("bench reconstruct --vines 1 --seed-base 1014");
+  ASSERT_EQ(bench.exit_code, 0) << bench.output;
+  EXPECT_NE(bench.output.find("\"stage_median_s\""), std::string::npos) << bench.output;
+  std::filesystem::remove_all(dir);
+}
+
+TEST(VinebotCli, ReconstructRejectsBadInputNamingIt) {
+  const std::string dir = FreshDir("reconstruct_bad");
+  ASSERT_EQ(Vinebot("sim render --seed 1015 --vine 1 --cameras 1 --out " + dir).exit_code, 0);
+  RunResult run = Vinebot("reconstruct --bundle " + dir + " --out " + dir + "/model.json");
+  EXPECT_EQ(run.exit_code, 2) << run.output;
+  EXPECT_NE(run.output.find("two cameras"), std::string::npos) << run.output;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/model.json"));
+  run = Vinebot("reconstruct --bundle " + dir + "/missing --out " + dir + "/model.json");
+  EXPECT_NE(run.exit_code, 0);
+  run = Vinebot("evaluate --model " + dir + "/ground_truth.json --truth " + dir + "/nope.json");
+  EXPECT_NE(run.exit_code, 0);
+  EXPECT_NE(run.output.find("nope.json"), std::string::npos) << run.output;
+  run = Vinebot("reconstruct --bundle " + dir + " --out x.json --deadline-s -1");
+  EXPECT_EQ(run.exit_code, 2) << run.output;
+  EXPECT_NE(run.output.find("--deadline-s"), std::string::npos) << run.output;
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace vb
