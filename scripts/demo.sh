@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: Apache-2.0
 # The main job, as far as it is built: simulate a few stops along a row, capture each through the
-# simulated camera rig, and check every bundle imports. Grows with every stage.
+# simulated camera rig, check every bundle imports, reconstruct each vine and score the model
+# against the simulator's ground truth. Grows with every stage.
 # Usage: scripts/demo.sh path/to/vinebot [OUT_DIR]
 set -euo pipefail
 vinebot=${1:?usage: scripts/demo.sh path/to/vinebot [OUT_DIR]}
@@ -16,7 +17,9 @@ for vine in 0 1 2; do
   "$vinebot" sim render --seed "$seed" --vine "$vine" --out "$dir" \
     --pixel-format bayer_rg8 --calibration-error-px 1.0
   "$vinebot" bundle info --bundle "$dir" > "$dir/info.json"
-  echo "  vine $vine: $(ls "$dir" | tr '\n' ' ')"
+  "$vinebot" reconstruct --bundle "$dir" --out "$dir/model.json" > "$dir/reconstruct.json"
+  "$vinebot" evaluate --model "$dir/model.json" --truth "$dir/ground_truth.json" > "$dir/metrics.json"
+  echo "  vine $vine: $(tr -d ' \n' < "$dir/metrics.json" | cut -c1-160)"
 done
-echo "vinebot demo: bundles in $out (images cam*.png, labels_cam*.png, ground_truth.json)."
-echo "Later stages (reconstruct, decide, plan, cut) are not built yet."
+echo "vinebot demo: bundles, model.json and metrics.json per vine in $out."
+echo "Later stages (decide, plan, cut) are not built yet."
