@@ -1,6 +1,13 @@
 // SPDX-License-Identifier: Apache-2.0
 // vinebot train segmenter: renders simulated stops with varied lighting and pixel formats, trains
 // the segmenter on them and reports it on further, held-out stops.
+//   --out FILE            the model to write
+//   --vines N             training stops, seeds [S, S + N) (default 16)
+//   --seed-base S         (default 1000; seeds >= 9000 are refused: reserved for the benchmark)
+//   --held-out M          held-out stops, seeds [S + N, S + N + M) (default 4)
+//   --evaluate FILE|builtin  only score a model on the held-out stops (no training, no --out)
+//   --dump-dir DIR        write held-out images, classes and errors as PNGs
+//   --samples-per-class, --svm-c, --cascade-margin, --no-cascade: SegmenterTrainOptions
 #include <chrono>
 #include <cstdint>
 #include <filesystem>
@@ -91,8 +98,13 @@ absl::Status DumpHeldOut(const std::string& dir, const std::vector<reconstruct::
 }  // namespace
 
 absl::Status RunTrainSegmenter(Flags& flags) {
-  VB_ASSIGN_OR_RETURN(const std::string out, flags.RequiredString("out"));
-  VB_ASSIGN_OR_RETURN(const int64_t vines, flags.Int("vines", 16));
+  // --evaluate FILE|builtin: score an existing model on the held-out stops instead of training.
+  VB_ASSIGN_OR_RETURN(const std::string evaluate, flags.String("evaluate", ""));
+  std::string out;
+  if (evaluate.empty()) {
+    VB_ASSIGN_OR_RETURN(out, flags.RequiredString("out"));
+  }
+  VB_ASSIGN_OR_RETURN(const int64_t vines, flags.Int("vines", evaluate.empty() ? 16 : 0));
   VB_ASSIGN_OR_RETURN(const int64_t seed_base, flags.Int("seed-base", 1000));
   VB_ASSIGN_OR_RETURN(const int64_t held_out_vines, flags.Int("held-out", 4));
   reconstruct::SegmenterTrainOptions options;
@@ -106,7 +118,9 @@ absl::Status RunTrainSegmenter(Flags& flags) {
   options.cascade = !no_cascade;
   VB_ASSIGN_OR_RETURN(const std::string dump_dir, flags.String("dump-dir", ""));
   VB_RETURN_IF_ERROR(flags.Finish());
-  if (vines < 1 || vines > 1000) return absl::InvalidArgumentError("--vines: must be in [1, 1000]");
+  if (vines < (evaluate.empty() ? 1 : 0) || vines > 1000) {
+    return absl::InvalidArgumentError("--vines: must be in [1, 1000] (>= 0 with --evaluate)");
+  }
   if (held_out_vines < 0 || held_out_vines > 1000) {
     return absl::InvalidArgumentError("--held-out: must be in [0, 1000]");
   }
@@ -127,6 +141,21 @@ absl::Status RunTrainSegmenter(Flags& flags) {
   }
   const double render_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (!evaluate.empty()) {
+    reconstruct::SegmenterModel model = reconstruct::BuiltinSegmenterModel();
+    if (evaluate != "builtin") {
+      VB_ASSIGN_OR_RETURN(model, reconstruct::ReadSegmenterModel(evaluate));
+    }
+    VB_ASSIGN_OR_RETURN(const reconstruct::SegmenterReport report,
+                        reconstruct::EvaluateSegmenter(held_out, model));
+    if (!dump_dir.empty()) VB_RETURN_IF_ERROR(DumpHeldOut(dump_dir, held_out, model));
+    const nlohmann::json json = {
+        {"model", evaluate},
+        {"held_out_seeds", {seed_base + vines, seed_base + vines + held_out_vines - 1}},
+        {"held_out", reconstruct::SegmenterReportToJson(report)}};
+    std::cout << json.dump(1) << "\n";
+    return absl::OkStatus();
+  }
   VB_ASSIGN_OR_RETURN(const reconstruct::SegmenterTrainResult result,
                       reconstruct::TrainSegmenter(train, held_out, options));
   reconstruct::SegmenterModel model = result.model;
