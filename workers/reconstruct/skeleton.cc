@@ -327,10 +327,32 @@ SkeletonGraph TraceSkeleton(const BinaryImage& skeleton) {
   return graph;
 }
 
-void PruneSkeletonWithNodeWidths(const PruneOptions& options,
-                                 const std::vector<double>& node_width_px, SkeletonGraph* graph) {
-  std::vector<double> width = node_width_px;
-  width.resize(graph->nodes.size(), 0.0);
+void PruneSkeleton(const PruneOptions& options, const std::function<double(int, int)>& radius_px,
+                   SkeletonGraph* graph) {
+  const auto radius_at = [&](const Eigen::Vector2d& p) {
+    return radius_px(static_cast<int>(std::lround(p.x())), static_cast<int>(std::lround(p.y())));
+  };
+  std::vector<double> radius;  // per node
+  radius.reserve(graph->nodes.size());
+  for (const SkeletonGraph::Node& node : graph->nodes) radius.push_back(radius_at(node.position));
+  // Length of a spur beyond its hub's inscribed disc, and the width where it leaves the disc
+  // (0 and 0 if it never does).
+  const auto beyond_hub = [&](const SkeletonGraph::Path& path, int hub) {
+    const Eigen::Vector2d centre = graph->nodes[hub].position;
+    const double r = radius[hub];
+    const int n = static_cast<int>(path.pixels.size());
+    const bool forward = path.node_begin == hub;
+    for (int k = 0; k < n; ++k) {
+      const Eigen::Vector2i& p = path.pixels[forward ? k : n - 1 - k];
+      if ((p.cast<double>() - centre).norm() > r) {
+        SkeletonGraph::Path rest;
+        rest.pixels.assign(path.pixels.begin() + (forward ? k : 0),
+                           path.pixels.begin() + (forward ? n : n - k));
+        return std::make_pair(rest.Length() + 1.0, 2.0 * radius_px(p.x(), p.y()));
+      }
+    }
+    return std::make_pair(0.0, 0.0);
+  };
   const auto kill_lonely = [&](int node) {
     if (graph->nodes[node].paths.empty()) graph->nodes[node].alive = false;
   };
@@ -345,10 +367,12 @@ void PruneSkeletonWithNodeWidths(const PruneOptions& options,
       const int de = graph->Degree(path.node_end);
       if ((db == 1) == (de == 1)) continue;
       const int hub = db == 1 ? path.node_end : path.node_begin;
-      const double limit =
-          std::max(options.min_spur_px, options.spur_width_factor * width[hub]);
       const double length = path.Length();
-      if (length < limit) spurs.emplace_back(length, i);
+      if (length >= options.min_spur_px) {
+        const auto [beyond, exit_width] = beyond_hub(path, hub);
+        if (beyond > 0.0 && beyond >= options.spur_width_factor * exit_width) continue;
+      }
+      spurs.emplace_back(length, i);
     }
     std::sort(spurs.begin(), spurs.end());
     for (const auto& [length, i] : spurs) {
@@ -369,21 +393,23 @@ void PruneSkeletonWithNodeWidths(const PruneOptions& options,
       const int b = path.node_end;
       if (a == b) {
         // A small loop left by a contraction or a pinhole: drop it.
-        if (path.Length() < std::max(options.min_spur_px, options.spur_width_factor * width[a])) {
+        if (path.Length() < std::max(options.min_spur_px, 2.0 * radius[a])) {
           RemovePath(graph, i);
           changed = true;
         }
         continue;
       }
       if (graph->Degree(a) < 3 || graph->Degree(b) < 3) continue;
-      if (path.Length() >= options.merge_width_factor * std::max(width[a], width[b])) continue;
+      if (path.Length() >= options.merge_width_factor * 2.0 * std::min(radius[a], radius[b])) {
+        continue;
+      }
       RemovePath(graph, i);
       SkeletonGraph::Node& na = graph->nodes[a];
       SkeletonGraph::Node& nb = graph->nodes[b];
       const double wa = static_cast<double>(na.paths.size());
       const double wb = static_cast<double>(nb.paths.size());
       na.position = (wa * na.position + wb * nb.position) / (wa + wb);
-      width[a] = std::max(width[a], width[b]);
+      radius[a] = std::max(radius[a], radius[b]);
       for (int p : nb.paths) {
         SkeletonGraph::Path& other = graph->paths[p];
         if (other.node_begin == b) other.node_begin = a;

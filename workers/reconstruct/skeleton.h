@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "Eigen/Core"
@@ -52,33 +53,24 @@ struct SkeletonGraph {
 SkeletonGraph TraceSkeleton(const BinaryImage& skeleton);
 
 struct PruneOptions {
-  double spur_width_factor = 1.0;   // end paths shorter than this * width at their junction go
+  double spur_width_factor = 1.0;   // end paths reaching less than this * their width beyond
+                                    // their junction's inscribed disc go
   double min_spur_px = 3.0;         // ... and always those shorter than this
-  double merge_width_factor = 0.6;  // junctions joined by a path shorter than this * width merge
+  double merge_width_factor = 0.6;  // junctions joined by a path shorter than this * the
+                                    // narrower junction's width merge
   double min_isolated_px = 6.0;     // paths with two free ends shorter than this go
 };
 
 // Prunes the spurs that thinning leaves on thick regions and at corners, merges junctions that
 // are one (the two junctions a crossing of two canes thins to when they are close), removes
 // short isolated paths, and joins the two paths of every node left with degree 2 (except loops).
-// `width_px(x, y)` is the foreground width around pixel (x, y) (2 * distance to background).
-// Leaves the graph compacted.
-template <typename WidthFn>
-void PruneSkeleton(const PruneOptions& options, WidthFn width_px, SkeletonGraph* graph);
-
-// Implementation detail of PruneSkeleton: width given per node.
-void PruneSkeletonWithNodeWidths(const PruneOptions& options,
-                                 const std::vector<double>& node_width_px, SkeletonGraph* graph);
-
-template <typename WidthFn>
-void PruneSkeleton(const PruneOptions& options, WidthFn width_px, SkeletonGraph* graph) {
-  std::vector<double> widths;
-  widths.reserve(graph->nodes.size());
-  for (const SkeletonGraph::Node& node : graph->nodes) {
-    widths.push_back(width_px(static_cast<int>(std::lround(node.position.x())),
-                              static_cast<int>(std::lround(node.position.y()))));
-  }
-  PruneSkeletonWithNodeWidths(options, widths, graph);
-}
+// `radius_px(x, y)` is the distance from pixel (x, y) to the background (the radius of the
+// inscribed disc there). A spur (a path from a junction to a free end) goes if it is shorter than
+// min_spur_px or reaches less than spur_width_factor * w beyond the junction's inscribed disc,
+// w being the foreground width where it leaves the disc: thinning's spurs run into corners of
+// thick regions and end soon after leaving the disc, real branches reach further (and a cane
+// leaving the head survives however wide the head). Leaves the graph compacted.
+void PruneSkeleton(const PruneOptions& options, const std::function<double(int, int)>& radius_px,
+                   SkeletonGraph* graph);
 
 }  // namespace vb::reconstruct

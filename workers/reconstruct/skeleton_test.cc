@@ -116,7 +116,7 @@ TEST(PruneSkeleton, RemovesShortSpurAndJoinsTheRest) {
   for (int y = 12; y < 15; ++y) image.set(30, y, 1);  // a 3-pixel spur
   SkeletonGraph graph = TraceSkeleton(image);
   ASSERT_EQ(graph.paths.size(), 3u);
-  PruneSkeleton(PruneOptions{}, [](int, int) { return 6.0; }, &graph);
+  PruneSkeleton(PruneOptions{}, [](int, int) { return 3.0; }, &graph);  // canes 6 px wide
   ASSERT_EQ(graph.paths.size(), 1u);
   EXPECT_NEAR(graph.paths[0].Length(), 50.0, 2.0);
   EXPECT_EQ(graph.nodes.size(), 2u);
@@ -127,22 +127,41 @@ TEST(PruneSkeleton, KeepsBranchesLongerThanTheWidth) {
   for (int x = 5; x <= 55; ++x) image.set(x, 30, 1);
   for (int y = 10; y < 30; ++y) image.set(30, y, 1);
   SkeletonGraph graph = TraceSkeleton(image);
-  PruneSkeleton(PruneOptions{}, [](int, int) { return 6.0; }, &graph);
+  PruneSkeleton(PruneOptions{}, [](int, int) { return 6.0; }, &graph);  // 12 px: 20 px survives
   EXPECT_EQ(graph.paths.size(), 3u);
+}
+
+TEST(PruneSkeleton, KeepsACaneLeavingAThickRegion) {
+  // A junction inside a head of radius 30; a 4 px wide cane reaches 12 px beyond the head.
+  BinaryImage image(120, 100);
+  for (int x = 5; x <= 115; ++x) image.set(x, 60, 1);
+  for (int y = 60 - 42; y < 60; ++y) image.set(60, y, 1);
+  SkeletonGraph graph = TraceSkeleton(image);
+  ASSERT_EQ(graph.paths.size(), 3u);
+  const auto radius = [](int x, int y) { return std::hypot(x - 60, y - 60) < 30 ? 30.0 : 2.0; };
+  SkeletonGraph head = graph;
+  PruneSkeleton(PruneOptions{}, radius, &head);
+  EXPECT_EQ(head.paths.size(), 3u);
+  // A 20 px stub on a 30 px wide band is an artefact of thinning.
+  for (int y = 0; y < 40; ++y) image.set(60, y, 0);
+  graph = TraceSkeleton(image);
+  ASSERT_EQ(graph.paths.size(), 3u);
+  PruneSkeleton(PruneOptions{}, [](int, int) { return 15.0; }, &graph);
+  EXPECT_EQ(graph.paths.size(), 1u);
 }
 
 TEST(PruneSkeleton, MergesTwoCloseJunctions) {
   // Two T junctions 6 px apart, as a crossing of two thick canes thins to.
-  BinaryImage image(60, 40);
-  for (int x = 5; x <= 55; ++x) image.set(x, 20, 1);
-  for (int y = 5; y < 20; ++y) image.set(27, y, 1);
-  for (int y = 21; y <= 35; ++y) image.set(33, y, 1);
+  BinaryImage image(60, 80);
+  for (int x = 5; x <= 55; ++x) image.set(x, 40, 1);
+  for (int y = 5; y < 40; ++y) image.set(27, y, 1);
+  for (int y = 41; y <= 75; ++y) image.set(33, y, 1);
   SkeletonGraph graph = TraceSkeleton(image);
   ASSERT_EQ(graph.paths.size(), 5u);
   SkeletonGraph thin = graph;
-  PruneSkeleton(PruneOptions{}, [](int, int) { return 3.0; }, &thin);
+  PruneSkeleton(PruneOptions{}, [](int, int) { return 1.5; }, &thin);
   EXPECT_EQ(thin.paths.size(), 5u);  // canes 3 px wide: two junctions
-  PruneSkeleton(PruneOptions{}, [](int, int) { return 12.0; }, &graph);
+  PruneSkeleton(PruneOptions{}, [](int, int) { return 6.0; }, &graph);  // 12 px wide: one
   EXPECT_EQ(graph.paths.size(), 4u);
   int degree4 = 0;
   for (int n = 0; n < static_cast<int>(graph.nodes.size()); ++n) degree4 += graph.Degree(n) == 4;
@@ -155,7 +174,7 @@ TEST(PruneSkeleton, DropsShortIsolatedPieces) {
   for (int x = 5; x < 25; ++x) image.set(x, 20, 1);
   SkeletonGraph graph = TraceSkeleton(image);
   ASSERT_EQ(graph.paths.size(), 2u);
-  PruneSkeleton(PruneOptions{}, [](int, int) { return 3.0; }, &graph);
+  PruneSkeleton(PruneOptions{}, [](int, int) { return 1.5; }, &graph);
   ASSERT_EQ(graph.paths.size(), 1u);
   EXPECT_EQ(graph.paths[0].pixels.front().y(), 20);
 }

@@ -132,19 +132,25 @@ Segment2D BuildSegment(const SkeletonGraph& graph, const SkeletonGraph::Path& pa
                        const Structure2DOptions& options) {
   std::vector<Eigen::Vector2d> points;
   std::vector<uint8_t> fixed;
-  const auto add_node = [&](int node, const Eigen::Vector2i& pixel) {
+  // Junction positions (cluster centres, or merged junctions) may lie a few pixels from the
+  // path's last pixel: bridge the gap at ~1 px spacing.
+  const auto add_node = [&](int node, const Eigen::Vector2d& from, bool at_front) {
     const Eigen::Vector2d position = graph.nodes[node].position;
-    if ((position - pixel.cast<double>()).norm() > 0.5) {
-      points.push_back(position);
+    const double gap = (position - from).norm();
+    if (gap <= 0.5) return;
+    const int steps = static_cast<int>(std::ceil(gap));
+    for (int k = at_front ? 0 : 1; at_front ? k < steps : k <= steps; ++k) {
+      points.push_back(at_front ? position + (from - position) * k / steps
+                                : from + (position - from) * k / steps);
       fixed.push_back(1);
     }
   };
-  add_node(path.node_begin, path.pixels.front());
+  add_node(path.node_begin, path.pixels.front().cast<double>(), true);
   for (const Eigen::Vector2i& pixel : path.pixels) {
     points.push_back(pixel.cast<double>());
     fixed.push_back(0);
   }
-  add_node(path.node_end, path.pixels.back());
+  add_node(path.node_end, path.pixels.back().cast<double>(), false);
   if (points.size() < 2) {
     // A one-pixel path between two coincident nodes: make it a two-point segment.
     points.push_back(points.back());
@@ -290,7 +296,7 @@ absl::StatusOr<View2D> Extract(const ClassImage& classes, const CameraCalibratio
   prune.merge_width_factor = options.junction_merge_factor;
   prune.min_isolated_px = options.min_segment_px;
   PruneSkeleton(
-      prune, [&](int x, int y) { return 2.0 * distance.at<float>(y, x); }, &graph);
+      prune, [&](int x, int y) { return static_cast<double>(distance.at<float>(y, x)); }, &graph);
 
   view.nodes.resize(graph.nodes.size());
   for (size_t i = 0; i < graph.nodes.size(); ++i) {

@@ -247,6 +247,19 @@ TEST(ExtractStructureOnSimulatedStop, DISABLED_Timing) {
     }
   }
   const double n = kRepeats * static_cast<double>(inputs.size());
+  // Degenerate inputs (a saturated image segmented as all foreground, or speckle).
+  ClassImage full(rig.cameras[0].image_width, rig.cameras[0].image_height);
+  std::fill(full.data.begin(), full.data.end(), static_cast<uint8_t>(PixelClass::kForeground));
+  ClassImage speckle(full.width, full.height);
+  for (size_t i = 0; i < speckle.data.size(); ++i) speckle.data[i] = (i * 2654435761u >> 13) % 4;
+  for (const ClassImage* degenerate : {&full, &speckle}) {
+    const auto start = std::chrono::steady_clock::now();
+    ASSERT_TRUE(ExtractStructure(*degenerate, rig.cameras[0], {}, Deadline::Infinite()).ok());
+    std::printf("{\"degenerate\": \"%s\", \"wall_ms\": %.1f}\n",
+                degenerate == &full ? "all foreground" : "speckle",
+                std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+                    .count());
+  }
   std::printf("{\"images\": %zu, \"repeats\": %d, \"wall_mean_ms\": %.1f, \"wall_best_ms\": %.1f, "
               "\"cpu_mean_ms\": %.1f, \"cpu_best_ms\": %.1f}\n",
               inputs.size(), kRepeats, wall_total / n, wall_best, cpu_total / n, cpu_best);
