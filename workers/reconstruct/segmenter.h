@@ -113,7 +113,7 @@ struct SegmenterTrainOptions {
   double svm_c = 0.5;             // SVM soft-margin constant, features normalised to unit variance
   int svm_max_iterations = 200;   // cap on the solver's passes over the samples, per SVM
   bool cascade = true;            // train stage 2
-  float cascade_margin = 0.6f;    // stage-1 score margin below which stage 2 decides
+  float cascade_margin = 1.0f;    // stage-1 score margin below which stage 2 decides
   int stage2_max_samples = 24000; // cap on hard pixels used to train stage 2
   int uniform_samples_per_view = 20000;  // uniform pixel sample per view for tuning the biases
   uint64_t seed = 1;              // sampling seed
