@@ -43,7 +43,7 @@ struct AssemblyOptions {
   double merge_angle_deg = 25.0;        // duplicates: max angle between (unoriented) tangents
   double min_overlap_m = 0.02;          // duplicates: min length of the side-by-side stretch
   double end_tolerance_m = 0.03;        // duplicates: a piece may leave a track this far from its end
-  double max_gap_m = 0.05;              // chaining: max distance between the joined ends
+  double max_gap_m = 0.10;              // chaining: max distance between the joined ends
   double max_chain_angle_deg = 30.0;    // chaining: max angle between end tangents and the gap
   double max_radius_ratio = 2.0;        // chaining: max ratio of the end radii (larger / smaller)
   double tangent_baseline_m = 0.03;     // chord length over which tangents and end radii are taken
