@@ -4,11 +4,15 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <string>
 
+#include "core/model_metrics.h"
 #include "gtest/gtest.h"
 #include "sim/rig.h"
 #include "sim/vine_generator.h"
 #include "workers/reconstruct/correspondence_test_util.h"
+#include "workers/reconstruct/reconstruct.h"
 #include "workers/reconstruct/synthetic_views.h"
 
 namespace vb::reconstruct {
@@ -175,11 +179,15 @@ TEST(MatchSegments, SyntheticVineIsCoveredAndPrecise) {
 }
 
 // Harder: neighbours' canes intrude, segments are broken and wobble (correspondence_test_util.h).
+// At alpha 2: the default (5) trades piece precision for recall, as cane assembly drops most
+// ghosts; this checks the classifier and Gibbs selection at a precision-oriented setting.
 TEST(MatchSegments, DegradedStopWithNeighboursIsMostlyRight) {
+  CorrespondenceOptions options;
+  options.alpha = 2.0;
   for (uint64_t seed : {1500, 1501}) {
     const SimulatedStop stop = MakeSimulatedStop(seed);
     const auto start = std::chrono::steady_clock::now();
-    const auto pieces = MatchSegments(stop.views, stop.rig, {}, Deadline::Infinite());
+    const auto pieces = MatchSegments(stop.views, stop.rig, options, Deadline::Infinite());
     const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     ASSERT_TRUE(pieces.ok()) << pieces.status();
@@ -222,7 +230,11 @@ TEST(MatchSegments, TimingOnABusyStop) {
 TEST(MatchSegments, DISABLED_Diagnose) {
   const char* env = std::getenv("VB_SEED");
   const uint64_t seed = env ? std::atoi(env) : 1500;
-  const SimulatedStop stop = MakeSimulatedStop(seed);
+  // VB_INPUT: synthetic (default), labels or images (MakeRenderedStop).
+  const char* input_env = std::getenv("VB_INPUT");
+  const std::string input = input_env ? input_env : "synthetic";
+  const SimulatedStop stop =
+      input == "synthetic" ? MakeSimulatedStop(seed) : MakeRenderedStop(seed, input == "images");
   std::vector<const Polyline3*> truth;
   for (const Cane& cane : stop.drawn.canes) truth.push_back(&cane.polyline);
   const auto scored = ScoreCandidates(stop.views, stop.rig, {}, Deadline::Infinite()).value();
@@ -275,6 +287,52 @@ TEST(MatchSegments, DISABLED_Diagnose) {
     }
     std::printf("pair %d%d: %d candidates, %d right\n", a, b, n, r);
   }
+}
+
+// Where the whole pipeline's cane recall and precision are lost on rendered stops (VB_INPUT
+// labels or images; VB_SEED first seed, VB_STOPS count): the bench metrics of the raw pieces
+// of MatchSegments (each as a cane) against those of ReconstructFromViews.
+TEST(MatchSegments, DISABLED_PipelineLoss) {
+  const char* env = std::getenv("VB_SEED");
+  const uint64_t first = env ? std::atoi(env) : 1100;
+  const char* count_env = std::getenv("VB_STOPS");
+  const int count = count_env ? std::atoi(count_env) : 8;
+  const char* input_env = std::getenv("VB_INPUT");
+  const bool images = input_env && std::string(input_env) == "images";
+  ReconstructOptions options;
+  if (const char* alpha = std::getenv("VB_ALPHA")) options.correspondence.alpha = std::atof(alpha);
+  double sums[4] = {0, 0, 0, 0};
+  for (int k = 0; k < count; ++k) {
+    const SimulatedStop stop = MakeRenderedStop(first + k, images);
+    ASSERT_FALSE(stop.views.empty());
+    const auto pieces =
+        MatchSegments(stop.views, stop.rig, options.correspondence, Deadline::Infinite());
+    ASSERT_TRUE(pieces.ok()) << pieces.status();
+    VineModel raw;
+    for (const Piece3D& piece : *pieces) {
+      const bool first_piece = raw.canes.empty();  // stands in for the trunk: the model needs one
+      raw.canes.push_back({.id = CaneId(static_cast<int64_t>(raw.canes.size())),
+                           .parent_id = first_piece ? std::nullopt : std::optional(CaneId(0)),
+                           .kind = first_piece ? CaneKind::kTrunk : CaneKind::kCane,
+                           .polyline = piece.polyline});
+    }
+    const auto raw_m = EvaluateReconstruction(raw, stop.scene.vine);
+    const auto result = ReconstructFromViews(stop.views, stop.rig, options, Deadline::Infinite());
+    ASSERT_TRUE(result.ok()) << result.status();
+    const auto full_m = EvaluateReconstruction(result->model, stop.scene.vine);
+    ASSERT_TRUE(raw_m.ok()) << raw_m.status();
+    ASSERT_TRUE(full_m.ok()) << full_m.status();
+    std::printf("seed %llu: pieces %zu recall %.3f precision %.3f | model recall %.3f precision "
+                "%.3f\n", static_cast<unsigned long long>(first + k), pieces->size(),
+                raw_m->cane_recall, raw_m->cane_precision, full_m->cane_recall,
+                full_m->cane_precision);
+    sums[0] += raw_m->cane_recall / count;
+    sums[1] += raw_m->cane_precision / count;
+    sums[2] += full_m->cane_recall / count;
+    sums[3] += full_m->cane_precision / count;
+  }
+  std::printf("mean: pieces recall %.3f precision %.3f | model recall %.3f precision %.3f\n",
+              sums[0], sums[1], sums[2], sums[3]);
 }
 }  // namespace
 }  // namespace vb::reconstruct

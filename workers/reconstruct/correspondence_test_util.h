@@ -8,10 +8,14 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/deadline.h"
+#include "sim/renderer.h"
 #include "sim/rig.h"
 #include "sim/vine_generator.h"
 #include "workers/reconstruct/match_classifier.h"
 #include "workers/reconstruct/piece3d.h"
+#include "workers/reconstruct/segmenter.h"
+#include "workers/reconstruct/structure2d.h"
 #include "workers/reconstruct/synthetic_views.h"
 
 namespace vb::reconstruct {
@@ -88,6 +92,42 @@ inline SimulatedStop MakeSimulatedStop(uint64_t seed, double break_px = 100.0) {
   Noise noise(seed);
   for (View2D& view : stop.views) Degrade(&view, &noise, break_px);
   stop.rig = sim::PerturbCalibration(stop.true_rig, 1.0, seed);
+  return stop;
+}
+
+// The stop at vine 1 of vineyard `seed` as `vinebot bench reconstruct` renders it (sensor noise,
+// reported calibration 1 px off), its views from the real 2D stage (ExtractStructure) run on
+// the renderer's label images (`segment` false) or on the segmenter's classes of the rendered
+// image (`segment` true; rendered as rgb8, where the bench demosaics a Bayer mosaic: vb_capture
+// is not linked here). Returns a stop without views if rendering or the 2D stage fails.
+inline SimulatedStop MakeRenderedStop(uint64_t seed, bool segment) {
+  SimulatedStop stop;
+  const int vine = 1;
+  const uint64_t noise_seed = seed * 1000003 + vine;  // as app/bench_command.cc
+  stop.scene = sim::GenerateScene(seed, vine).value();
+  stop.drawn = stop.scene.vine;
+  for (const VineModel& neighbour : stop.scene.neighbours) {
+    for (const Cane& cane : neighbour.canes) stop.drawn.canes.push_back(cane);
+    for (const Sphere& s : neighbour.head.spheres) stop.drawn.head.spheres.push_back(s);
+  }
+  stop.true_rig = sim::MakeRig().value();
+  // As capture::MakeSimRig.
+  stop.rig = sim::PerturbCalibration(stop.true_rig, 1.0, noise_seed ^ 0xCA11B4A7Eull);
+  for (size_t i = 0; i < stop.true_rig.cameras.size(); ++i) {
+    const auto view = sim::Render(stop.scene, stop.true_rig.cameras[i], sim::RenderOptions{},
+                                  noise_seed + 7919 * (i + 1));
+    if (!view.ok()) return {};
+    ClassImage classes = ClassesOfSimLabels(view->labels);
+    if (segment) {
+      auto segmented = Segment(view->image, BuiltinSegmenterModel());
+      if (!segmented.ok()) return {};
+      classes = std::move(*segmented);
+    }
+    auto view2d = ExtractStructure(classes, stop.rig.cameras[i], Structure2DOptions{},
+                                   Deadline::Infinite());
+    if (!view2d.ok()) return {};
+    stop.views.push_back(std::move(*view2d));
+  }
   return stop;
 }
 

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <string>
+#include <vector>
 
 #include "gtest/gtest.h"
 #include "workers/reconstruct/correspondence.h"
@@ -18,10 +20,9 @@ struct TrainingStop {
   std::vector<LabelledMatch> two_view;
 };
 
-// Every fitted candidate of the degraded stop of vineyard `seed` (SimulatedStop), labelled
-// against ground truth: right iff >= 90% of its points lie within 1 cm of one true cane.
-TrainingStop MakeTrainingStop(uint64_t seed) {
-  const SimulatedStop sim_stop = MakeSimulatedStop(seed);
+// Every fitted candidate of `sim_stop`, labelled against ground truth: right iff >= 90% of its
+// points lie within 1 cm of one true cane.
+TrainingStop MakeTrainingStop(const SimulatedStop& sim_stop) {
   std::vector<const Polyline3*> truth;
   for (const Cane& cane : sim_stop.drawn.canes) truth.push_back(&cane.polyline);
   const auto scored = ScoreCandidates(sim_stop.views, sim_stop.rig, {}, Deadline::Infinite());
@@ -33,6 +34,30 @@ TrainingStop MakeTrainingStop(uint64_t seed) {
     if (c.multi_view) stop.multi_view.push_back({c.features, right});
   }
   return stop;
+}
+
+// The degraded stop of vineyard `seed` (SimulatedStop) labelled as above.
+TrainingStop MakeTrainingStop(uint64_t seed) { return MakeTrainingStop(MakeSimulatedStop(seed)); }
+
+// The stop of vineyard `seed` from input `input`: "synthetic" (MakeSimulatedStop), "labels" or
+// "images" (MakeRenderedStop: the real 2D stage on label images or on segmented images).
+SimulatedStop MakeStop(const std::string& input, uint64_t seed) {
+  if (input == "synthetic") return MakeSimulatedStop(seed);
+  return MakeRenderedStop(seed, input == "images");
+}
+
+// Comma-separated list in the environment variable `name`, or `fallback`.
+std::vector<std::string> EnvList(const char* name, const std::string& fallback) {
+  const char* env = std::getenv(name);
+  std::string text = env ? env : fallback;
+  std::vector<std::string> out;
+  for (size_t begin = 0; begin <= text.size();) {
+    size_t end = text.find(',', begin);
+    if (end == std::string::npos) end = text.size();
+    if (end > begin) out.push_back(text.substr(begin, end - begin));
+    begin = end + 1;
+  }
+  return out;
 }
 
 // Area under the ROC curve of `weights` on `examples`.
@@ -126,17 +151,26 @@ TEST(MatchClassifier, DefaultWeightsSeparateHeldOutCandidates) {
 }
 
 // The tool that produced DefaultMatchClassifier(): run with
-//   vb_reconstruct_test --gtest_also_run_disabled_tests \
+//   VB_TRAIN_INPUT=labels,images vb_reconstruct_test --gtest_also_run_disabled_tests \
 //       --gtest_filter=MatchClassifier.DISABLED_TrainOnSimulatedStops
-// (VB_TRAIN_STOPS overrides the number of stops, seeds 1000 onwards).
+// VB_TRAIN_INPUT: comma-separated inputs of MakeStop (default labels,images); VB_TRAIN_STOPS:
+// stops per input, seeds 1000 onwards (default 100); VB_DEV_STOPS: held-out stops per input from
+// seed 1100 on which alpha is reported (default 10).
 TEST(MatchClassifier, DISABLED_TrainOnSimulatedStops) {
   const char* env = std::getenv("VB_TRAIN_STOPS");
-  const int stops = env ? std::atoi(env) : 60;
+  const int stops = env ? std::atoi(env) : 100;
+  const char* dev_env = std::getenv("VB_DEV_STOPS");
+  const int held_out = dev_env ? std::atoi(dev_env) : 10;
+  const std::vector<std::string> inputs = EnvList("VB_TRAIN_INPUT", "labels,images");
   std::vector<LabelledMatch> multi, two;
-  for (int k = 0; k < stops; ++k) {
-    TrainingStop stop = MakeTrainingStop(1000 + k);
-    multi.insert(multi.end(), stop.multi_view.begin(), stop.multi_view.end());
-    two.insert(two.end(), stop.two_view.begin(), stop.two_view.end());
+  for (const std::string& input : inputs) {
+    for (int k = 0; k < stops; ++k) {
+      const SimulatedStop sim_stop = MakeStop(input, 1000 + k);
+      if (sim_stop.views.empty()) continue;
+      TrainingStop stop = MakeTrainingStop(sim_stop);
+      multi.insert(multi.end(), stop.multi_view.begin(), stop.multi_view.end());
+      two.insert(two.end(), stop.two_view.begin(), stop.two_view.end());
+    }
   }
   int right = 0;
   for (const auto& e : multi) right += e.right ? 1 : 0;
@@ -149,24 +183,28 @@ TEST(MatchClassifier, DISABLED_TrainOnSimulatedStops) {
   std::printf("training AUC multi %.3f two %.3f\n", Auc(multi, *w_multi), Auc(two, *w_two));
   PrintWeights("multi_view", *w_multi);
   PrintWeights("two_view", *w_two);
-  // Choose alpha on stops not trained on (seeds 1900-1909): coverage and precision of the
-  // selected pieces (correspondence_test_util.h Evaluate).
+  // Held-out stops (seeds 1100 onwards): coverage and precision of the selected pieces
+  // (correspondence_test_util.h Evaluate) for a range of alpha.
   CorrespondenceOptions options;
   options.classifier.multi_view = *w_multi;
   options.classifier.two_view = *w_two;
-  for (double alpha : {0.5, 1.0, 1.5, 2.0, 3.0, 4.0}) {
-    options.alpha = alpha;
-    double coverage = 0.0, precision = 0.0;
-    const int held_out = 10;
-    for (int k = 0; k < held_out; ++k) {
-      const SimulatedStop stop = MakeSimulatedStop(1900 + k);
-      const auto pieces = MatchSegments(stop.views, stop.rig, options, Deadline::Infinite());
-      ASSERT_TRUE(pieces.ok()) << pieces.status();
-      const Metrics m = Evaluate(*pieces, stop.scene.vine, stop.drawn, stop.true_rig);
-      coverage += m.coverage / held_out;
-      precision += m.precision / held_out;
+  for (const std::string& input : inputs) {
+    std::vector<SimulatedStop> dev;
+    for (int k = 0; k < held_out; ++k) dev.push_back(MakeStop(input, 1100 + k));
+    for (double alpha : {0.5, 1.0, 2.0, 3.0, 5.0}) {
+      options.alpha = alpha;
+      double coverage = 0.0, precision = 0.0;
+      for (const SimulatedStop& stop : dev) {
+        if (stop.views.empty()) continue;
+        const auto pieces = MatchSegments(stop.views, stop.rig, options, Deadline::Infinite());
+        ASSERT_TRUE(pieces.ok()) << pieces.status();
+        const Metrics m = Evaluate(*pieces, stop.scene.vine, stop.drawn, stop.true_rig);
+        coverage += m.coverage / held_out;
+        precision += m.precision / held_out;
+      }
+      std::printf("%s alpha %.1f: held-out coverage %.3f precision %.3f\n", input.c_str(), alpha,
+                  coverage, precision);
     }
-    std::printf("alpha %.1f: held-out coverage %.3f precision %.3f\n", alpha, coverage, precision);
   }
 }
 
