@@ -69,7 +69,9 @@ TEST(MatchSegments, CrossingCanesAreNotMerged) {
     const std::vector<View2D> views = SyntheticViews(model, rig);
     const auto pieces = MatchSegments(views, rig, {}, Deadline::Infinite());
     ASSERT_TRUE(pieces.ok()) << pieces.status();
-    if (cameras == 2) EXPECT_EQ(pieces->size(), 2u);
+    if (cameras == 2) {
+      EXPECT_EQ(pieces->size(), 2u);
+    }
     for (const Piece3D& piece : *pieces) {
       const double d0 = MaxDistance(piece, model.canes[0].polyline);
       const double d1 = MaxDistance(piece, model.canes[1].polyline);

@@ -151,8 +151,8 @@ TEST(MatchClassifier, DefaultWeightsSeparateHeldOutCandidates) {
 }
 
 // The tool that produced DefaultMatchClassifier(): run with
-//   VB_TRAIN_INPUT=labels,images vb_reconstruct_test --gtest_also_run_disabled_tests \
-//       --gtest_filter=MatchClassifier.DISABLED_TrainOnSimulatedStops
+//   VB_TRAIN_INPUT=labels,images vb_reconstruct_test --gtest_also_run_disabled_tests
+//       --gtest_filter=MatchClassifier.DISABLED_TrainOnSimulatedStops   (one command line)
 // VB_TRAIN_INPUT: comma-separated inputs of MakeStop (default labels,images); VB_TRAIN_STOPS:
 // stops per input, seeds 1000 onwards (default 100); VB_DEV_STOPS: held-out stops per input from
 // seed 1100 on which alpha is reported (default 10).
