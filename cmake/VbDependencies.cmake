@@ -14,7 +14,7 @@ find_package(PkgConfig REQUIRED)
 # OpenCV: Debian's per-module -dev packages ship headers and libraries but no CMake
 # config (that comes with the much larger libopencv-dev), so declare the modules here.
 find_path(VB_OPENCV_INCLUDE_DIR opencv2/core.hpp PATH_SUFFIXES opencv4 REQUIRED)
-foreach(module core imgproc imgcodecs calib3d ml)
+foreach(module core imgproc imgcodecs calib3d)
   find_library(VB_OPENCV_${module}_LIBRARY opencv_${module} REQUIRED)
   add_library(vb_opencv_${module} INTERFACE IMPORTED)
   set_target_properties(vb_opencv_${module} PROPERTIES

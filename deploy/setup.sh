@@ -12,7 +12,6 @@ packages=(
   libeigen3-dev nlohmann-json3-dev libabsl-dev
   # vision (per-module OpenCV packages: the meta package pulls in far more than we use)
   libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev libopencv-calib3d-dev
-  libopencv-ml-dev
   # reconstruction: joint 3D optimisation
   libceres-dev
   # cameras: Aravis (GigE Vision / USB3 Vision); its pkg-config file needs libusb's;
