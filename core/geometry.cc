@@ -117,6 +117,29 @@ std::vector<Eigen::Vector3d> Polyline3::Sample(double step_m) const {
   return out;
 }
 
+Polyline3 Polyline3::Resampled(double step_m) const {
+  Polyline3 out;
+  if (points.empty()) return out;
+  const std::vector<double> arc = ArcLengths();
+  const double length = arc.back();
+  const int n = std::max(2, static_cast<int>(std::lround(length / step_m)) + 1);
+  out.points.reserve(n);
+  out.radii.reserve(n);
+  for (int k = 0; k < n; ++k) {
+    size_t i = 0;
+    double f = 0.0;
+    Locate(arc, length * k / (n - 1), &i, &f);
+    if (points.size() == 1) {
+      out.points.push_back(points[0]);
+      out.radii.push_back(radii.empty() ? 0.0 : radii[0]);
+      continue;
+    }
+    out.points.push_back(points[i] + f * (points[i + 1] - points[i]));
+    out.radii.push_back(radii[i] + f * (radii[i + 1] - radii[i]));
+  }
+  return out;
+}
+
 double PointSegmentDistance(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
                             const Eigen::Vector3d& b, double* t) {
   const Eigen::Vector3d ab = b - a;

@@ -31,6 +31,9 @@ struct Polyline3 {
   void TruncateAt(double s);
   // Resamples at roughly `step_m` spacing, keeping both ends.
   std::vector<Eigen::Vector3d> Sample(double step_m) const;
+  // The polyline resampled at max(2, round(Length() / step_m) + 1) points equally spaced in arc
+  // length, ends kept, radii interpolated. Precondition: step_m > 0.
+  Polyline3 Resampled(double step_m) const;
 };
 
 // Line segment with a radius: the swept sphere used for canes, wires and arm links.

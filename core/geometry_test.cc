@@ -56,6 +56,22 @@ TEST(Polyline3, SampleSpacing) {
   for (size_t i = 1; i < s.size(); ++i) EXPECT_LE((s[i] - s[i - 1]).norm(), 0.005 + 1e-12);
 }
 
+TEST(Polyline3, ResampledMatchesPointAndRadiusAtEqualSpacing) {
+  const Polyline3 line = LShape();
+  const Polyline3 r = line.Resampled(0.4);
+  ASSERT_EQ(r.points.size(), 9u);  // length 3 m: round(7.5) + 1 points
+  ASSERT_EQ(r.radii.size(), 9u);
+  for (size_t k = 0; k < r.points.size(); ++k) {
+    const double s = 3.0 * k / 8.0;
+    EXPECT_LT((r.points[k] - line.PointAt(s)).norm(), 1e-12) << k;
+    EXPECT_NEAR(r.radii[k], line.RadiusAt(s), 1e-12) << k;
+  }
+  // A step longer than the line still keeps both ends.
+  const Polyline3 ends = line.Resampled(10.0);
+  ASSERT_EQ(ends.points.size(), 2u);
+  EXPECT_EQ(ends.points.back(), line.points.back());
+}
+
 TEST(Polyline3, ValidateRejectsBadPolylines) {
   Polyline3 p = LShape();
   p.radii.pop_back();

@@ -436,15 +436,7 @@ class Assembler {
     for (size_t i = 1; i + 1 < t.size(); ++i) {
       dense.points[i] = 0.25 * (t.points[i - 1] + 2.0 * t.points[i] + t.points[i + 1]);
     }
-    const double length = dense.Length();
-    const int n = std::max(2, static_cast<int>(std::lround(length / options_.step_m)) + 1);
-    Polyline3 out;
-    for (int k = 0; k < n; ++k) {
-      const double s = length * k / (n - 1);
-      out.points.push_back(dense.PointAt(s));
-      out.radii.push_back(dense.RadiusAt(s));
-    }
-    return out;
+    return dense.Resampled(options_.step_m);
   }
 
  private:

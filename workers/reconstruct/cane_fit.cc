@@ -168,18 +168,6 @@ class DeadlineCallback : public ceres::IterationCallback {
   bool expired_ = false;
 };
 
-Polyline3 Resample(const Polyline3& line, double spacing) {
-  const double length = line.Length();
-  const int n = std::max(2, static_cast<int>(std::lround(length / spacing)) + 1);
-  Polyline3 out;
-  for (int k = 0; k < n; ++k) {
-    const double s = length * k / (n - 1);
-    out.points.push_back(line.PointAt(s));
-    out.radii.push_back(line.RadiusAt(s));
-  }
-  return out;
-}
-
 // The rest shape of a cane: its points with the noise smoothed away (three [1 2 1] / 4 passes;
 // a binomial kernel of sd ~1.2 points), which would otherwise inflate its length and curvature.
 std::vector<Eigen::Vector3d> RestShape(const Polyline3& line) {
@@ -335,7 +323,7 @@ absl::Status RefineModel(VineModel* model, const std::vector<View2D>& views,
   const size_t cane_count = model->canes.size();
   std::vector<Polyline3> lines(cane_count);
   for (size_t c = 0; c < cane_count; ++c) {
-    lines[c] = Resample(model->canes[c].polyline, options.point_spacing_m);
+    lines[c] = model->canes[c].polyline.Resampled(options.point_spacing_m);
   }
   std::vector<std::vector<double>> params(cane_count);
   for (size_t c = 0; c < cane_count; ++c) {
