@@ -154,14 +154,13 @@ absl::StatusOr<VineModel> ConnectCanes(const std::vector<Polyline3>& input,
 
   std::vector<Polyline3> tree = {*trunk};
   std::vector<int> parent_of = {-1};
-  std::vector<bool> on_head = {false};
   std::vector<Attachment> best(kept.size());
   std::vector<bool> done(kept.size(), false);
 
   auto consider = [&](size_t i, int target) {
     for (int end = 0; end < 2; ++end) {
       const Eigen::Vector3d& p = end == 0 ? kept[i].points.front() : kept[i].points.back();
-      Eigen::Vector3d at;
+      Eigen::Vector3d at = p;
       double d = DistanceToPolyline(p, tree[target], &at);
       if (target == 0) d -= trunk_radius;
       if (d < best[i].distance) best[i] = {d, end == 1, target, at};
@@ -171,12 +170,11 @@ absl::StatusOr<VineModel> ConnectCanes(const std::vector<Polyline3>& input,
     consider(i, 0);
     for (int end = 0; end < 2; ++end) {
       const Eigen::Vector3d& p = end == 0 ? kept[i].points.front() : kept[i].points.back();
-      Eigen::Vector3d at;
+      Eigen::Vector3d at = p;
       const double d = DistanceToHead(p, head, &at) - options.head_margin_m;
       if (d < best[i].distance) best[i] = {std::max(d, 0.0), end == 1, 0, at};
     }
   }
-  std::vector<bool> head_attached(kept.size(), false);
   while (true) {
     int pick = -1;
     for (size_t i = 0; i < kept.size(); ++i) {
