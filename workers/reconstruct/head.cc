@@ -251,11 +251,12 @@ absl::StatusOr<HeadAndTrunk> ReconstructHeadAndTrunk(const std::vector<View2D>& 
   // at the trunk's true depth (perspective makes the back half longer, so the centroid is not).
   const int voxels_per_slab = std::max(1, static_cast<int>(std::lround(options.slab_m / options.min_cell_m)));
   const int slabs = (size.z() + voxels_per_slab - 1) / voxels_per_slab;
-  std::vector<double> min_x(slabs, 1e9), max_x(slabs, -1e9), sum_x(slabs, 0), sum_y(slabs, 0);
+  std::vector<double> min_x(slabs, 1e9), max_x(slabs, -1e9);
+  std::vector<double> centre_x(slabs, 0.0), centre_y(slabs, 0.0);  // of the widest rows
   std::vector<int> count(slabs, 0);
   std::vector<std::vector<int>> row_count(slabs, std::vector<int>(size.y(), 0));
   std::vector<std::vector<double>> row_sum_x(slabs, std::vector<double>(size.y(), 0.0));
-  double top_z = -1e9, min_z = 1e9;
+  double top_z = -1e9;
   for (int z = 0; z < size.z(); ++z)
     for (int y = 0; y < size.y(); ++y)
       for (int x = 0; x < size.x(); ++x) {
@@ -269,7 +270,6 @@ absl::StatusOr<HeadAndTrunk> ReconstructHeadAndTrunk(const std::vector<View2D>& 
         row_sum_x[s][y] += p.x();
         ++count[s];
         top_z = std::max(top_z, p.z());
-        min_z = std::min(min_z, p.z());
       }
   for (int s = 0; s < slabs; ++s) {
     if (count[s] == 0) continue;
@@ -277,12 +277,12 @@ absl::StatusOr<HeadAndTrunk> ReconstructHeadAndTrunk(const std::vector<View2D>& 
     double n = 0;
     for (int y = 0; y < size.y(); ++y) {
       if (row_count[s][y] < widest) continue;
-      sum_y[s] += grid.Centre({0, y, 0}).y();
-      sum_x[s] += row_sum_x[s][y] / row_count[s][y];
+      centre_y[s] += grid.Centre({0, y, 0}).y();
+      centre_x[s] += row_sum_x[s][y] / row_count[s][y];
       ++n;
     }
-    sum_x[s] *= count[s] / n;  // stored as sums over count[s] for the centroid below
-    sum_y[s] *= count[s] / n;
+    centre_x[s] /= n;
+    centre_y[s] /= n;
   }
   auto slab_z = [&](int s) {
     return volume.box.min().z() + (s + 0.5) * voxels_per_slab * options.min_cell_m;
@@ -312,14 +312,14 @@ absl::StatusOr<HeadAndTrunk> ReconstructHeadAndTrunk(const std::vector<View2D>& 
   head_bottom_z -= options.head_overlap_m;
 
   // Trunk: slab centres below the head. Near the bottom of the images only the far part of the
-  // views' cones remains, which drags the widest row backwards: keep slabs near the median depth,
-  // then extend the trunk straight down to the ground (where trunks grow from), along the line
+  // views' cones remains, which drags the widest row backwards: keep slabs near a reference depth
+  // (below), then extend the trunk straight down to the ground (where trunks grow from), along the line
   // fitted to the kept centres.
   Polyline3 trunk;
   std::vector<double> trunk_y;
   for (int s : occupied) {
     if (slab_z(s) > head_bottom_z) break;
-    trunk.points.push_back({sum_x[s] / count[s], sum_y[s] / count[s], slab_z(s)});
+    trunk.points.push_back({centre_x[s], centre_y[s], slab_z(s)});
     trunk_y.push_back(trunk.points.back().y());
   }
   // Reference depth: triangulated wood inside the trunk's silhouette columns if there is enough,
@@ -369,10 +369,11 @@ absl::StatusOr<HeadAndTrunk> ReconstructHeadAndTrunk(const std::vector<View2D>& 
   double head_y = 0.0;
   int head_n = 0;
   bool any_head = false;
+  std::vector<bool> in_head(kept.size(), false);
   for (size_t c = 0; c < kept.size(); ++c) {
-    bool in_component = false;
-    for (size_t flat : voxels_of_cube[c]) in_component = in_component || labels[flat] == best_label;
-    if (!in_component || kept[c].centre.z() + 0.5 * kept[c].side < head_bottom_z) continue;
+    for (size_t flat : voxels_of_cube[c]) in_head[c] = in_head[c] || labels[flat] == best_label;
+    in_head[c] = in_head[c] && kept[c].centre.z() + 0.5 * kept[c].side >= head_bottom_z;
+    if (!in_head[c]) continue;
     any_head = true;
     head_min_x = std::min(head_min_x, kept[c].centre.x() - 0.5 * kept[c].side);
     head_max_x = std::max(head_max_x, kept[c].centre.x() + 0.5 * kept[c].side);
@@ -380,7 +381,7 @@ absl::StatusOr<HeadAndTrunk> ReconstructHeadAndTrunk(const std::vector<View2D>& 
   // The head's depth: the widest rows of its slabs, as for the trunk.
   for (int s = 0; s < slabs; ++s) {
     if (count[s] == 0 || slab_z(s) + 0.5 * options.slab_m < head_bottom_z) continue;
-    head_y += sum_y[s] / count[s];
+    head_y += centre_y[s];
     ++head_n;
   }
   if (!any_head || head_n == 0) return result;
@@ -399,9 +400,7 @@ absl::StatusOr<HeadAndTrunk> ReconstructHeadAndTrunk(const std::vector<View2D>& 
   const double half_depth =
       0.5 * std::max(head_max_x - head_min_x, top_z - head_bottom_z) + options.depth_margin_m;
   for (size_t c = 0; c < kept.size(); ++c) {
-    bool in_component = false;
-    for (size_t flat : voxels_of_cube[c]) in_component = in_component || labels[flat] == best_label;
-    if (!in_component || kept[c].centre.z() + 0.5 * kept[c].side < head_bottom_z) continue;
+    if (!in_head[c]) continue;
     if (std::abs(kept[c].centre.y() - head_y) > half_depth + 0.5 * kept[c].side) continue;
     result.head.spheres.push_back({kept[c].centre, 0.5 * std::sqrt(3.0) * kept[c].side});
   }
