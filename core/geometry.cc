@@ -91,6 +91,24 @@ Eigen::Vector3d Polyline3::TangentAt(double s) const {
   return n > 0.0 ? Eigen::Vector3d(d / n) : Eigen::Vector3d::UnitX();
 }
 
+double Polyline3::Project(const Eigen::Vector3d& p, double* distance_m) const {
+  double best_s = 0.0;
+  double best_d = points.empty() ? 0.0 : (p - points[0]).norm();
+  double arc = 0.0;
+  for (size_t i = 0; i + 1 < points.size(); ++i) {
+    double t = 0.0;
+    const double d = PointSegmentDistance(p, points[i], points[i + 1], &t);
+    const double length = (points[i + 1] - points[i]).norm();
+    if (d < best_d) {
+      best_d = d;
+      best_s = arc + t * length;
+    }
+    arc += length;
+  }
+  if (distance_m != nullptr) *distance_m = best_d;
+  return best_s;
+}
+
 void Polyline3::TruncateAt(double s) {
   if (points.size() < 2) return;
   const std::vector<double> arc = ArcLengths();

@@ -27,6 +27,9 @@ struct Polyline3 {
   double RadiusAt(double s) const;
   // Unit tangent at arc length s (direction base -> tip).
   Eigen::Vector3d TangentAt(double s) const;
+  // Arc length of the point of the polyline nearest to p (ties: the nearest to the base);
+  // `distance_m` (optional) receives the distance. 0 for an empty polyline.
+  double Project(const Eigen::Vector3d& p, double* distance_m = nullptr) const;
   // Truncates the polyline at arc length s (keeps [0, s]). s is clamped.
   void TruncateAt(double s);
   // Resamples at roughly `step_m` spacing, keeping both ends.

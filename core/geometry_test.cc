@@ -50,6 +50,19 @@ TEST(Polyline3, TruncateAtKeepsTheBasePart) {
   EXPECT_TRUE(q.Validate("q").ok());
 }
 
+TEST(Polyline3, ProjectFindsTheNearestArcLengthAndDistance) {
+  const Polyline3 p = LShape();
+  double d = -1;
+  EXPECT_NEAR(p.Project({0.4, 0.3, 0}, &d), 0.4, 1e-12);
+  EXPECT_NEAR(d, 0.3, 1e-12);
+  EXPECT_NEAR(p.Project({1.5, 1.5, 0}, &d), 2.5, 1e-12);
+  EXPECT_NEAR(d, 0.5, 1e-12);
+  EXPECT_NEAR(p.Project({-2, 0, 0}, &d), 0.0, 1e-12);
+  EXPECT_NEAR(d, 2.0, 1e-12);
+  EXPECT_NEAR(p.Project({1, 5, 0}), 3.0, 1e-12);
+  EXPECT_EQ(Polyline3{}.Project({1, 1, 1}), 0.0);
+}
+
 TEST(Polyline3, SampleSpacing) {
   const auto s = LShape().Sample(0.005);
   EXPECT_EQ(s.size(), 601u);

@@ -145,6 +145,10 @@ std::pair<double, double> UnionVolume(const std::vector<Sphere>& spheres,
 
 }  // namespace
 
+double SphereUnionVolume(const std::vector<Sphere>& spheres, double grid_m) {
+  return UnionVolume(spheres, {}, grid_m).first;
+}
+
 absl::StatusOr<ReconstructionMetrics> EvaluateReconstruction(const VineModel& model,
                                                              const VineModel& truth,
                                                              const MetricsOptions& options) {

@@ -53,6 +53,11 @@ absl::StatusOr<ReconstructionMetrics> EvaluateReconstruction(const VineModel& mo
                                                              const VineModel& truth,
                                                              const MetricsOptions& options = {});
 
+// Volume (m^3) of the union of `spheres` by a grid integral: cells of side grid_m (coarsened so
+// that the bounding box is at most 200 cells long) are counted when their centre lies inside a
+// sphere. 0 for no spheres. Precondition: grid_m > 0.
+double SphereUnionVolume(const std::vector<Sphere>& spheres, double grid_m);
+
 // {"cane_recall": ..., ...} with the keys named as the fields above.
 nlohmann::json MetricsToJson(const ReconstructionMetrics& metrics);
 

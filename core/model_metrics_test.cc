@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "core/model_metrics.h"
 
+#include <cmath>
+
 #include "gtest/gtest.h"
 
 namespace vb {
@@ -92,6 +94,18 @@ TEST(EvaluateReconstruction, RejectsInvalidModel) {
   const auto m = EvaluateReconstruction(model, Truth());
   ASSERT_FALSE(m.ok());
   EXPECT_NE(std::string(m.status().message()).find("model:"), std::string::npos);
+}
+
+TEST(SphereUnionVolume, OneSphereAndTwoOverlappingSpheres) {
+  const double r = 0.05;
+  const double sphere = 4.0 / 3.0 * M_PI * r * r * r;
+  EXPECT_NEAR(SphereUnionVolume({{Eigen::Vector3d(0, 0, 1), r}}, 0.001), sphere, 0.01 * sphere);
+  // Two spheres whose centres are r apart: 2V minus the lens, V_lens = pi (4r + d)(2r - d)^2 / 12.
+  const double lens = M_PI * (4 * r + r) * r * r / 12.0;
+  EXPECT_NEAR(SphereUnionVolume({{Eigen::Vector3d(0, 0, 1), r}, {Eigen::Vector3d(r, 0, 1), r}},
+                                0.001),
+              2 * sphere - lens, 0.01 * sphere);
+  EXPECT_EQ(SphereUnionVolume({}, 0.001), 0.0);
 }
 
 }  // namespace

@@ -1,0 +1,153 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "core/cut_metrics.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <tuple>
+#include <unordered_map>
+#include <unordered_set>
+
+#include "absl/strings/str_cat.h"
+#include "core/statistics.h"
+
+namespace vb {
+namespace {
+
+absl::Status Prefixed(const char* what, const absl::Status& status) {
+  if (status.ok()) return status;
+  return absl::Status(status.code(), absl::StrCat(what, ": ", status.message()));
+}
+
+// Where a reconstructed cut lands on the ground truth.
+struct Landing {
+  size_t cane = 0;        // index into truth.canes
+  double distance_m = 0;  // to the cane's axis
+  double arc_m = 0;       // arc length on it of the nearest axis point
+};
+
+Landing Land(const VineModel& truth, const Eigen::Vector3d& p) {
+  Landing best;
+  best.distance_m = std::numeric_limits<double>::infinity();
+  for (size_t i = 0; i < truth.canes.size(); ++i) {
+    double d = 0.0;
+    const double s = truth.canes[i].polyline.Project(p, &d);
+    if (d < best.distance_m) best = {i, d, s};
+  }
+  return best;
+}
+
+// Indices of truth canes that keep wood under the truth plan: kept and spurred canes and all
+// their ancestors.
+std::unordered_set<size_t> KeptCanes(const VineModel& truth, const CutPlan& plan) {
+  std::unordered_set<size_t> kept;
+  auto add_with_ancestors = [&](CaneId id) {
+    std::optional<size_t> at = truth.IndexOf(id);
+    // Bounded by the cane count; the model was validated (no cycles), so this only ends early.
+    for (size_t steps = 0; at.has_value() && steps <= truth.canes.size(); ++steps) {
+      if (!kept.insert(*at).second) break;  // its ancestors are in already
+      const auto& parent = truth.canes[*at].parent_id;
+      at = parent.has_value() ? truth.IndexOf(*parent) : std::nullopt;
+    }
+  };
+  for (CaneId id : plan.keep) add_with_ancestors(id);
+  for (CaneId id : plan.spurs) add_with_ancestors(id);
+  return kept;
+}
+
+}  // namespace
+
+absl::Status CutMetricsOptions::Validate() const {
+  if (!std::isfinite(match_distance_m) || match_distance_m <= 0)
+    return absl::InvalidArgumentError(
+        absl::StrCat("cut metrics options.match_distance_m must be positive, is ", match_distance_m));
+  if (!std::isfinite(kept_distance_m) || kept_distance_m <= 0)
+    return absl::InvalidArgumentError(
+        absl::StrCat("cut metrics options.kept_distance_m must be positive, is ", kept_distance_m));
+  return absl::OkStatus();
+}
+
+absl::StatusOr<CutMetrics> EvaluateCuts(const VineModel& truth, const CutPlan& truth_plan,
+                                        const VineModel& model, const CutPlan* model_plan,
+                                        const CutMetricsOptions& options) {
+  if (absl::Status s = options.Validate(); !s.ok()) return s;
+  if (absl::Status s = Prefixed("truth", truth.Validate()); !s.ok()) return s;
+  if (absl::Status s = Prefixed("truth_plan", truth_plan.ValidateAgainst(truth)); !s.ok()) return s;
+  if (absl::Status s = Prefixed("model", model.Validate()); !s.ok()) return s;
+  if (model_plan != nullptr) {
+    if (absl::Status s = Prefixed("model_plan", model_plan->ValidateAgainst(model)); !s.ok())
+      return s;
+  }
+
+  CutMetrics m;
+  m.truth_cuts = static_cast<int>(truth_plan.cuts.size());
+  m.cuts_missed_fraction = m.truth_cuts > 0 ? 1.0 : 0.0;
+  if (model_plan == nullptr) return m;
+  const std::vector<Cut>& model_cuts = model_plan->cuts;
+  m.model_cuts = static_cast<int>(model_cuts.size());
+
+  // Truth cuts by the index of their cane, and the first truth cut's arc length on each cane.
+  std::vector<size_t> truth_cane(truth_plan.cuts.size());
+  std::unordered_map<size_t, double> first_cut_arc;
+  for (size_t i = 0; i < truth_plan.cuts.size(); ++i) {
+    const Cut& cut = truth_plan.cuts[i];
+    truth_cane[i] = *truth.IndexOf(cut.cane_id);  // ValidateAgainst checked it exists
+    const double s = truth.canes[truth_cane[i]].polyline.Project(cut.point);
+    auto [it, inserted] = first_cut_arc.emplace(truth_cane[i], s);
+    if (!inserted) it->second = std::min(it->second, s);
+  }
+
+  std::vector<Landing> landing(model_cuts.size());
+  for (size_t j = 0; j < model_cuts.size(); ++j) landing[j] = Land(truth, model_cuts[j].point);
+
+  // Candidate pairs on the same truth cane within the match distance, taken nearest first.
+  std::vector<std::tuple<double, size_t, size_t>> pairs;
+  for (size_t i = 0; i < truth_plan.cuts.size(); ++i) {
+    for (size_t j = 0; j < model_cuts.size(); ++j) {
+      if (landing[j].cane != truth_cane[i]) continue;
+      const double d = (truth_plan.cuts[i].point - model_cuts[j].point).norm();
+      if (d <= options.match_distance_m) pairs.emplace_back(d, i, j);
+    }
+  }
+  std::sort(pairs.begin(), pairs.end());
+  std::vector<bool> truth_matched(truth_plan.cuts.size(), false);
+  std::vector<bool> model_matched(model_cuts.size(), false);
+  std::vector<double> errors;
+  for (const auto& [d, i, j] : pairs) {
+    if (truth_matched[i] || model_matched[j]) continue;
+    truth_matched[i] = model_matched[j] = true;
+    errors.push_back(d);
+  }
+  m.matched_cuts = static_cast<int>(errors.size());
+  m.cut_error_median_m = Median(errors);
+  m.cut_error_p95_m = Quantile(errors, 0.95);
+  if (m.truth_cuts > 0)
+    m.cuts_missed_fraction = static_cast<double>(m.truth_cuts - m.matched_cuts) / m.truth_cuts;
+  if (m.model_cuts > 0)
+    m.cuts_spurious_fraction = static_cast<double>(m.model_cuts - m.matched_cuts) / m.model_cuts;
+
+  const std::unordered_set<size_t> kept = KeptCanes(truth, truth_plan);
+  for (size_t j = 0; j < model_cuts.size(); ++j) {
+    const Landing& l = landing[j];
+    if (model_matched[j] || !kept.contains(l.cane) || l.distance_m > options.kept_distance_m)
+      continue;
+    const auto first = first_cut_arc.find(l.cane);
+    if (first != first_cut_arc.end() && l.arc_m >= first->second) continue;  // wood the truth removes
+    ++m.cuts_on_kept_canes;
+  }
+  return m;
+}
+
+nlohmann::json CutMetricsToJson(const CutMetrics& m) {
+  return {{"cut_error_median_m", m.cut_error_median_m},
+          {"cut_error_p95_m", m.cut_error_p95_m},
+          {"cuts_missed_fraction", m.cuts_missed_fraction},
+          {"cuts_spurious_fraction", m.cuts_spurious_fraction},
+          {"cuts_on_kept_canes", m.cuts_on_kept_canes},
+          {"truth_cuts", m.truth_cuts},
+          {"model_cuts", m.model_cuts},
+          {"matched_cuts", m.matched_cuts}};
+}
+
+}  // namespace vb
