@@ -44,15 +44,18 @@ struct CutPlan {
   std::vector<CaneId> spurs;
   std::vector<Cut> cuts;
 
-  // INVALID_ARGUMENT naming the element: invalid policy, duplicate cut ids, a cane both kept and
-  // spurred, non-finite points, a direction that is not unit length, non-positive diameter.
+  // INVALID_ARGUMENT naming the element: invalid policy, duplicate or non-positive cut ids, a
+  // cane listed twice in keep or spurs or both kept and spurred, non-finite points, a direction
+  // that is not unit length (to 1e-6), non-positive diameter.
   absl::Status Validate() const;
   // Validate() plus: every cane id named exists in `model`.
   absl::Status ValidateAgainst(const VineModel& model) const;
 };
 
 nlohmann::json CutPlanToJson(const CutPlan& plan);
-// Parses and validates (CutPlan::Validate). INVALID_ARGUMENT naming the field on any problem.
+// Parses and validates (CutPlan::Validate). INVALID_ARGUMENT naming the field on any problem,
+// unknown fields included (the policy object follows PruningPolicyFromJson: missing policy fields
+// keep their defaults).
 absl::StatusOr<CutPlan> CutPlanFromJson(const nlohmann::json& json);
 absl::Status WriteCutPlan(const std::string& path, const CutPlan& plan);
 // Errors are prefixed with the path.

@@ -49,8 +49,12 @@ struct PruningPolicy {
 // {"version":1, "style":"cane", "canes_to_keep":2, ...} with every field; fruiting_wire_z_m is
 // null when unset.
 nlohmann::json PruningPolicyToJson(const PruningPolicy& policy);
-// Fields missing from `json` keep their defaults (so a policy file may name only what differs);
-// unknown fields, wrong types and invalid values are INVALID_ARGUMENT naming the field.
+// Fields missing from `json` keep their defaults (so a policy file may name only what differs;
+// in spur style a missing canes_to_keep is 0, not 2); unknown fields, wrong types and invalid
+// values are INVALID_ARGUMENT naming the field ("policy.spurs: not an integer").
+// Valid ranges (Validate): spur_length_m [0.005, 1], diameters [0, 0.05] with min <= max,
+// min_kept_length_m [0, 5] <= max_kept_length_m [0.01, 5], cut_offset_m [0.001, 0.2], wire
+// heights [0.05, 3] with every foliage wire above the fruiting wire when that is set.
 absl::StatusOr<PruningPolicy> PruningPolicyFromJson(const nlohmann::json& json);
 // Errors are prefixed with the path.
 absl::StatusOr<PruningPolicy> ReadPruningPolicy(const std::string& path);
