@@ -23,6 +23,8 @@ struct DecideOptions {
   // that cannot leave the head within it is made at the farthest point and noted.
   double max_head_slide_m = 0.05;
 
+  // INVALID_ARGUMENT naming the field ("options.weights.imbalance: not finite",
+  // "options.max_head_slide_m: ...", which must lie in [0, 0.5]).
   absl::Status Validate() const;
 };
 
@@ -36,8 +38,11 @@ struct Decision {
 };
 
 // INVALID_ARGUMENT naming the field for an invalid model (VineModel::Validate: parent cycles,
-// unknown parents, NaN points, radii count mismatch), a model with no trunk or no canes at all
-// ("model: empty"), an invalid policy or options. DEADLINE_EXCEEDED / CANCELLED from `deadline`.
+// unknown parents, NaN points, radii count mismatch), a model with no canes at all ("model:
+// empty"; a valid model with canes always has its trunk), an invalid policy or options ("policy.x",
+// "options.x"). DEADLINE_EXCEEDED / CANCELLED from `deadline`. A trunk without candidate canes is
+// no error: the plan is empty and a note says why. plan.policy is `policy`; plan.keep and
+// plan.spurs are the scheme's (sorted by id); plan.cuts come from PlaceCuts (cut_points.h).
 absl::StatusOr<Decision> Decide(const VineModel& model, const PruningPolicy& policy,
                                 const DecideOptions& options = {},
                                 const Deadline& deadline = Deadline::Infinite());
