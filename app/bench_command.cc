@@ -145,6 +145,7 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   stage("segment_s", &reconstruct::StageTimings::segment_s);
   stage("structure_s", &reconstruct::StageTimings::structure_s);
   stage("correspondence_s", &reconstruct::StageTimings::correspondence_s);
+  stage("rig_refine_s", &reconstruct::StageTimings::rig_refine_s);
   stage("assembly_s", &reconstruct::StageTimings::assembly_s);
   stage("head_s", &reconstruct::StageTimings::head_s);
   stage("connect_s", &reconstruct::StageTimings::connect_s);

@@ -5,7 +5,8 @@ namespace vb::app {
 
 nlohmann::json TimingsToJson(const reconstruct::StageTimings& t) {
   return {{"segment_s", t.segment_s},       {"structure_s", t.structure_s},
-          {"correspondence_s", t.correspondence_s}, {"assembly_s", t.assembly_s},
+          {"correspondence_s", t.correspondence_s}, {"rig_refine_s", t.rig_refine_s},
+          {"assembly_s", t.assembly_s},
           {"head_s", t.head_s},             {"connect_s", t.connect_s},
           {"refine_s", t.refine_s},         {"trellis_s", t.trellis_s},
           {"total_s", t.total_s}};
@@ -30,6 +31,13 @@ nlohmann::json ReconstructReport(const reconstruct::ReconstructResult& result) {
       {"rejected_canes", result.fit.rejected_outside + result.fit.rejected_background +
                              result.fit.removed_with_parent},
       {"timings", TimingsToJson(result.timings)}};
+  const reconstruct::RigRefineSummary& rr = result.rig_refine;
+  report["rig_refine"] = {{"applied", rr.applied},
+                          {"points", rr.points},
+                          {"median_before_px", rr.median_before_px},
+                          {"median_after_px", rr.median_after_px},
+                          {"correction_px", rr.correction_px}};
+  if (!rr.reason.empty()) report["rig_refine"]["reason"] = rr.reason;
   if (!result.empty_reason.empty()) report["empty_reason"] = result.empty_reason;
   return report;
 }

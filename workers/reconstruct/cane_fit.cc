@@ -12,76 +12,15 @@
 #include "absl/strings/str_cat.h"
 #include "ceres/ceres.h"
 #include "ceres/cubic_interpolation.h"
+#include "workers/reconstruct/ceres_camera.h"
 
 namespace vb::reconstruct {
 namespace {
-
-using Grid = ceres::Grid2D<float, 1>;
-using Interpolator = ceres::BiCubicInterpolator<Grid>;
 
 // Coordinates beyond this (metres) are garbage, not a vine; they would only produce overflow.
 constexpr double kMaxCoordinateM = 1000.0;
 // Passes of the [1 2 1] / 4 kernel that make the rest shape.
 constexpr int kRestSmoothingPasses = 3;
-
-// The camera model of core/calibration.h, templated for automatic differentiation.
-struct Projector {
-  double r[9];
-  double t[3];
-  double fx, fy, skew, cx, cy;
-  double k1, k2, p1, p2, k3;
-
-  explicit Projector(const CameraCalibration& c) {
-    for (int i = 0; i < 3; ++i) {
-      for (int j = 0; j < 3; ++j) r[3 * i + j] = c.rotation_camera_from_platform(i, j);
-      t[i] = c.translation_camera_from_platform[i];
-    }
-    fx = c.camera_matrix(0, 0);
-    fy = c.camera_matrix(1, 1);
-    skew = c.camera_matrix(0, 1);
-    cx = c.camera_matrix(0, 2);
-    cy = c.camera_matrix(1, 2);
-    std::tie(k1, k2, p1, p2, k3) =
-        std::tuple(c.distortion[0], c.distortion[1], c.distortion[2], c.distortion[3],
-                   c.distortion[4]);
-  }
-
-  // False if the point is (nearly) on or behind the image plane.
-  template <typename T>
-  bool operator()(const T* p, T* u, T* v) const {
-    T pc[3];
-    for (int i = 0; i < 3; ++i) pc[i] = r[3 * i] * p[0] + r[3 * i + 1] * p[1] + r[3 * i + 2] * p[2] + t[i];
-    if (!(pc[2] > T(1e-3))) return false;
-    const T x = pc[0] / pc[2];
-    const T y = pc[1] / pc[2];
-    const T r2 = x * x + y * y;
-    const T radial = T(1.0) + r2 * (k1 + r2 * (k2 + r2 * k3));
-    const T xd = x * radial + T(2.0 * p1) * x * y + p2 * (r2 + T(2.0) * x * x);
-    const T yd = y * radial + p1 * (r2 + T(2.0) * y * y) + T(2.0 * p2) * x * y;
-    *u = fx * xd + skew * yd + cx;
-    *v = fy * yd + cy;
-    return true;
-  }
-};
-
-// Distance in pixels from the projection of a point to the view's nearest skeleton point.
-struct CentrelineCost {
-  CentrelineCost(const Projector& projector, const Interpolator* interpolator, double inv_sd)
-      : projector(projector), interpolator(interpolator), inv_sd(inv_sd) {}
-  template <typename T>
-  bool operator()(const T* p, T* residual) const {
-    T u, v;
-    if (!projector(p, &u, &v)) return false;
-    T d2;
-    interpolator->Evaluate(v, u, &d2);  // (row, column)
-    // d2 can dip a hair below 0 between samples; the epsilon keeps the derivative finite at 0.
-    residual[0] = sqrt(fmax(d2, T(0.0)) + T(1e-6)) * inv_sd;
-    return true;
-  }
-  Projector projector;
-  const Interpolator* interpolator;
-  double inv_sd;
-};
 
 // Second difference of three consecutive points about that of the cane's rest shape.
 struct KinkCost {
@@ -145,28 +84,6 @@ struct GroundCost {
   double inv_sd;
 };
 
-class DeadlineCallback : public ceres::IterationCallback {
- public:
-  explicit DeadlineCallback(const Deadline& deadline) : deadline_(deadline) {}
-  ceres::CallbackReturnType operator()(const ceres::IterationSummary&) override {
-    if (deadline_.Cancelled()) {
-      cancelled_ = true;
-      return ceres::SOLVER_ABORT;
-    }
-    if (deadline_.Expired()) {
-      expired_ = true;
-      return ceres::SOLVER_TERMINATE_SUCCESSFULLY;  // keeps the current (best) iterate
-    }
-    return ceres::SOLVER_CONTINUE;
-  }
-  bool cancelled() const { return cancelled_; }
-  bool expired() const { return expired_; }
-
- private:
-  const Deadline& deadline_;
-  bool cancelled_ = false;
-  bool expired_ = false;
-};
 
 // The rest shape of a cane: its points with the noise smoothed away (three [1 2 1] / 4 passes;
 // a binomial kernel of sd ~1.2 points), which would otherwise inflate its length and curvature.
@@ -368,21 +285,10 @@ absl::Status RefineModel(VineModel* model, const std::vector<View2D>& views,
   };
   reject();
 
-  // The cost reads the *squared* distance map: Keys' cubic convolution reproduces quadratics, so
-  // interpolating d^2 and taking the root gives the sub-pixel distance to the skeleton, where
-  // interpolating d itself gives a flat-bottomed bowl (d ~ 2 x^2 within a pixel of the
-  // centreline) in which the regularisers, not the images, would place the points.
-  std::vector<std::vector<float>> squared(views.size());
-  std::vector<std::unique_ptr<Grid>> grids;
-  std::vector<std::unique_ptr<Interpolator>> interpolators;
+  std::vector<std::unique_ptr<SquaredDistanceField>> fields;
   std::vector<Projector> projectors;
   for (size_t v = 0; v < views.size(); ++v) {
-    squared[v].resize(views[v].centreline_distance_px.size());
-    std::transform(views[v].centreline_distance_px.begin(), views[v].centreline_distance_px.end(),
-                   squared[v].begin(), [](float d) { return d * d; });
-    grids.push_back(std::make_unique<Grid>(squared[v].data(), 0, views[v].height, 0,
-                                           views[v].width));
-    interpolators.push_back(std::make_unique<Interpolator>(*grids.back()));
+    fields.push_back(std::make_unique<SquaredDistanceField>(views[v]));
     projectors.emplace_back(rig.cameras[v]);
   }
 
@@ -410,7 +316,7 @@ absl::Status RefineModel(VineModel* model, const std::vector<View2D>& views,
         }
         problem.AddResidualBlock(
             new ceres::AutoDiffCostFunction<CentrelineCost, 1, 3>(
-                new CentrelineCost(projectors[v], interpolators[v].get(), inv_px)),
+                new CentrelineCost(projectors[v], fields[v]->interpolator(), inv_px)),
             &loss, block(c, i));
         ++seen_by[i];
       }

@@ -68,17 +68,33 @@ absl::Status ReconstructOptions::Validate() const {
 }
 
 absl::StatusOr<ReconstructResult> ReconstructFromViews(const std::vector<View2D>& views,
-                                                       const RigCalibration& rig,
+                                                       const RigCalibration& calibrated_rig,
                                                        const ReconstructOptions& options,
                                                        const Deadline& deadline) {
   VB_RETURN_IF_ERROR(options.Validate());
-  VB_RETURN_IF_ERROR(CheckRig(rig));
+  VB_RETURN_IF_ERROR(CheckRig(calibrated_rig));
   ReconstructResult result;
   auto t = std::chrono::steady_clock::now();
-  VB_ASSIGN_OR_RETURN(const std::vector<Piece3D> pieces,
-                      MatchSegments(views, rig, options.correspondence, deadline));
-  result.pieces = static_cast<int>(pieces.size());
+  VB_ASSIGN_OR_RETURN(std::vector<Piece3D> pieces,
+                      MatchSegments(views, calibrated_rig, options.correspondence, deadline));
   result.timings.correspondence_s = SecondsSince(t);
+
+  t = std::chrono::steady_clock::now();
+  VB_ASSIGN_OR_RETURN(result.rig, RefineRig(views, calibrated_rig, pieces, options.rig_refine,
+                                            deadline, &result.rig_refine));
+  // Wire and post lines are in normalised coordinates, which a new focal length changes.
+  std::vector<View2D> refined_views;
+  if (result.rig_refine.applied) {
+    refined_views = views;
+    for (size_t v = 0; v < views.size(); ++v) {
+      ReexpressLines(calibrated_rig.cameras[v], result.rig.cameras[v], &refined_views[v].wires);
+      ReexpressLines(calibrated_rig.cameras[v], result.rig.cameras[v], &refined_views[v].posts);
+    }
+    VB_ASSIGN_OR_RETURN(pieces, MatchSegments(views, result.rig, options.correspondence, deadline));
+  }
+  result.pieces = static_cast<int>(pieces.size());
+  result.timings.rig_refine_s = SecondsSince(t);
+  const RigCalibration& rig = result.rig;
 
   t = std::chrono::steady_clock::now();
   VB_ASSIGN_OR_RETURN(std::vector<Polyline3> canes,
@@ -114,7 +130,8 @@ absl::StatusOr<ReconstructResult> ReconstructFromViews(const std::vector<View2D>
 
   t = std::chrono::steady_clock::now();
   VB_ASSIGN_OR_RETURN(const Trellis trellis,
-                      ReconstructTrellis(views, rig, options.volume, options.trellis));
+                      ReconstructTrellis(refined_views.empty() ? views : refined_views, rig,
+                                         options.volume, options.trellis));
   result.model.wires = trellis.wires;
   result.model.posts = trellis.posts;
   result.timings.trellis_s = SecondsSince(t);
@@ -184,6 +201,7 @@ absl::StatusOr<ReconstructResult> Reconstruct(const std::vector<Image>& images,
     VB_ASSIGN_OR_RETURN(result, ReconstructFromViews(views, rig, options, deadline));
   } else {
     result.empty_reason = "no wood (cane, trunk or head) was found in any image";
+    result.rig = rig;
   }
   result.timings.segment_s = seg * scale;
   result.timings.structure_s = str * scale;

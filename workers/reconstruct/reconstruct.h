@@ -7,6 +7,8 @@
 //   3. correspondence across views, Gibbs sampling  6. connect canes into one tree (connect.h)
 //      and minimum expected loss (correspondence.h) 7. joint Ceres refinement (cane_fit.h)
 //   4. assemble 3D pieces into canes (cane_assembly.h) 8. wires and posts (trellis3d.h)
+// Between 3 and 4 the rig's rotations are refined on the confident matches and correspondence
+// runs again with the refined rig (rig_refine.h).
 // Steps 1-2 run per view on up to `threads` threads. Thread-safe (no shared state).
 #pragma once
 
@@ -24,6 +26,7 @@
 #include "workers/reconstruct/correspondence.h"
 #include "workers/reconstruct/head.h"
 #include "workers/reconstruct/piece3d.h"
+#include "workers/reconstruct/rig_refine.h"
 #include "workers/reconstruct/segmenter.h"
 #include "workers/reconstruct/structure2d.h"
 #include "workers/reconstruct/trellis3d.h"
@@ -39,6 +42,7 @@ struct ReconstructOptions {
   ConnectOptions connect;
   FitOptions fit;
   TrellisOptions trellis;
+  RigRefineOptions rig_refine;           // step 3b: refine the rig on confident matches, re-match
   bool refine = true;                    // run the joint Ceres refinement (step 7)
   int threads = 2;                       // threads for the per-view steps
 
@@ -48,7 +52,7 @@ struct ReconstructOptions {
 // Wall-clock seconds per step (per-view steps: the wall time of all views together).
 struct StageTimings {
   double segment_s = 0, structure_s = 0, correspondence_s = 0, assembly_s = 0, head_s = 0,
-         connect_s = 0, refine_s = 0, trellis_s = 0, total_s = 0;
+         connect_s = 0, refine_s = 0, rig_refine_s = 0, trellis_s = 0, total_s = 0;
 };
 
 struct ReconstructResult {
@@ -59,6 +63,9 @@ struct ReconstructResult {
   int assembled_canes = 0;       // canes after assembly
   ConnectSummary connect;
   FitSummary fit;
+  RigRefineSummary rig_refine;
+  // The rig the model was built with: the calibration, or its refinement (rig_refine.applied).
+  RigCalibration rig;
 };
 
 // images[i] (rgb8) was taken by rig.cameras[i]. Errors, each naming the camera or field:

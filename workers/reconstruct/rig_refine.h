@@ -1,0 +1,77 @@
+// SPDX-License-Identifier: Apache-2.0
+// Online refinement of the rig's extrinsics from the stop's own images. A rig on a platform that
+// bumps along a vineyard row drifts from its calibration by a pixel or so (vibration, heat); at
+// the vine's 0.8 m that misplaces triangulated canes by 5-20 mm in depth, half the 10 mm the
+// metrics allow. The canes every view sees pin the cameras to one another: the confident matches
+// of a first correspondence pass give 3D points, and a bundle adjustment moves those points and
+// a small rotation and focal-length scale of each camera so that every point projects onto the
+// skeleton in every view that sees it (distance-to-skeleton residuals, robust loss). Camera
+// centres stay as calibrated (a drift of the mounts is mostly rotation, and with fixed centres
+// the scale is fixed too); weak priors on the corrections settle the near-gauge freedom (the
+// whole rig turning together) at the smallest correction that explains the images. This goes
+// beyond Botterill et al. 2017, who calibrated once with a target; it is standard
+// self-calibration (Triggs et al., "Bundle Adjustment - A Modern Synthesis", 2000).
+// Thread-safe (pure function).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "core/calibration.h"
+#include "core/deadline.h"
+#include "workers/reconstruct/piece3d.h"
+#include "workers/reconstruct/view2d.h"
+
+namespace vb::reconstruct {
+
+struct RigRefineOptions {
+  bool enabled = true;              // false: the rig is used as calibrated
+  // This camera's pose is held fixed; -1: none, every camera is corrected under the priors. On
+  // rigs where every camera drifts, -1 halves the triangulation error of holding one camera
+  // (rig_refine_test), which only makes the others agree with the held camera's error.
+  int reference_camera = -1;
+  double min_probability = 0.8;     // pieces at least this likely to be right give points
+  double min_support = 0.8;         // ... and at least this much on the foreground of all views
+  double sample_step_m = 0.01;      // spacing of points along each piece
+  int max_points = 600;             // evenly thinned to at most this many points
+  int min_points = 60;              // fewer points seen by >= 2 views: no refinement
+  double reprojection_sd_px = 1.0;  // residual scale (distance to the skeleton)
+  double loss_scale_sd = 2.0;       // Cauchy loss scale, in sd (wrong matches fall beyond it)
+  double correction_prior_px = 4.0; // weak prior holding each correction near the calibration
+  double max_correction_px = 8.0;   // a larger correction (at the focal length) is not trusted
+  int max_iterations = 30;
+
+  absl::Status Validate() const;
+};
+
+struct RigRefineSummary {
+  bool applied = false;           // the returned rig differs from the input
+  std::string reason;             // why not, when not applied
+  int points = 0;                 // 3D points in the adjustment
+  int residuals = 0;              // point-view observations
+  double median_before_px = 0.0;  // median distance to the skeleton before and after
+  double median_after_px = 0.0;
+  // Per camera: the larger of rotation angle x focal length and focal scale x half width.
+  std::vector<double> correction_px;
+};
+
+// The rig with refined camera rotations and focal lengths. `pieces` are a first correspondence pass's output with
+// `rig`. Falls back to `rig` unchanged (applied = false, reason set) when there are too few
+// confident points, the solve fails, or a correction exceeds max_correction_px.
+// INVALID_ARGUMENT for invalid options or views not matching the rig; DEADLINE_EXCEEDED /
+// CANCELLED from `deadline`.
+absl::StatusOr<RigCalibration> RefineRig(const std::vector<View2D>& views,
+                                         const RigCalibration& rig,
+                                         const std::vector<Piece3D>& pieces,
+                                         const RigRefineOptions& options, const Deadline& deadline,
+                                         RigRefineSummary* summary = nullptr);
+
+
+// Re-expresses wire or post lines found in the normalised coordinates of camera `from` in those of
+// `to` (the same camera after RefineRig changed its focal length): the lines' supports are mapped
+// through their pixels and refitted.
+void ReexpressLines(const CameraCalibration& from, const CameraCalibration& to,
+                    std::vector<Line2D>* lines);
+
+}  // namespace vb::reconstruct
