@@ -17,14 +17,19 @@ namespace {
 
 int OriginRank(ExpertOrigin origin) { return static_cast<int>(origin); }
 
-// Mean diameter over [0, min(span, length)], sampled every centimetre: one thick knot at the
-// base must not decide the reading (a pruner looks along the first hand-width of the cane).
+// Mean diameter over [0, min(span, length)] (the radius is linear along each segment, so the
+// trapezoid rule is exact): one knot at the base must not decide the reading; a pruner looks
+// along the first hand-width of the cane.
 double BaseDiameter(const Polyline3& line) {
-  const double span = std::min(kExpertBaseSpanM, line.Length());
-  constexpr int kSamples = 11;
-  double sum = 0.0;
-  for (int i = 0; i < kSamples; ++i) sum += 2.0 * line.RadiusAt(span * i / (kSamples - 1));
-  return sum / kSamples;
+  const std::vector<double> arc = line.ArcLengths();
+  const double span = std::min(kExpertBaseSpanM, arc.back());
+  if (span <= 0.0) return 2.0 * line.radii.front();
+  double area = 0.0;
+  for (size_t i = 0; i + 1 < arc.size() && arc[i] < span; ++i) {
+    const double s1 = std::min(arc[i + 1], span);
+    area += 0.5 * (line.radii[i] + line.RadiusAt(s1)) * (s1 - arc[i]);
+  }
+  return 2.0 * area / span;
 }
 
 Eigen::Vector3d HeadCentre(const VineModel& model, const Cane& trunk) {
@@ -34,14 +39,19 @@ Eigen::Vector3d HeadCentre(const VineModel& model, const Cane& trunk) {
   return sum / static_cast<double>(model.head.spheres.size());
 }
 
-bool TouchesHead(const VineModel& model, const Cane& trunk, const Eigen::Vector3d& p) {
+// Whether a base on the trunk (or an old spur) is on the head: within kExpertHeadContactM of a
+// head sphere or above the head's lowest point; without spheres, within kExpertTrunkTopHeadM of
+// the trunk's top.
+bool OnHead(const VineModel& model, const Cane& trunk, const Eigen::Vector3d& p) {
   if (model.head.spheres.empty()) {
-    return (p - trunk.polyline.points.back()).norm() <= kExpertHeadContactM;
+    return (p - trunk.polyline.points.back()).norm() <= kExpertTrunkTopHeadM;
   }
+  double lowest = std::numeric_limits<double>::infinity();
   for (const Sphere& s : model.head.spheres) {
     if ((p - s.center).norm() - s.radius <= kExpertHeadContactM) return true;
+    lowest = std::min(lowest, s.center.z() - s.radius);
   }
-  return false;
+  return p.z() >= lowest;
 }
 
 // Height at `x` of the lowest wire spanning x (linear between wire points), if any.
@@ -68,13 +78,13 @@ double DiameterOutsideMm(double diameter_m, const PruningPolicy& policy) {
 }
 
 // Lexicographic rank keys (smaller is better); K3 for kept canes, the spur rule for spurs.
-using KeepKey = std::tuple<int, double, double, int, double, int64_t>;
+using KeepKey = std::tuple<int, double, double, double, double, int64_t>;
 using SpurKey = std::tuple<int, double, double, int64_t>;
 
 KeepKey KeepRank(const ExpertCaneView& c, const PruningPolicy& policy) {
   return {OriginRank(c.origin), c.diameter_outside_mm,
-          std::max(0.0, policy.max_kept_length_m - c.length_m), c.lay_down_faults,
-          c.base_distance_from_head_m, c.id.value};
+          std::max(0.0, policy.max_kept_length_m - c.length_m), std::max(0.0, -c.base_below_wire_m),
+          c.placement_rad, c.id.value};
 }
 
 SpurKey SpurRank(const ExpertCaneView& c) {
@@ -125,7 +135,7 @@ absl::StatusOr<std::vector<ExpertCaneView>> AssessCanes(const VineModel& model,
     const Eigen::Vector3d& base = line.points.front();
     if (parent.kind == CaneKind::kCane) {
       v.origin = ExpertOrigin::kCane;
-    } else if (TouchesHead(model, *trunk, base)) {
+    } else if (OnHead(model, *trunk, base)) {
       v.origin = ExpertOrigin::kHead;
     } else {
       v.origin = parent.kind == CaneKind::kTrunk ? ExpertOrigin::kTrunk : ExpertOrigin::kCane;
@@ -140,8 +150,7 @@ absl::StatusOr<std::vector<ExpertCaneView>> AssessCanes(const VineModel& model,
     const double n = ahead.norm();
     const double cos_angle = n > 1e-12 ? v.side * ahead.x() / n : 0.0;
     v.angle_from_wire_rad = std::acos(std::clamp(cos_angle, -1.0, 1.0));
-    v.lay_down_faults = (v.base_below_wire_m < 0.0) + (v.base_below_wire_m > kExpertMaxBelowWireM) +
-                        (v.angle_from_wire_rad > kExpertMaxAngleRad);
+    v.placement_rad = v.angle_from_wire_rad + kExpertRadPerMetreFromHead * v.base_distance_from_head_m;
     // Ancestors among canes of kind `cane` (the walk ends at the trunk; Validate excluded cycles).
     for (std::optional<CaneId> p = cane.parent_id; p.has_value();) {
       const Cane& up = model.canes[*model.IndexOf(*p)];

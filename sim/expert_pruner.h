@@ -12,9 +12,10 @@
 // human pruner's choices from tablet approvals.
 //
 // What the pruner measures of each cane of kind `cane` (trunk and old spurs are never chosen):
-//   origin      head: the parent is the trunk (or an old spur) and the base touches the head
-//               (within kExpertHeadContactM of a head sphere's surface; within
-//               kExpertHeadContactM of the trunk top if the model has no head spheres);
+//   origin      head: the parent is the trunk (or an old spur) and the base is on the head
+//               (within kExpertHeadContactM of a head sphere's surface or above the head's
+//               lowest point; within kExpertTrunkTopHeadM of the trunk top if the model has no
+//               head spheres);
 //               trunk: any other cane growing from the trunk (a water shoot);
 //               cane: grows from another cane (a secondary cane).
 //   diameter    mean diameter over the first 0.10 m; `diameter_outside_mm` is its distance outside
@@ -38,11 +39,12 @@
 //         to it: too thin is weak, too thick is vegetative and hard to bend);
 //      c. reach: how far the cane falls short of policy.max_kept_length_m (a cane long enough to
 //         fill the wire to the next vine is best; longer ones are shortened anyway);
-//      d. lay-down faults, counted: base above the wire (cannot be bent down onto it); base more
-//         than kExpertMaxBelowWireM below the wire (too low to reach it); initial direction more
-//         than kExpertMaxAngleRad from the outward wire direction (must be bent hard or crosses
-//         the head);
-//      e. base distance from the head centre (closer keeps the head compact);
+//      d. height of the base above the wire (0 below it: a base above the wire must be bent down
+//         onto it, which cracks canes);
+//      e. placement, the pruner's judgement of how well the cane lies for tying down: the angle
+//         (rad) from the outward wire direction it must be bent through plus
+//         kExpertRadPerMetreFromHead x its base distance from the head centre (a base near the
+//         head keeps the head compact; 1 cm counts as much as 0.1 rad, about 6 degrees, of bend);
 //      f. cane id (a deterministic tie-break).
 //   K4 A cane is never picked if it descends from, or is an ancestor of, a cane already kept or
 //      spurred (one would fall with the other's cut).
@@ -66,10 +68,10 @@
 
 namespace vb::sim {
 
-inline constexpr double kExpertHeadContactM = 0.02;    // base within this of the head: from the head
+inline constexpr double kExpertHeadContactM = 0.03;    // base within this of the head: from the head
+inline constexpr double kExpertTrunkTopHeadM = 0.10;   // the head's reach when it has no spheres
 inline constexpr double kExpertBaseSpanM = 0.10;       // diameter and direction are measured over this
-inline constexpr double kExpertMaxBelowWireM = 0.20;   // lower bases cannot reach the wire
-inline constexpr double kExpertMaxAngleRad = 1.0472;   // 60 degrees from the outward wire direction
+inline constexpr double kExpertRadPerMetreFromHead = 10.0;  // placement (rule K3e): 1 cm = 0.1 rad
 inline constexpr double kExpertDefaultWireZM = 0.95;   // fruiting wire height if nothing says
 
 enum class ExpertOrigin { kHead = 0, kTrunk = 1, kCane = 2 };
@@ -85,7 +87,7 @@ struct ExpertCaneView {
   double base_below_wire_m = 0.0;           // wire_z - base_z (negative: above the wire)
   double angle_from_wire_rad = 0.0;         // in [0, pi]
   int side = 1;                             // -1 left of the head centre, +1 right
-  int lay_down_faults = 0;                  // rule K3d, 0-3
+  double placement_rad = 0.0;               // rule K3e: angle + kExpertRadPerMetreFromHead x distance
   std::vector<CaneId> ancestors;            // canes (not the trunk) it grows from, nearest first
 };
 

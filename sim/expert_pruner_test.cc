@@ -107,25 +107,38 @@ TEST(ExpertPruner, PrefersHeadCanesToWaterShootsAndSecondaryCanes) {
   (void)secondary;
 }
 
-TEST(ExpertPruner, RanksDiameterBeforeReachBeforeLayDown) {
+TEST(ExpertPruner, RanksDiameterBeforeReachBeforePlacement) {
   VineBuilder v;
   // Left: in range but short, vs too thick and long: diameter wins.
   const CaneId left_in_range = v.AddHeadCane(-1, 0.3, 0.5, 0.009);
   v.AddHeadCane(-1, 0.3, 1.2, 0.014);
-  // Right: long but steep (a lay-down fault) beats shorter and flat: reach wins.
+  // Right: long but steep beats shorter and flat: reach wins.
   const CaneId right_long = v.AddHeadCane(+1, 1.4, 1.0, 0.009);
   v.AddHeadCane(+1, 0.2, 0.7, 0.009);
   const ExpertDecision d = MustPrune(v.model());
   EXPECT_THAT(d.keep, ElementsAre(left_in_range, right_long));
 }
 
-TEST(ExpertPruner, LayDownFaultsBeatDistanceFromTheHead) {
+TEST(ExpertPruner, PlacementWeighsBendAgainstDistanceFromTheHead) {
   VineBuilder v;
-  v.AddHeadCane(-1, 1.3, 1.0, 0.009);                          // steep, at the head
-  const CaneId flat = v.AddHeadCane(-1, 0.2, 1.0, 0.009, 0.05);  // flat, farther out
-  const CaneId right = v.AddHeadCane(+1, 0.2, 1.0, 0.009);
+  v.AddHeadCane(-1, 1.3, 1.0, 0.009);                            // steep, at the head: 1.8
+  const CaneId flat = v.AddHeadCane(-1, 0.2, 1.0, 0.009, 0.015);  // flat, 1.5 cm out: 0.85
+  v.AddHeadCane(+1, 0.2, 1.0, 0.009, 0.07);                       // flat, far out: 1.4
+  const CaneId near = v.AddHeadCane(+1, 0.5, 1.0, 0.009);         // 0.5 rad, at the head: 1.0
   const ExpertDecision d = MustPrune(v.model());
-  EXPECT_THAT(d.keep, ElementsAre(flat, right));
+  EXPECT_THAT(d.keep, ElementsAre(flat, near));
+}
+
+TEST(ExpertPruner, PrefersBasesBelowTheWire) {
+  VineBuilder v;
+  const CaneId low = v.AddHeadCane(-1, 0.8, 1.0, 0.009);  // 0.02 m above a 0.98 m wire
+  v.Add({-0.01, 0.8, 1.05}, {-1, 0, 0.05}, 1.0, 0.009);   // on top of the head, flat: 0.07 above
+  v.AddHeadCane(+1, 0.3, 1.0, 0.009);
+  PruningPolicy policy;
+  policy.fruiting_wire_z_m = 0.98;
+  const ExpertDecision d = MustPrune(v.model(), policy);
+  ASSERT_EQ(d.keep.size(), 2u);
+  EXPECT_EQ(d.keep[0], low);
 }
 
 TEST(ExpertPruner, KeepsBothOnOneSideWhenTheOtherHasNoCane) {
@@ -169,10 +182,10 @@ TEST(ExpertPruner, MeasuresWhatTheRulesUse) {
   EXPECT_NEAR(c.angle_from_wire_rad, 0.0, 1e-6);
   EXPECT_GT(c.base_diameter_m, 0.0135);  // tapers a little over the first 0.10 m
   EXPECT_NEAR(c.diameter_outside_mm, 1e3 * (c.base_diameter_m - 0.012), 1e-9);
-  EXPECT_EQ(c.lay_down_faults, 0);
+  EXPECT_NEAR(c.placement_rad, 10.0 * 0.05, 1e-6);
   const ExpertCaneView& w = (*views)[1];
   EXPECT_EQ(w.origin, ExpertOrigin::kTrunk);
-  EXPECT_EQ(w.lay_down_faults, 1);  // 0.55 m below the wire
+  EXPECT_NEAR(w.base_below_wire_m, 0.55, 1e-9);
 }
 
 TEST(ExpertPruner, RejectsInvalidPolicyAndModel) {
