@@ -33,4 +33,13 @@ absl::Status RunBenchReconstruct(Flags& flags);
 // vinebot train segmenter --out FILE [...]: trains the pixel classifier on simulated stops.
 absl::Status RunTrainSegmenter(Flags& flags);
 
+// vinebot sim decide-labels --vines N --seed-base S --out DIR [--policy policy.json]: simulated
+// vines labelled by the expert rule set (sim/expert_pruner.h), as NAME.model.json + NAME.plan.json.
+absl::Status RunSimDecideLabels(Flags& flags);
+
+// vinebot train decide --labels DIR [--holdout DIR | --holdout-fraction F] [--epochs N]
+// [--out weights.json]: learns the scheme weights (workers/decide/scheme_learning.h) and prints
+// train and held-out agreement with the labels as JSON.
+absl::Status RunTrainDecide(Flags& flags);
+
 }  // namespace vb::app

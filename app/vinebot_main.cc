@@ -36,6 +36,12 @@ const std::vector<Command>& Commands() {
       {"bench reconstruct", "--vines N --seed-base S [--calibration-error-px X]",
        vb::app::RunBenchReconstruct},
       {"train segmenter", "--out FILE [--vines N --seed-base S]", vb::app::RunTrainSegmenter},
+      {"sim decide-labels", "--vines N --out DIR [--seed-base S] [--policy policy.json]",
+       vb::app::RunSimDecideLabels},
+      {"train decide",
+       "--labels DIR [--holdout DIR | --holdout-fraction F] [--epochs N] [--regularization L] "
+       "[--out weights.json]",
+       vb::app::RunTrainDecide},
   };
   return commands;
 }
