@@ -61,7 +61,8 @@ std::unordered_set<size_t> KeptCanes(const VineModel& truth, const CutPlan& plan
 absl::Status CutMetricsOptions::Validate() const {
   if (!std::isfinite(match_distance_m) || match_distance_m <= 0)
     return absl::InvalidArgumentError(
-        absl::StrCat("cut metrics options.match_distance_m must be positive, is ", match_distance_m));
+        absl::StrCat("cut metrics options.match_distance_m must be positive, is ",
+                     match_distance_m));
   if (!std::isfinite(kept_distance_m) || kept_distance_m <= 0)
     return absl::InvalidArgumentError(
         absl::StrCat("cut metrics options.kept_distance_m must be positive, is ", kept_distance_m));
@@ -130,10 +131,13 @@ absl::StatusOr<CutMetrics> EvaluateCuts(const VineModel& truth, const CutPlan& t
   const std::unordered_set<size_t> kept = KeptCanes(truth, truth_plan);
   for (size_t j = 0; j < model_cuts.size(); ++j) {
     const Landing& l = landing[j];
-    if (model_matched[j] || !kept.contains(l.cane) || l.distance_m > options.kept_distance_m)
-      continue;
+    if (model_matched[j] || !kept.contains(l.cane)) continue;
+    const double reach =
+        std::max(options.kept_distance_m, truth.canes[l.cane].polyline.RadiusAt(l.arc_m));
+    if (l.distance_m > reach) continue;
     const auto first = first_cut_arc.find(l.cane);
-    if (first != first_cut_arc.end() && l.arc_m >= first->second) continue;  // wood the truth removes
+    // Beyond the truth's first cut on the cane: wood the truth removes anyway.
+    if (first != first_cut_arc.end() && l.arc_m >= first->second) continue;
     ++m.cuts_on_kept_canes;
   }
   return m;

@@ -11,11 +11,12 @@
 //     most match_distance_m (30 mm). Each ground-truth cut has a single partner at most; with one
 //     cut per cane on either side, this is "the nearest reconstructed cut on the same cane".
 //  3. A reconstructed cut is on a kept cane when it has no ground-truth partner, lies within
-//     kept_distance_m (10 mm) of the axis of its assigned ground-truth cane, and that cane keeps
-//     wood there in the ground-truth plan: the cane is kept, spurred, or an ancestor of a kept or
-//     spurred cane (the trunk always is), and the cut lies before the first ground-truth cut on
-//     that cane (if any). These are the cuts that would take away wood the truth keeps (a cut on
-//     the trunk or on the parent of a kept cane drops the kept cane too): the worst error.
+//     kept_distance_m (10 mm) of the axis of its assigned ground-truth cane or inside that cane's
+//     wood (within its radius there: a thick trunk), and that cane keeps wood there in the
+//     ground-truth plan: the cane is kept, spurred, or an ancestor of a kept or spurred cane (the
+//     trunk always is), and the cut lies before the first ground-truth cut on that cane (if any).
+//     These are the cuts that would take away wood the truth keeps (a cut on the trunk or on the
+//     parent of a kept cane drops the kept cane too): the worst error.
 #pragma once
 
 #include "absl/status/status.h"
@@ -28,7 +29,7 @@ namespace vb {
 
 struct CutMetricsOptions {
   double match_distance_m = 0.030;  // a truth cut and a reconstructed cut match within this
-  double kept_distance_m = 0.010;   // a cut this close to a kept cane's axis cuts it
+  double kept_distance_m = 0.010;   // this near a kept cane's axis (or inside it) cuts it
 
   // INVALID_ARGUMENT naming the field unless both are positive and finite.
   absl::Status Validate() const;

@@ -19,11 +19,12 @@ Cane StraightCane(int64_t id, std::optional<int64_t> parent, CaneKind kind, Eige
   return c;
 }
 
-// Trunk 1 up to z = 1; cane 2 (kept) along +x; canes 3 and 4 (removed) along -x, 30 mm apart;
+// Trunk 1 (50 mm thick) up to z = 1; cane 2 (kept) along +x; canes 3 and 4 (removed) along -x, 30 mm apart;
 // cane 5 (a spur) along +y.
 VineModel Truth() {
   VineModel v;
   v.canes.push_back(StraightCane(1, std::nullopt, CaneKind::kTrunk, {0, 0, 0}, {0, 0, 1}, 1.0));
+  v.canes.back().polyline.radii = {0.025, 0.025};
   v.canes.push_back(StraightCane(2, 1, CaneKind::kCane, {0.05, 0, 1}, {1, 0, 0}, 0.8));
   v.canes.push_back(StraightCane(3, 1, CaneKind::kCane, {-0.05, 0, 1}, {-1, 0, 0}, 0.6));
   v.canes.push_back(StraightCane(4, 1, CaneKind::kCane, {-0.05, 0, 1.03}, {-1, 0, 0}, 0.6));
@@ -129,11 +130,13 @@ TEST(EvaluateCuts, CountsCutsOnWoodTheTruthKeeps) {
   add(2, {0.75, 0.0, 1.0});    // beyond the truth's shortening cut: removed wood anyway
   add(5, {0.0, 0.09, 1.0});    // on the spur, 60 mm short of its cut: counted
   add(1, {0.0, 0.0, 0.5});     // on the trunk (every kept cane falls): counted
+  add(1, {0.02, 0.0, 0.4});    // 20 mm off the trunk's axis but inside its wood: counted
+  add(1, {0.03, 0.0, 0.3});    // 30 mm off: outside the trunk, not counted
   auto m = EvaluateCuts(truth, truth_plan, truth, &model_plan);
   ASSERT_TRUE(m.ok()) << m.status();
   EXPECT_EQ(m->matched_cuts, 4);
-  EXPECT_EQ(m->cuts_on_kept_canes, 4);
-  EXPECT_DOUBLE_EQ(m->cuts_spurious_fraction, 6.0 / 10.0);
+  EXPECT_EQ(m->cuts_on_kept_canes, 5);
+  EXPECT_DOUBLE_EQ(m->cuts_spurious_fraction, 8.0 / 12.0);
 }
 
 TEST(EvaluateCuts, NoReconstructedPlanMissesEveryTruthCut) {

@@ -15,7 +15,8 @@ Cane Straight(int64_t id, std::optional<int64_t> parent, CaneKind kind, Eigen::V
   c.id = CaneId(id);
   if (parent) c.parent_id = CaneId(*parent);
   c.kind = kind;
-  c.polyline.points = {base, base + 0.5 * length * dir.normalized(), base + length * dir.normalized()};
+  const Eigen::Vector3d d = dir.normalized();
+  c.polyline.points = {base, base + 0.5 * length * d, base + length * d};
   c.polyline.radii = {r0, 0.5 * (r0 + r1), r1};
   return c;
 }
@@ -27,12 +28,15 @@ Cane Straight(int64_t id, std::optional<int64_t> parent, CaneKind kind, Eigen::V
 VineModel Vine() {
   VineModel v;
   v.head.spheres.push_back({Eigen::Vector3d(0, 0, 1.05), 0.05});
-  v.canes.push_back(Straight(1, std::nullopt, CaneKind::kTrunk, {0, 0, 0}, {0, 0, 1}, 1.0, 0.02, 0.01));
-  v.canes.push_back(Straight(2, 1, CaneKind::kCane, {0.05, 0, 1.05}, {1, 0, 0}, 0.8, 0.003, 0.003));
-  v.canes.push_back(Straight(3, 1, CaneKind::kCane, {-0.05, 0, 1.05}, {-1, 0, 0}, 0.5, 0.005, 0.005));
-  v.canes.push_back(Straight(4, 1, CaneKind::kCane, {0, 0, 0.5}, {1, 0, 0.2}, 0.4, 0.004, 0.004));
-  v.canes.push_back(Straight(5, 3, CaneKind::kCane, {-0.35, 0, 1.05}, {0, 0, 1}, 0.3, 0.003, 0.003));
-  v.canes.push_back(Straight(6, 1, CaneKind::kSpur, {0, 0.05, 1.05}, {0, 1, 0.5}, 0.05, 0.004, 0.004));
+  const CaneKind kCane = CaneKind::kCane;
+  v.canes.push_back(
+      Straight(1, std::nullopt, CaneKind::kTrunk, {0, 0, 0}, {0, 0, 1}, 1.0, 0.02, 0.01));
+  v.canes.push_back(Straight(2, 1, kCane, {0.05, 0, 1.05}, {1, 0, 0}, 0.8, 0.003, 0.003));
+  v.canes.push_back(Straight(3, 1, kCane, {-0.05, 0, 1.05}, {-1, 0, 0}, 0.5, 0.005, 0.005));
+  v.canes.push_back(Straight(4, 1, kCane, {0, 0, 0.5}, {1, 0, 0.2}, 0.4, 0.004, 0.004));
+  v.canes.push_back(Straight(5, 3, kCane, {-0.35, 0, 1.05}, {0, 0, 1}, 0.3, 0.003, 0.003));
+  v.canes.push_back(
+      Straight(6, 1, CaneKind::kSpur, {0, 0.05, 1.05}, {0, 1, 0.5}, 0.05, 0.004, 0.004));
   return v;
 }
 
