@@ -40,7 +40,7 @@ const std::vector<Command>& Commands() {
        vb::app::RunSimDecideLabels},
       {"train decide",
        "--labels DIR [--holdout DIR | --holdout-fraction F] [--epochs N] [--regularization L] "
-       "[--out weights.json]",
+       "[--keep-loss K] [--out weights.json]",
        vb::app::RunTrainDecide},
   };
   return commands;
