@@ -3,12 +3,14 @@
 // (seeds seed_base .. seed_base + N - 1, vine 1 of each vineyard, sensor noise, the reported
 // calibration perturbed by --calibration-error-px RMS), reconstructs each from the bundle's
 // images exactly as `vinebot reconstruct` does (Bayer demosaicing included), evaluates it
-// against the ground truth and prints per-stage timings and mean metrics as one JSON object.
+// against the ground truth (the cut-point metrics by deciding on both, --policy or the default)
+// and prints per-stage timings and mean metrics as one JSON object.
 #include <algorithm>
 #include <chrono>
 #include <iostream>
 
 #include "app/commands.h"
+#include "app/decide_evaluation.h"
 #include "app/reconstruct_report.h"
 #include "core/model_metrics.h"
 #include "core/status_macros.h"
@@ -32,6 +34,43 @@ double Quantile(std::vector<double> v, double q) {
   return v[std::min(v.size() - 1, static_cast<size_t>(q * (v.size() - 1) + 0.5))];
 }
 
+// Mean and median over vines of each cut-point metric. The cut errors are over the vines with at
+// least one matched cut (a vine without one has no error to average); the fractions and counts
+// are over every vine evaluated, those decide could not plan for included (all truth cuts
+// missed).
+nlohmann::json CutMetricsSummary(const std::vector<DecidedCutMetrics>& vines) {
+  nlohmann::json mean = nlohmann::json::object();
+  nlohmann::json median = nlohmann::json::object();
+  auto summarise = [&](const char* key, auto value, bool matched_only) {
+    std::vector<double> v;
+    for (const DecidedCutMetrics& d : vines)
+      if (!matched_only || d.metrics.matched_cuts > 0) v.push_back(value(d.metrics));
+    double sum = 0.0;
+    for (double x : v) sum += x;
+    mean[key] = v.empty() ? 0.0 : sum / v.size();
+    median[key] = Median(v);
+  };
+  summarise("cut_error_median_m", [](const CutMetrics& m) { return m.cut_error_median_m; }, true);
+  summarise("cut_error_p95_m", [](const CutMetrics& m) { return m.cut_error_p95_m; }, true);
+  summarise("cuts_missed_fraction", [](const CutMetrics& m) { return m.cuts_missed_fraction; },
+            false);
+  summarise("cuts_spurious_fraction",
+            [](const CutMetrics& m) { return m.cuts_spurious_fraction; }, false);
+  summarise("cuts_on_kept_canes",
+            [](const CutMetrics& m) { return double(m.cuts_on_kept_canes); }, false);
+  int truth_cuts = 0, model_cuts = 0, matched = 0, on_kept = 0, without_plan = 0;
+  for (const DecidedCutMetrics& d : vines) {
+    truth_cuts += d.metrics.truth_cuts;
+    model_cuts += d.metrics.model_cuts;
+    matched += d.metrics.matched_cuts;
+    on_kept += d.metrics.cuts_on_kept_canes;
+    without_plan += !d.model_decide_error.empty();
+  }
+  return {{"mean", mean},         {"median", median},       {"truth_cuts", truth_cuts},
+          {"model_cuts", model_cuts}, {"matched_cuts", matched}, {"cuts_on_kept_canes", on_kept},
+          {"vines_without_plan", without_plan}};
+}
+
 }  // namespace
 
 absl::Status RunBenchReconstruct(Flags& flags) {
@@ -45,12 +84,15 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   // images replace step 1) or truth (perfect 2D: views drawn from the true model replace steps
   // 1-2). The last two locate where accuracy is lost.
   VB_ASSIGN_OR_RETURN(const std::string input, flags.String("input", "images"));
+  // Cut-point metrics decide under this policy (default: PruningPolicy's defaults).
+  VB_ASSIGN_OR_RETURN(const std::string policy_path, flags.String("policy", ""));
   if (input != "images" && input != "labels" && input != "truth")
     return absl::InvalidArgumentError("--input must be images, labels or truth");
   VB_RETURN_IF_ERROR(flags.Finish());
   if (vines < 1 || vines > 10000) return absl::InvalidArgumentError("--vines must be in [1, 10000]");
   if (seed_base < 0) return absl::InvalidArgumentError("--seed-base must be >= 0");
   if (threads < 1 || threads > 64) return absl::InvalidArgumentError("--threads must be in [1, 64]");
+  VB_ASSIGN_OR_RETURN(const PruningPolicy policy, PolicyOrDefault(policy_path));
 
   capture::SimCaptureOptions sim_options;
   sim_options.calibration_error_px = calibration_error_px;
@@ -61,6 +103,7 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   const reconstruct::SegmenterModel& segmenter = reconstruct::BuiltinSegmenterModel();
 
   std::vector<ReconstructionMetrics> metrics;
+  std::vector<DecidedCutMetrics> cut_metrics;
   std::vector<reconstruct::StageTimings> timings;
   std::vector<double> render_s;
   nlohmann::json per_vine_json = nlohmann::json::array();
@@ -112,6 +155,10 @@ absl::Status RunBenchReconstruct(Flags& flags) {
     VB_ASSIGN_OR_RETURN(const ReconstructionMetrics m,
                         EvaluateReconstruction(result->model, capture.ground_truth));
     metrics.push_back(m);
+    VB_ASSIGN_OR_RETURN(DecidedCutMetrics cuts,
+                        EvaluateDecidedCuts(result->model, capture.ground_truth, policy));
+    entry["cut_metrics"] = DecidedCutMetricsToJson(cuts);
+    cut_metrics.push_back(std::move(cuts));
     timings.push_back(result->timings);
     entry["metrics"] = MetricsToJson(m);
     entry["reconstruction"] = ReconstructReport(*result);
@@ -131,6 +178,7 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   average("wire_precision", &ReconstructionMetrics::wire_precision);
   average("head_enclosed_fraction", &ReconstructionMetrics::head_enclosed_fraction);
   average("head_volume_ratio", &ReconstructionMetrics::head_volume_ratio);
+  const nlohmann::json cuts = CutMetricsSummary(cut_metrics);
   double min_head = 1.0;
   for (const ReconstructionMetrics& m : metrics) min_head = std::min(min_head, m.head_enclosed_fraction);
 
@@ -163,6 +211,7 @@ absl::Status RunBenchReconstruct(Flags& flags) {
                         {"failures", failures},
                         {"empty_models", empty},
                         {"mean", mean},
+                        {"cut_metrics", cuts},
                         {"min_head_enclosed_fraction", min_head},
                         {"stage_median_s", stage_median},
                         {"stage_p90_s", stage_p90},

@@ -22,9 +22,20 @@ absl::Status RunBundleInfo(Flags& flags);
 // vine model (workers/reconstruct).
 absl::Status RunReconstruct(Flags& flags);
 
-// vinebot evaluate --model model.json --truth ground_truth.json: prints the accuracy metrics of
-// ARCHITECTURE.md as one JSON object.
+// vinebot evaluate --model model.json --truth ground_truth.json [--policy policy.json]: prints
+// the accuracy metrics of ARCHITECTURE.md as one JSON object, the cut-point metrics included
+// (decide run on both models under the default or given policy).
 absl::Status RunEvaluate(Flags& flags);
+
+// vinebot decide --model model.json [--policy policy.json] [--weights weights.json]
+// [--deadline-s T] --out cut_plan.json: decides the cut plan of a vine model (workers/decide);
+// notes go to stderr, a one-line JSON summary to stdout.
+absl::Status RunDecide(Flags& flags);
+
+// vinebot phenomics --model model.json [--plan cut_plan.json | --policy policy.json]
+// [--weights weights.json]: prints the vine's phenomics as JSON; without --plan the plan is
+// decided here (default or given policy) so the pruning weight and kept length are filled in.
+absl::Status RunPhenomics(Flags& flags);
 
 // vinebot bench reconstruct --vines N --seed-base S: renders, reconstructs and evaluates N
 // simulated vines; prints per-stage timings and mean metrics as JSON.

@@ -32,8 +32,19 @@ const std::vector<Command>& Commands() {
        vb::app::RunCapture},
       {"bundle info", "--bundle DIR", vb::app::RunBundleInfo},
       {"reconstruct", "--bundle DIR --out model.json [--deadline-s T]", vb::app::RunReconstruct},
-      {"evaluate", "--model model.json --truth ground_truth.json", vb::app::RunEvaluate},
-      {"bench reconstruct", "--vines N --seed-base S [--calibration-error-px X]",
+      {"evaluate", "--model model.json --truth ground_truth.json [--policy policy.json]",
+       vb::app::RunEvaluate},
+      {"decide",
+       "--model model.json [--policy policy.json] [--weights weights.json] [--deadline-s T] "
+       "--out cut_plan.json",
+       vb::app::RunDecide},
+      {"phenomics",
+       "--model model.json [--plan cut_plan.json | --policy policy.json [--weights weights.json]]"
+       "\n      without --plan, the plan is decided here so pruning weight and kept length are "
+       "filled in",
+       vb::app::RunPhenomics},
+      {"bench reconstruct",
+       "--vines N --seed-base S [--calibration-error-px X] [--policy policy.json]",
        vb::app::RunBenchReconstruct},
       {"train segmenter", "--out FILE [--vines N --seed-base S]", vb::app::RunTrainSegmenter},
       {"sim decide-labels", "--vines N --out DIR [--seed-base S] [--policy policy.json]",

@@ -2,14 +2,21 @@
 // End-to-end tests of the vinebot binary: its files, its exit codes and its error messages.
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <functional>
+#include <sstream>
 #include <string>
 
+#include "core/cut_plan.h"
+#include "core/json_io.h"
 #include "core/vine_model_json.h"
 #include "gtest/gtest.h"
 #include "sim/rig.h"
+#include "sim/vine_generator.h"
 #include "workers/capture/bundle.h"
 #include "workers/capture/fake_camera_process.h"
 
@@ -171,12 +178,15 @@ TEST(VinebotCli, ReconstructAndEvaluateASimulatedStop) {
       Vinebot("evaluate --model " + dir + "/model.json --truth " + dir + "/ground_truth.json");
   ASSERT_EQ(eval.exit_code, 0) << eval.output;
   for (const char* key : {"\"cane_recall\"", "\"cane_precision\"", "\"connectivity\"",
-                          "\"wire_recall\"", "\"head_enclosed_fraction\""}) {
+                          "\"wire_recall\"", "\"head_enclosed_fraction\"",
+                          "\"cut_error_median_m\"", "\"cuts_missed_fraction\"",
+                          "\"cuts_on_kept_canes\""}) {
     EXPECT_NE(eval.output.find(key), std::string::npos) << key << " in " << eval.output;
   }
   const RunResult bench = Vinebot("bench reconstruct --vines 1 --seed-base 1014");
   ASSERT_EQ(bench.exit_code, 0) << bench.output;
   EXPECT_NE(bench.output.find("\"stage_median_s\""), std::string::npos) << bench.output;
+  EXPECT_NE(bench.output.find("\"cut_metrics\""), std::string::npos) << bench.output;
   std::filesystem::remove_all(dir);
 }
 
@@ -195,6 +205,162 @@ TEST(VinebotCli, ReconstructRejectsBadInputNamingIt) {
   run = Vinebot("reconstruct --bundle " + dir + " --out x.json --deadline-s -1");
   EXPECT_EQ(run.exit_code, 2) << run.output;
   EXPECT_NE(run.output.find("--deadline-s"), std::string::npos) << run.output;
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace vb
+
+namespace vb {
+namespace {
+
+std::string ReadText(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// A simulated vine's ground truth, written as a model file (no rendering needed).
+std::string WriteSimTruth(const std::string& dir, uint64_t seed) {
+  std::filesystem::create_directories(dir);
+  auto scene = sim::GenerateScene(seed, 1);
+  EXPECT_TRUE(scene.ok()) << scene.status();
+  const std::string path = dir + "/truth.json";
+  EXPECT_TRUE(WriteVineModel(path, scene->vine).ok());
+  return path;
+}
+
+// The decide and phenomics commands end to end on a simulated ground truth: a valid cut plan
+// (every cut on its cane, none on a kept cane), the same plan twice, the phenomics keys.
+TEST(VinebotCli, DecideWritesAValidCutPlanForASimulatedVine) {
+  const std::string dir = FreshDir("decide");
+  const std::string truth_path = WriteSimTruth(dir, 4242);
+  const RunResult run =
+      Vinebot("decide --model " + truth_path + " --out " + dir + "/plan.json");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_NE(run.output.find("\"cuts\""), std::string::npos) << run.output;
+  const auto truth = ReadVineModel(truth_path);
+  ASSERT_TRUE(truth.ok()) << truth.status();
+  const auto plan = ReadCutPlan(dir + "/plan.json");
+  ASSERT_TRUE(plan.ok()) << plan.status();
+  EXPECT_TRUE(plan->ValidateAgainst(*truth).ok());
+  EXPECT_FALSE(plan->keep.empty());
+  EXPECT_FALSE(plan->cuts.empty());
+  for (const Cut& cut : plan->cuts) {
+    EXPECT_EQ(std::count(plan->keep.begin(), plan->keep.end(), cut.cane_id) > 0,
+              cut.reason == CutReason::kShorten)
+        << "cut " << cut.id.value;
+    double distance = 1.0;
+    truth->canes[*truth->IndexOf(cut.cane_id)].polyline.Project(cut.point, &distance);
+    EXPECT_LE(distance, 0.001) << "cut " << cut.id.value;
+  }
+  ASSERT_EQ(Vinebot("decide --model " + truth_path + " --out " + dir + "/again.json").exit_code, 0);
+  EXPECT_EQ(ReadText(dir + "/plan.json"), ReadText(dir + "/again.json"));
+
+  for (const std::string& args : {std::string("--plan ") + dir + "/plan.json", std::string()}) {
+    const RunResult pheno = Vinebot("phenomics --model " + truth_path + " " + args);
+    ASSERT_EQ(pheno.exit_code, 0) << pheno.output;
+    for (const char* key : {"\"canes_from_head\"", "\"canes_from_trunk\"", "\"canes_from_cane\"",
+                            "\"cane_length_total_m\"", "\"cane_diameter_median_mm\"",
+                            "\"cane_diameter_histogram\"", "\"trunk_diameter_mm\"",
+                            "\"head_volume_m3\"", "\"pruning_weight_kg\"", "\"kept_length_m\"",
+                            "\"cuts_by_reason\""}) {
+      EXPECT_NE(pheno.output.find(key), std::string::npos) << key << " in " << pheno.output;
+    }
+    EXPECT_EQ(pheno.output.find("\"pruning_weight_kg\": null"), std::string::npos) << pheno.output;
+  }
+  const RunResult both = Vinebot("phenomics --model " + truth_path + " --plan " + dir +
+                                 "/plan.json --policy " + dir + "/policy.json");
+  EXPECT_EQ(both.exit_code, 2) << both.output;
+  EXPECT_NE(both.output.find("--plan"), std::string::npos) << both.output;
+  std::filesystem::remove_all(dir);
+}
+
+TEST(VinebotCli, DecideRejectsMalformedModelsNamingTheField) {
+  const std::string dir = FreshDir("decide_bad");
+  const std::string truth_path = WriteSimTruth(dir, 4243);
+  const auto good = ReadJsonFile(truth_path);
+  ASSERT_TRUE(good.ok()) << good.status();
+  struct Case {
+    const char* name;
+    std::function<void(nlohmann::json&)> spoil;
+    const char* expected;  // in the message
+  };
+  const std::vector<Case> cases = {
+      {"cycle",
+       [](nlohmann::json& j) {
+         j["canes"][1]["parent_id"] = j["canes"][2]["id"];
+         j["canes"][2]["parent_id"] = j["canes"][1]["id"];
+       },
+       "cycle"},
+      {"unknown_parent", [](nlohmann::json& j) { j["canes"][2]["parent_id"] = 999999; },
+       "parent_id 999999"},
+      {"nan_point", [](nlohmann::json& j) { j["canes"][1]["points"][1][2] = "NaN"; },
+       "canes[1].points[1]"},
+      {"empty", [](nlohmann::json& j) { j["canes"] = nlohmann::json::array(); }, "empty"},
+      {"radii", [](nlohmann::json& j) { j["canes"][3]["radii"].erase(0); }, "radii"},
+  };
+  for (const Case& c : cases) {
+    nlohmann::json spoilt = *good;
+    c.spoil(spoilt);
+    const std::string path = dir + "/" + c.name + ".json";
+    std::ofstream(path) << spoilt.dump();
+    for (const std::string command : {"decide --out " + dir + "/p.json", std::string("phenomics")}) {
+      const RunResult run = Vinebot(command + " --model " + path);
+      EXPECT_EQ(run.exit_code, 2) << command << " " << c.name << ": " << run.output;
+      EXPECT_NE(run.output.find(c.expected), std::string::npos)
+          << command << " " << c.name << ": " << run.output;
+      EXPECT_NE(run.output.find(path), std::string::npos) << run.output;
+    }
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir + "/p.json"));
+
+  std::ofstream(dir + "/policy.json") << R"({"canes_to_keep": 9})";
+  RunResult run = Vinebot("decide --model " + truth_path + " --policy " + dir +
+                          "/policy.json --out " + dir + "/p.json");
+  EXPECT_EQ(run.exit_code, 2) << run.output;
+  EXPECT_NE(run.output.find("canes_to_keep"), std::string::npos) << run.output;
+  std::ofstream(dir + "/policy.json") << R"({"cane_to_keep": 2})";
+  run = Vinebot("decide --model " + truth_path + " --policy " + dir + "/policy.json --out " + dir +
+                "/p.json");
+  EXPECT_EQ(run.exit_code, 2) << run.output;
+  EXPECT_NE(run.output.find("cane_to_keep"), std::string::npos) << run.output;
+  run = Vinebot("decide --model " + truth_path + " --out " + dir + "/p.json --deadline-s 0");
+  EXPECT_EQ(run.exit_code, 2) << run.output;
+  EXPECT_NE(run.output.find("--deadline-s"), std::string::npos) << run.output;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/p.json"));
+  std::filesystem::remove_all(dir);
+}
+
+// evaluate reports the cut-point metrics: exact on the truth itself, every cut missed (not an
+// error) for an empty reconstruction.
+TEST(VinebotCli, EvaluatePrintsTheCutPointMetrics) {
+  const std::string dir = FreshDir("evaluate_cuts");
+  const std::string truth_path = WriteSimTruth(dir, 4244);
+  RunResult run = Vinebot("evaluate --model " + truth_path + " --truth " + truth_path);
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  auto json = nlohmann::json::parse(run.output, nullptr, false);
+  ASSERT_FALSE(json.is_discarded()) << run.output;
+  for (const char* key : {"cut_error_median_m", "cut_error_p95_m", "cuts_missed_fraction",
+                          "cuts_spurious_fraction", "cuts_on_kept_canes", "cane_recall"}) {
+    EXPECT_TRUE(json.contains(key)) << key << " in " << run.output;
+  }
+  EXPECT_EQ(json["cuts_missed_fraction"], 0.0);
+  EXPECT_EQ(json["cuts_spurious_fraction"], 0.0);
+  EXPECT_EQ(json["cut_error_p95_m"], 0.0);
+  EXPECT_EQ(json["cuts_on_kept_canes"], 0);
+
+  auto empty = ReadJsonFile(truth_path);
+  ASSERT_TRUE(empty.ok());
+  (*empty)["canes"] = nlohmann::json::array();
+  std::ofstream(dir + "/empty.json") << empty->dump();
+  run = Vinebot("evaluate --model " + dir + "/empty.json --truth " + truth_path);
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  json = nlohmann::json::parse(run.output, nullptr, false);
+  ASSERT_FALSE(json.is_discarded()) << run.output;
+  EXPECT_EQ(json["cuts_missed_fraction"], 1.0);
+  EXPECT_TRUE(json.contains("model_decide_error")) << run.output;
   std::filesystem::remove_all(dir);
 }
 
