@@ -34,7 +34,8 @@ struct PruningPolicy {
   double cane_diameter_max_m = 0.012;
   double min_kept_length_m = 0.30;       // shorter canes are never kept
   double max_kept_length_m = 0.90;       // kept canes longer than this are shortened to it
-  double cut_offset_m = 0.01;            // removal cuts lie this far along the cane from its base
+  double cut_offset_m = 0.01;            // removal cuts lie this far along the cane beyond its
+                                         // parent's surface
   // Height of the fruiting wire (kept canes are tied down along it); nullopt: the lowest wire of
   // the vine model near the head, or 0.95 m if the model has no wires.
   std::optional<double> fruiting_wire_z_m;

@@ -34,6 +34,21 @@ bool InsideHead(const HeadModel& head, const Eigen::Vector3d& p) {
   return false;
 }
 
+// Arc length along `cane` where it leaves its parent's wood: the first point (2 mm steps) farther
+// from the parent's axis than the parent's radius there; 0 if the base is already outside. The
+// simulator and reconstruction both start a cane on its parent's axis, so a cut measured from the
+// base alone would land inside a thick trunk.
+double ExitFromParent(const Polyline3& cane, const Polyline3& parent) {
+  constexpr double kStepM = 0.002;
+  const double length = cane.Length();
+  for (double s = 0.0; s < length; s += kStepM) {
+    const Eigen::Vector3d p = cane.PointAt(s);
+    const double on_parent = parent.Project(p);
+    if ((p - parent.PointAt(on_parent)).norm() > parent.RadiusAt(on_parent)) return s;
+  }
+  return length;
+}
+
 // The planned cut on one cane, before the head slide and the falling rule.
 struct PlannedCut {
   double s = 0.0;
@@ -102,6 +117,7 @@ absl::StatusOr<CutPlacement> PlaceCuts(const VineModel& model,
   for (size_t i = 0; i < n; ++i) index.emplace(model.canes[i].id.value, i);
   std::vector<int> parent(n, -1);
   std::vector<double> attach(n, 0.0);  // arc length on the parent where the cane grows from it
+  std::vector<double> exit(n, 0.0);    // arc length on the cane where it leaves the parent's wood
   std::vector<int> depth(n, 0);
   for (size_t i = 0; i < n; ++i) {
     const Cane& cane = model.canes[i];
@@ -114,6 +130,7 @@ absl::StatusOr<CutPlacement> PlaceCuts(const VineModel& model,
     }
     parent[i] = static_cast<int>(it->second);
     attach[i] = model.canes[it->second].polyline.Project(cane.polyline.points.front());
+    exit[i] = ExitFromParent(cane.polyline, model.canes[it->second].polyline);
   }
   // Parents before children (depth order); the model is validated, so chains end.
   for (size_t i = 0; i < n; ++i) {
@@ -157,8 +174,8 @@ absl::StatusOr<CutPlacement> PlaceCuts(const VineModel& model,
         }
         break;
       case Role::kSpur:
-        if (length > policy.spur_length_m + kMinTrimM) {
-          planned[i] = PlannedCut{policy.spur_length_m, CutReason::kSpur};
+        if (length > exit[i] + policy.spur_length_m + kMinTrimM) {
+          planned[i] = PlannedCut{exit[i] + policy.spur_length_m, CutReason::kSpur};
         } else {
           out.notes.push_back(absl::StrCat(name, ": spur left uncut (", Metres(length),
                                            " long, spurs are ", Metres(policy.spur_length_m),
@@ -178,7 +195,8 @@ absl::StatusOr<CutPlacement> PlaceCuts(const VineModel& model,
                                              child, " growing from it stays"));
           }
         } else {
-          planned[i] = PlannedCut{std::min(policy.cut_offset_m, 0.5 * length), CutReason::kRemove};
+          planned[i] = PlannedCut{std::min(exit[i] + policy.cut_offset_m, 0.5 * length),
+                                  CutReason::kRemove};
         }
         break;
     }

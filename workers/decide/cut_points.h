@@ -3,10 +3,12 @@
 // kept are cut about 1 cm from their base, spurs are left about 10 cm long). Pure function;
 // thread-safe.
 //
-// Rules, for every cane of kind `cane` (arc lengths s measured from the cane's base):
+// Rules, for every cane of kind `cane` (arc lengths s measured from the cane's base; `exit` is
+// where the cane leaves its parent's wood, the first point farther from the parent's axis than
+// the parent's radius, since a cane's base lies on its parent's axis):
 //  - kept: no cut, unless it is longer than policy.max_kept_length_m + kMinTrimM; then a
 //    `shorten` cut at s = max_kept_length_m.
-//  - spur: a `spur` cut at s = policy.spur_length_m, unless the cane is not longer than that
+//  - spur: a `spur` cut at s = exit + policy.spur_length_m, unless the cane is not longer than that
 //    + kMinTrimM (then it is left as it is, with a note).
 //  - neither, with a kept cane or spur growing from it (directly or through other canes): cutting
 //    it at its base would drop that cane too, so instead it is shortened just beyond the base of
@@ -14,8 +16,8 @@
 //    policy.cut_offset_m (attach: where the child's base projects onto this cane), with a note;
 //    no cut if that is within kMinTrimM of its tip. (IsFeasible already forbids a kept cane or
 //    spur growing from another kept cane or spur.)
-//  - neither, otherwise: a `remove` cut at s = policy.cut_offset_m (half the length for canes
-//    shorter than twice that).
+//  - neither, otherwise: a `remove` cut at s = exit + policy.cut_offset_m (at most half the
+//    cane's length).
 //  - a cut point inside a head sphere slides outward (toward the tip) until it is outside, at
 //    most max_head_slide_m and never past the tip; a slide, and a cut still inside the head
 //    after the full slide, are noted.

@@ -237,3 +237,29 @@ TEST(PlaceCuts, RejectsSchemesThatDoNotFitTheCandidates) {
 
 }  // namespace
 }  // namespace vb::decide
+
+namespace vb::decide {
+namespace {
+
+// A water shoot grows from the trunk's axis (as the simulator and reconstruction start canes);
+// its removal cut lies cut_offset_m beyond the trunk's surface, not inside the trunk.
+TEST(PlaceCuts, RemovalCutIsMeasuredFromTheParentsSurface) {
+  VineModel m = TestVine();
+  m.canes.push_back(Straight(10, 1, CaneKind::kCane, {0, 0.8, 0.5}, {0.5, 0.8, 0.5}, 0.004,
+                             0.002));
+  const auto cands = Candidates(m);
+  Scheme scheme;
+  scheme.keep = Ids({2, 3});
+  scheme.spurs = Ids({4, 7});
+  const auto placed = PlaceCuts(m, cands, PruningPolicy{}, scheme, 0.05);
+  ASSERT_TRUE(placed.ok()) << placed.status();
+  const Cut* cut = CutOn(*placed, 10);
+  ASSERT_NE(cut, nullptr);
+  EXPECT_EQ(cut->reason, CutReason::kRemove);
+  // Trunk radius 0.02 m, offset 0.01 m: x = 0.03 m, within the 2 mm search step.
+  EXPECT_NEAR(cut->point.x(), 0.03, 0.0025);
+  EXPECT_GT(cut->point.x(), 0.02);
+}
+
+}  // namespace
+}  // namespace vb::decide
