@@ -29,7 +29,7 @@ struct PruningPolicy {
   PruningStyle style = PruningStyle::kCane;
   int canes_to_keep = 2;                 // kept canes, 1-6 (cane style; must be 0 in spur style)
   int spurs = 2;                         // spurs left, 0-6 in cane style, 1-12 in spur style
-  double spur_length_m = 0.10;           // a spur is its cane cut this far from its base
+  double spur_length_m = 0.10;           // a spur is its cane cut this far beyond its parent
   double cane_diameter_min_m = 0.007;    // preferred diameter of a kept cane (at its base)
   double cane_diameter_max_m = 0.012;
   double min_kept_length_m = 0.30;       // shorter canes are never kept
