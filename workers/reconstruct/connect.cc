@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <utility>
 
 #include "absl/strings/str_cat.h"
 
@@ -43,18 +44,93 @@ double DistanceToHead(const Eigen::Vector3d& p, const HeadModel& head, Eigen::Ve
   return best;
 }
 
-struct Attachment {
-  double distance = kInf;
-  bool at_end = false;           // the cane's last point is its base (reverse it)
-  int parent = -1;               // index into the output canes (0 = trunk); -1 none
-  Eigen::Vector3d point = Eigen::Vector3d::Zero();
+void Reverse(Polyline3* line) {
+  std::reverse(line->points.begin(), line->points.end());
+  std::reverse(line->radii.begin(), line->radii.end());
+}
+
+// An arc of the join graph: node 0 is the trunk and head, node i + 1 the prepared cane i.
+struct Arc {
+  int from = 0;
+  int to = 0;
+  double weight = 0.0;
 };
+
+// Maximum-weight spanning arborescence rooted at `root` over nodes [0, n) (Chu and Liu 1965;
+// Edmonds 1967), contracting one cycle per level. Every node but the root must have an incoming
+// arc. Returns per node the index of its chosen incoming arc (-1 for the root).
+std::vector<int> MaxArborescence(int n, int root, const std::vector<Arc>& arcs) {
+  std::vector<int> in(n, -1);
+  for (size_t k = 0; k < arcs.size(); ++k) {
+    const Arc& a = arcs[k];
+    if (a.to == root || a.from == a.to) continue;
+    if (in[a.to] < 0 || a.weight > arcs[in[a.to]].weight) in[a.to] = static_cast<int>(k);
+  }
+  std::vector<int> seen(n, -1), cycle;
+  for (int v = 0; v < n && cycle.empty(); ++v) {
+    int u = v;
+    while (u != root && seen[u] < 0 && in[u] >= 0) {
+      seen[u] = v;
+      u = arcs[in[u]].from;
+    }
+    if (u != root && seen[u] == v && in[u] >= 0) {
+      int x = u;
+      do {
+        cycle.push_back(x);
+        x = arcs[in[x]].from;
+      } while (x != u);
+    }
+  }
+  if (cycle.empty()) return in;
+  // Contract the cycle into one node; arcs entering it are charged the cycle arc they replace.
+  std::vector<char> on_cycle(n, 0);
+  for (int x : cycle) on_cycle[x] = 1;
+  std::vector<int> label(n, -1);
+  int m = 0;
+  for (int v = 0; v < n; ++v)
+    if (!on_cycle[v]) label[v] = m++;
+  const int contracted = m++;
+  for (int x : cycle) label[x] = contracted;
+  std::vector<Arc> sub;
+  std::vector<int> origin;
+  for (size_t k = 0; k < arcs.size(); ++k) {
+    const Arc& a = arcs[k];
+    const int u = label[a.from], v = label[a.to];
+    if (u == v) continue;
+    const double w = on_cycle[a.to] ? a.weight - arcs[in[a.to]].weight : a.weight;
+    sub.push_back({u, v, w});
+    origin.push_back(static_cast<int>(k));
+  }
+  const std::vector<int> sub_in = MaxArborescence(m, label[root], sub);
+  std::vector<int> chosen(n, -1);
+  for (int v = 0; v < m; ++v) {
+    if (sub_in[v] < 0) continue;
+    const int k = origin[sub_in[v]];
+    chosen[arcs[k].to] = k;
+  }
+  for (int x : cycle)
+    if (chosen[x] < 0) chosen[x] = in[x];
+  return chosen;
+}
+
+// Unit tangent pointing out of the polyline at its first or last point, over ~3 cm.
+Eigen::Vector3d EndOutward(const Polyline3& line, bool last) {
+  const double length = line.Length();
+  const double s = std::min(0.03, length);
+  const Eigen::Vector3d end = last ? line.points.back() : line.points.front();
+  const Eigen::Vector3d d = end - line.PointAt(last ? length - s : s);
+  const double n = d.norm();
+  return n > 1e-12 ? Eigen::Vector3d(d / n) : Eigen::Vector3d::UnitZ();
+}
 
 }  // namespace
 
 absl::Status ConnectOptions::Validate() const {
   for (auto [v, name] : {std::pair{max_attach_m, "max_attach_m"}, {sample_step_m, "sample_step_m"},
-                         {inside_fraction, "inside_fraction"}}) {
+                         {inside_fraction, "inside_fraction"},
+                         {max_bridge_m, "max_bridge_m"},
+                         {continuation_gap_m, "continuation_gap_m"},
+                         {continuation_angle_deg, "continuation_angle_deg"}}) {
     if (!std::isfinite(v) || v <= 0)
       return absl::InvalidArgumentError(absl::StrCat("connect options: ", name, " must be > 0"));
   }
@@ -63,13 +139,23 @@ absl::Status ConnectOptions::Validate() const {
     return absl::InvalidArgumentError(
         "connect options: head_margin_m and spur_length_m must be >= 0");
   }
+  if (!(min_join_probability > 0 && min_join_probability < 1)) {
+    return absl::InvalidArgumentError("connect options: min_join_probability must be in (0, 1)");
+  }
+  for (double w : join_weights.cane) {
+    if (!std::isfinite(w))
+      return absl::InvalidArgumentError("connect options: join_weights must be finite");
+  }
+  for (double w : join_weights.root) {
+    if (!std::isfinite(w))
+      return absl::InvalidArgumentError("connect options: join_weights must be finite");
+  }
   return absl::OkStatus();
 }
 
-absl::StatusOr<VineModel> ConnectCanes(const std::vector<Polyline3>& input,
-                                       const std::optional<Polyline3>& trunk_in,
-                                       const HeadModel& head, const ConnectOptions& options,
-                                       ConnectSummary* summary) {
+absl::StatusOr<PreparedCanes> PrepareCanes(const std::vector<Polyline3>& input,
+                                           const std::optional<Polyline3>& trunk_in,
+                                           const HeadModel& head, const ConnectOptions& options) {
   if (absl::Status s = options.Validate(); !s.ok()) return s;
   for (size_t i = 0; i < input.size(); ++i) {
     if (absl::Status s = input[i].Validate(absl::StrCat("canes[", i, "]")); !s.ok()) return s;
@@ -77,12 +163,7 @@ absl::StatusOr<VineModel> ConnectCanes(const std::vector<Polyline3>& input,
   if (trunk_in) {
     if (absl::Status s = trunk_in->Validate("trunk"); !s.ok()) return s;
   }
-  ConnectSummary local;
-  ConnectSummary& sum = summary ? *summary : local;
-  sum = ConnectSummary();
-  VineModel model;
-  model.head = head;
-
+  PreparedCanes out;
   std::vector<Polyline3> canes = input;
   std::optional<Polyline3> trunk = trunk_in;
   if (!trunk) {
@@ -101,13 +182,10 @@ absl::StatusOr<VineModel> ConnectCanes(const std::vector<Polyline3>& input,
         best = static_cast<int>(i);
       }
     }
-    if (best < 0) return model;
+    if (best < 0) return out;
     trunk = canes[best];
     canes.erase(canes.begin() + best);
-    if (trunk->points.front().z() > trunk->points.back().z()) {
-      std::reverse(trunk->points.begin(), trunk->points.end());
-      std::reverse(trunk->radii.begin(), trunk->radii.end());
-    }
+    if (trunk->points.front().z() > trunk->points.back().z()) Reverse(&*trunk);
   }
   const double trunk_radius = *std::max_element(trunk->radii.begin(), trunk->radii.end());
 
@@ -115,7 +193,6 @@ absl::StatusOr<VineModel> ConnectCanes(const std::vector<Polyline3>& input,
   // The longest of them inside the trunk, triangulated from the trunk's centre lines, is a more
   // accurate axis than the silhouettes' slab centres: it becomes the trunk, reaching the ground
   // along the silhouette trunk's base.
-  std::vector<Polyline3> kept;
   const Polyline3 silhouette_trunk = *trunk;
   double best_trunk_length = options.trunk_axis_min_fraction * silhouette_trunk.Length();
   for (const Polyline3& cane : canes) {
@@ -128,7 +205,7 @@ absl::StatusOr<VineModel> ConnectCanes(const std::vector<Polyline3>& input,
       }
     }
     if (!samples.empty() && inside >= options.inside_fraction * samples.size()) {
-      ++sum.inside_trunk_or_head;
+      ++out.inside_trunk_or_head;
       size_t in_trunk = 0;
       for (const Eigen::Vector3d& p : samples)
         in_trunk += DistanceToPolyline(p, silhouette_trunk, nullptr) <= trunk_radius + 0.01;
@@ -136,10 +213,7 @@ absl::StatusOr<VineModel> ConnectCanes(const std::vector<Polyline3>& input,
           cane.Length() > best_trunk_length) {
         best_trunk_length = cane.Length();
         Polyline3 axis = cane;
-        if (axis.points.front().z() > axis.points.back().z()) {
-          std::reverse(axis.points.begin(), axis.points.end());
-          std::reverse(axis.radii.begin(), axis.radii.end());
-        }
+        if (axis.points.front().z() > axis.points.back().z()) Reverse(&axis);
         if (silhouette_trunk.points.front().z() < axis.points.front().z() - 0.02) {
           axis.points.insert(axis.points.begin(), silhouette_trunk.points.front());
           axis.radii.insert(axis.radii.begin(), axis.radii.front());
@@ -149,55 +223,211 @@ absl::StatusOr<VineModel> ConnectCanes(const std::vector<Polyline3>& input,
       }
       continue;
     }
-    kept.push_back(cane);
+    out.canes.push_back(cane);
   }
+  out.trunk = trunk;
+  return out;
+}
 
-  std::vector<Polyline3> tree = {*trunk};
-  std::vector<int> parent_of = {-1};
-  std::vector<Attachment> best(kept.size());
-  std::vector<bool> done(kept.size(), false);
-
-  auto consider = [&](size_t i, int target) {
-    for (int end = 0; end < 2; ++end) {
-      const Eigen::Vector3d& p = end == 0 ? kept[i].points.front() : kept[i].points.back();
-      Eigen::Vector3d at = p;
-      double d = DistanceToPolyline(p, tree[target], &at);
-      if (target == 0) d -= trunk_radius;
-      if (d < best[i].distance) best[i] = {d, end == 1, target, at};
-    }
+std::vector<JoinCandidate> FindJoins(const PreparedCanes& prepared, const HeadModel& head,
+                                     const ConnectOptions& options) {
+  std::vector<JoinCandidate> joins;
+  if (!prepared.trunk) return joins;
+  const Polyline3& trunk = *prepared.trunk;
+  const std::vector<Polyline3>& canes = prepared.canes;
+  const double trunk_radius = *std::max_element(trunk.radii.begin(), trunk.radii.end());
+  // The head's centre and surface; a trunk without a head ends in its top point.
+  Eigen::Vector3d centre = trunk.points.back();
+  if (!head.spheres.empty()) {
+    centre.setZero();
+    for (const Sphere& s : head.spheres) centre += s.center;
+    centre /= static_cast<double>(head.spheres.size());
+  }
+  auto to_head = [&](const Eigen::Vector3d& p) {
+    if (head.spheres.empty()) return std::max(0.0, (p - centre).norm() - trunk_radius);
+    return std::max(0.0, DistanceToHead(p, head, nullptr));
   };
-  for (size_t i = 0; i < kept.size(); ++i) {
-    consider(i, 0);
+  std::vector<Eigen::AlignedBox3d> boxes;
+  for (const Polyline3& c : canes) {
+    Eigen::AlignedBox3d box;
+    for (const Eigen::Vector3d& p : c.points) box.extend(p);
+    box.min().array() -= options.max_attach_m;
+    box.max().array() += options.max_attach_m;
+    boxes.push_back(box);
+  }
+  for (size_t i = 0; i < canes.size(); ++i) {
     for (int end = 0; end < 2; ++end) {
-      const Eigen::Vector3d& p = end == 0 ? kept[i].points.front() : kept[i].points.back();
+      const Eigen::Vector3d& p = end == 0 ? canes[i].points.front() : canes[i].points.back();
+      JoinGeometry g;
+      g.child = &canes[i];
+      g.base_is_last = end == 1;
+      g.head_centre = centre;
+      g.base_to_head_m = to_head(p);
+      auto add = [&](int parent, JoinTarget target, const Eigen::Vector3d& at, double gap) {
+        if (gap > options.max_attach_m) return;
+        g.target = target;
+        g.parent = parent >= 0 ? &canes[parent] : (target == JoinTarget::kTrunk ? &trunk : nullptr);
+        g.point = at;
+        g.gap_m = std::max(0.0, gap);
+        g.point_to_head_m = to_head(at);
+        JoinCandidate c;
+        c.child = static_cast<int>(i);
+        c.base_is_last = end == 1;
+        c.parent = parent;
+        c.target = target;
+        c.point = at;
+        c.features = ComputeJoinFeatures(g);
+        c.probability = JoinProbability(c.features, options.join_weights);
+        joins.push_back(c);
+      };
       Eigen::Vector3d at = p;
-      const double d = DistanceToHead(p, head, &at) - options.head_margin_m;
-      if (d < best[i].distance) best[i] = {std::max(d, 0.0), end == 1, 0, at};
+      const double d_trunk = DistanceToPolyline(p, trunk, &at) - trunk_radius;
+      add(-1, JoinTarget::kTrunk, at, d_trunk);
+      if (!head.spheres.empty()) {
+        const double d_head = DistanceToHead(p, head, &at) - options.head_margin_m;
+        add(-1, JoinTarget::kHead, at, d_head);
+      }
+      for (size_t j = 0; j < canes.size(); ++j) {
+        if (j == i || !boxes[j].contains(p)) continue;
+        const double d = DistanceToPolyline(p, canes[j], &at);
+        add(static_cast<int>(j), JoinTarget::kCane, at, d);
+      }
     }
   }
-  while (true) {
-    int pick = -1;
-    for (size_t i = 0; i < kept.size(); ++i) {
-      if (done[i] || best[i].distance > options.max_attach_m) continue;
-      if (pick < 0 || best[i].distance < best[pick].distance) pick = static_cast<int>(i);
+  return joins;
+}
+
+absl::StatusOr<VineModel> ConnectCanes(const std::vector<Polyline3>& input,
+                                       const std::optional<Polyline3>& trunk_in,
+                                       const HeadModel& head, const ConnectOptions& options,
+                                       ConnectSummary* summary) {
+  absl::StatusOr<PreparedCanes> prepared = PrepareCanes(input, trunk_in, head, options);
+  if (!prepared.ok()) return prepared.status();
+  return BuildTree(*prepared, FindJoins(*prepared, head, options), head, options, summary);
+}
+
+absl::StatusOr<VineModel> BuildTree(const PreparedCanes& prepared_in,
+                                    const std::vector<JoinCandidate>& joins,
+                                    const HeadModel& head, const ConnectOptions& options,
+                                    ConnectSummary* summary) {
+  if (absl::Status s = options.Validate(); !s.ok()) return s;
+  const PreparedCanes* prepared = &prepared_in;
+  ConnectSummary local;
+  ConnectSummary& sum = summary ? *summary : local;
+  sum = ConnectSummary();
+  VineModel model;
+  model.head = head;
+  if (!prepared->trunk) return model;
+  sum.inside_trunk_or_head = prepared->inside_trunk_or_head;
+  const int count = static_cast<int>(prepared->canes.size());
+  for (size_t k = 0; k < joins.size(); ++k) {
+    const JoinCandidate& c = joins[k];
+    if (c.child < 0 || c.child >= count || c.parent < -1 || c.parent >= count ||
+        c.parent == c.child || !(c.probability >= 0.0 && c.probability <= 1.0)) {
+      return absl::InvalidArgumentError(absl::StrCat("joins[", k, "]: invalid"));
     }
-    if (pick < 0) break;
-    done[pick] = true;
-    Polyline3 cane = kept[pick];
-    if (best[pick].at_end) {
-      std::reverse(cane.points.begin(), cane.points.end());
-      std::reverse(cane.radii.begin(), cane.radii.end());
+  }
+  std::vector<Polyline3> canes = prepared->canes;
+  const int n = static_cast<int>(canes.size());
+
+  // Node 0 is the trunk and head; cane i is node i + 1. Arcs 0 .. n-1 are "no parent" (from the
+  // root, marked as such); then one arc per candidate join.
+  std::vector<Arc> arcs;
+  const double none = std::log(options.min_join_probability);
+  for (int i = 0; i < n; ++i) arcs.push_back({0, i + 1, none});
+  for (const JoinCandidate& c : joins) {
+    arcs.push_back({c.parent + 1, c.child + 1, std::log(std::max(c.probability, 1e-12))});
+  }
+  const std::vector<int> chosen = MaxArborescence(n + 1, 0, arcs);
+  // parent[i]: -1 trunk/head, -2 none, else a cane; join[i]: the chosen candidate.
+  std::vector<int> parent(n, -2), join(n, -1);
+  for (int i = 0; i < n; ++i) {
+    const int k = chosen[i + 1];
+    if (k < n) continue;
+    join[i] = k - n;
+    parent[i] = joins[join[i]].parent;
+  }
+  // Kept: every join up to the root is a real one.
+  std::vector<int> kept(n, -1);  // -1 unknown, 0 no, 1 yes
+  for (int i = 0; i < n; ++i) {
+    std::vector<int> path;
+    int at = i;
+    while (at >= 0 && kept[at] < 0 && parent[at] != -2) {
+      path.push_back(at);
+      at = parent[at];
+      if (path.size() > static_cast<size_t>(n)) break;  // cannot happen in an arborescence
     }
-    // The base point lies on the parent (or the head surface) where the cane meets it.
-    if ((cane.points.front() - best[pick].point).norm() > 1e-4) {
-      cane.points.insert(cane.points.begin(), best[pick].point);
+    const int verdict = at == -1 ? 1 : (at >= 0 && kept[at] >= 0 ? kept[at] : 0);
+    if (at >= 0 && kept[at] < 0) kept[at] = 0;
+    for (int x : path) kept[x] = verdict;
+  }
+  // Orient every kept cane base first, and give it a first point on its parent.
+  for (int i = 0; i < n; ++i) {
+    if (kept[i] != 1) continue;
+    const JoinCandidate& c = joins[join[i]];
+    if (c.base_is_last) Reverse(&canes[i]);
+  }
+  std::vector<std::vector<int>> children(n + 1);
+  for (int i = 0; i < n; ++i)
+    if (kept[i] == 1) children[parent[i] + 1].push_back(i);
+
+  // Continuations: a child that leaves its parent's tip along the parent's direction is the
+  // same cane, broken in the images; append it (best join first), and hand its children over.
+  std::vector<char> merged(n, 0);
+  if (options.merge_continuations) {
+    const double cos_max = std::cos(options.continuation_angle_deg * 3.14159265358979323846 / 180);
+    for (int j = 0; j < n; ++j) {
+      if (kept[j] != 1 || merged[j]) continue;
+      while (true) {
+        const Polyline3& line = canes[j];
+        const double length = line.Length();
+        const Eigen::Vector3d out = EndOutward(line, true);
+        int best = -1;
+        for (int c : children[j + 1]) {
+          const JoinCandidate& jc = joins[join[c]];
+          if (length - line.Project(jc.point) > options.continuation_gap_m) continue;
+          if (-EndOutward(canes[c], false).dot(out) < cos_max) continue;
+          if (best < 0 || jc.probability > joins[join[best]].probability) best = c;
+        }
+        if (best < 0) break;
+        Polyline3& tail = canes[best];
+        size_t first = 0;
+        while (first + 1 < tail.points.size() &&
+               (tail.points[first] - line.points.back()).dot(out) <= 0.0) {
+          ++first;  // points of the tail that fold back over the parent's tip
+        }
+        canes[j].points.insert(canes[j].points.end(), tail.points.begin() + first,
+                               tail.points.end());
+        canes[j].radii.insert(canes[j].radii.end(), tail.radii.begin() + first, tail.radii.end());
+        merged[best] = 1;
+        std::erase(children[j + 1], best);
+        for (int g : children[best + 1]) {
+          parent[g] = j;
+          children[j + 1].push_back(g);
+        }
+        children[best + 1].clear();
+      }
+    }
+  }
+
+  // Emit parents first (breadth first from the root).
+  std::vector<Polyline3> tree = {*prepared->trunk};
+  std::vector<int> parent_of = {-1};
+  std::vector<int> index_of(n, -1);
+  std::vector<int> queue = children[0];
+  for (size_t q = 0; q < queue.size(); ++q) {
+    const int i = queue[q];
+    Polyline3 cane = canes[i];
+    const Eigen::Vector3d at = joins[join[i]].point;
+    const double gap = (cane.points.front() - at).norm();
+    if (gap > 1e-4 && gap <= options.max_bridge_m) {
+      cane.points.insert(cane.points.begin(), at);
       cane.radii.insert(cane.radii.begin(), cane.radii.front());
     }
-    tree.push_back(cane);
-    parent_of.push_back(best[pick].parent);
-    const int index = static_cast<int>(tree.size()) - 1;
-    for (size_t i = 0; i < kept.size(); ++i)
-      if (!done[i]) consider(i, index);
+    index_of[i] = static_cast<int>(tree.size());
+    tree.push_back(std::move(cane));
+    parent_of.push_back(parent[i] < 0 ? 0 : index_of[parent[i]]);
+    for (int c : children[i + 1]) queue.push_back(c);
   }
 
   for (size_t i = 0; i < tree.size(); ++i) {
@@ -214,7 +444,7 @@ absl::StatusOr<VineModel> ConnectCanes(const std::vector<Polyline3>& input,
     model.canes.push_back(std::move(cane));
   }
   sum.attached = static_cast<int>(tree.size()) - 1;
-  sum.unattached = static_cast<int>(std::count(done.begin(), done.end(), false));
+  sum.unattached = static_cast<int>(std::count(kept.begin(), kept.end(), 0));
   return model;
 }
 

@@ -1,12 +1,23 @@
 // SPDX-License-Identifier: Apache-2.0
 // Connecting reconstructed canes into one tree rooted at the trunk (issue 3 step 6; Botterill
-// et al. 2017 sec. 3.2.4 joins canes to their parents where they nearly meet in 3D).
+// et al., "A Robot System for Pruning Grape Vines", J. Field Robotics 2017, sec. 3.2: canes are
+// joined to their parents by trained join classifiers on gaps, angles and widths).
 //
-// Greedy growth from the root: the trunk and head are connected; repeatedly the unconnected cane
-// with an end nearest to anything connected (head surface, trunk, a connected cane) is attached
-// there, oriented so that end is its base, and given a first point on its parent. Canes that
-// never come within `max_attach_m` of the tree (a neighbour's canes, ghosts) are left out: the
-// arm must avoid them, but they are not this vine's and are not pruned. Thread-safe (pure).
+// Method:
+//  1. Canes lying mostly inside the trunk or head are those structures seen again and dropped
+//     (a long one inside the trunk replaces the silhouette's trunk axis).
+//  2. Every end of every cane, as a possible base, is paired with the nearest point of every
+//     other cane, of the trunk and of the head's surface within `max_attach_m`: a candidate
+//     join, scored by the join classifier (join_classifier.h) on gap, tangent continuity, the
+//     side of the parent it meets, width ratio, which end is nearer the head, and so on.
+//  3. Every cane takes one parent (the trunk or head, another cane, or none) so that the sum of
+//     the log-probabilities of the chosen joins is largest and the joins form a tree: a maximum
+//     spanning arborescence (Chu and Liu 1965; Edmonds 1967). "None" has probability
+//     `min_join_probability`; a cane with no parent, and every cane hanging on it, is left out
+//     (a neighbour's canes, ghosts): the arm must avoid them, but they are not pruned.
+//  4. A cane that continues its parent from the parent's tip (a cane broken at a crossing or an
+//     occlusion) is appended to it, so that canes come out whole.
+// Thread-safe (pure).
 #pragma once
 
 #include <optional>
@@ -14,18 +25,26 @@
 
 #include "absl/status/statusor.h"
 #include "core/vine_model.h"
+#include "workers/reconstruct/join_classifier.h"
 
 namespace vb::reconstruct {
 
 struct ConnectOptions {
-  double max_attach_m = 0.04;        // an end this near the tree may attach to it
-  double head_margin_m = 0.02;       // canes within this of the head surface attach to the head
+  double max_attach_m = 0.15;        // joins with a wider gap than this are not considered
+  double max_bridge_m = 0.04;        // a base this near its join point gets a first point there;
+                                     // a farther one stays where it was seen (the gap is unseen)
+  double head_margin_m = 0.02;       // a gap to the head is measured from this far outside it
   double inside_fraction = 0.7;      // canes with this much of their length inside the trunk or
                                      // head are duplicates of them and dropped
   double spur_length_m = 0.08;       // canes on the head or trunk shorter than this are spurs
   double trunk_axis_min_fraction = 0.3;  // a stereo cane inside the silhouette trunk at least
                                          // this fraction of its length replaces its axis
   double sample_step_m = 0.01;       // spacing of samples along canes for distances
+  double min_join_probability = 0.1; // a cane hangs on the tree only by a join this likely
+  bool merge_continuations = true;   // append canes that continue their parent's tip to it
+  double continuation_gap_m = 0.02;  // ... joining within this of the tip (arc length)
+  double continuation_angle_deg = 35.0;  // ... with tangents within this angle
+  JoinWeights join_weights = DefaultJoinWeights();  // the join classifier
 
   absl::Status Validate() const;
 };
@@ -37,12 +56,42 @@ struct ConnectSummary {
 };
 
 // Builds the model's canes: id 1 the trunk (from `trunk`, or if absent the thickest cane reaching
-// lowest), then attached canes with ids 2, 3, ... in attachment order (parents first). `head`
-// is copied into the model. An empty input gives a model without canes. INVALID_ARGUMENT for
-// invalid options or a cane failing Polyline3::Validate (naming its index).
+// lowest), then attached canes with ids 2, 3, ... (parents first). `head` is copied into the
+// model. An empty input gives a model without canes. INVALID_ARGUMENT for invalid options or a
+// cane failing Polyline3::Validate (naming its index).
 absl::StatusOr<VineModel> ConnectCanes(const std::vector<Polyline3>& canes,
                                        const std::optional<Polyline3>& trunk,
                                        const HeadModel& head, const ConnectOptions& options,
                                        ConnectSummary* summary = nullptr);
+
+// Steps 1-2 alone (PrepareCanes, FindJoins), for training the join classifier and diagnosis.
+struct PreparedCanes {
+  std::optional<Polyline3> trunk;  // base (lowest) to top; nullopt only without any cane
+  std::vector<Polyline3> canes;    // the canes that are not the trunk or head seen again
+  int inside_trunk_or_head = 0;
+};
+
+struct JoinCandidate {
+  int child = -1;                  // index into PreparedCanes::canes
+  bool base_is_last = false;       // the child's last point would be its base
+  int parent = -1;                 // index into PreparedCanes::canes; -1 the trunk or head
+  JoinTarget target = JoinTarget::kCane;
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();  // where on the parent
+  JoinFeatures features{};
+  double probability = 0.0;
+};
+
+// Same errors as ConnectCanes.
+absl::StatusOr<PreparedCanes> PrepareCanes(const std::vector<Polyline3>& canes,
+                                           const std::optional<Polyline3>& trunk,
+                                           const HeadModel& head, const ConnectOptions& options);
+std::vector<JoinCandidate> FindJoins(const PreparedCanes& prepared, const HeadModel& head,
+                                     const ConnectOptions& options);
+// Steps 3-4 on given joins (ConnectCanes = PrepareCanes, FindJoins, BuildTree). INVALID_ARGUMENT
+// for invalid options or a join naming a cane out of range or a probability outside [0, 1].
+absl::StatusOr<VineModel> BuildTree(const PreparedCanes& prepared,
+                                    const std::vector<JoinCandidate>& joins,
+                                    const HeadModel& head, const ConnectOptions& options,
+                                    ConnectSummary* summary = nullptr);
 
 }  // namespace vb::reconstruct

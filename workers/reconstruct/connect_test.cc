@@ -25,7 +25,7 @@ TEST(ConnectCanes, GrowsATreeFromTheTrunkAndHead) {
   const Polyline3 trunk = Line({0, 0.8, 0}, {0, 0.8, 0.95}, 0.025);
   std::vector<Polyline3> canes = {
       Line({0.06, 0.8, 1.0}, {0.6, 0.8, 1.1}),        // A: from the head surface outward
-      Line({0.3, 0.8, 1.5}, {0.3, 0.8, 1.075}),       // B: tip end 2 mm from A's middle
+      Line({0.3, 0.8, 1.5}, {0.3, 0.8, 1.0464}),      // B: lower end 2 mm from A's middle
       Line({1.0, 0.9, 0.3}, {1.0, 0.9, 0.8}),         // C: far from everything
       Line({0.0, 0.8, 0.3}, {0.0, 0.8, 0.7}, 0.02),   // D: the trunk seen again
       Line({-0.05, 0.8, 1.03}, {-0.1, 0.8, 1.05}),    // E: a short stub on the head
@@ -40,7 +40,7 @@ TEST(ConnectCanes, GrowsATreeFromTheTrunkAndHead) {
   ASSERT_EQ(model->canes.size(), 4u);
   EXPECT_EQ(model->canes[0].kind, CaneKind::kTrunk);
   EXPECT_EQ(model->head.spheres.size(), 1u);
-  // The stub attaches first (it touches the head), then A; B hangs on A, base at its old tip.
+  // The stub and A hang on the head (parent: the trunk); B on A, its base the end near A.
   const Cane* a = nullptr;
   const Cane* b = nullptr;
   for (const Cane& cane : model->canes) {
@@ -56,6 +56,64 @@ TEST(ConnectCanes, GrowsATreeFromTheTrunkAndHead) {
   // B's first point lies on A.
   const Eigen::Vector3d base = b->polyline.points.front();
   EXPECT_LT(PointSegmentDistance(base, {0.06, 0.8, 1.0}, {0.6, 0.8, 1.1}), 1e-9);
+}
+
+// A cane from the head broken where another cane crosses in front of it: the outer piece's end
+// touches the crossing cane, but it continues the inner piece 3 cm on. The outer piece is
+// appended to the inner one (one whole cane), not hung on the cane it touches.
+TEST(ConnectCanes, ACaneBrokenAtACrossingComesOutWhole) {
+  const Polyline3 trunk = Line({0, 0.8, 0}, {0, 0.8, 0.95}, 0.025);
+  // The crossing cane grows from the trunk below the head and passes 1 cm in front of the
+  // break at (0.44, 0.79, 1.0).
+  const std::vector<Polyline3> input = {
+      Line({0.45, 0.8, 1.0}, {0.85, 0.8, 1.02}, 0.004),    // outer piece, listed first
+      Line({0.06, 0.8, 1.0}, {0.42, 0.8, 1.0}, 0.0045),    // inner piece, from the head
+      Line({0.03, 0.79, 0.7}, {0.64, 0.79, 1.1545}, 0.005),  // the crossing cane
+  };
+  ConnectSummary summary;
+  const auto model = ConnectCanes(input, trunk, Head(), ConnectOptions(), &summary);
+  ASSERT_TRUE(model.ok()) << model.status();
+  ASSERT_TRUE(model->Validate().ok()) << model->Validate();
+  const Cane* whole = nullptr;
+  for (const Cane& cane : model->canes) {
+    if (cane.polyline.points.back().isApprox(Eigen::Vector3d(0.85, 0.8, 1.02))) whole = &cane;
+  }
+  ASSERT_NE(whole, nullptr);
+  EXPECT_EQ(whole->parent_id, CaneId(1));  // from the head, not from the crossing cane
+  EXPECT_LT((whole->polyline.points.front() - Eigen::Vector3d(0.06, 0.8, 1.0)).norm(), 0.03);
+  EXPECT_GT(whole->polyline.Length(), 0.75);
+}
+
+// Two pieces that continue each other could each be the other's parent; the tree has no cycle
+// and a piece far from everything is left out with whatever hangs on it.
+TEST(ConnectCanes, LeavesOutWhatDoesNotReachTheVine) {
+  const Polyline3 trunk = Line({0, 0.8, 0}, {0, 0.8, 0.95}, 0.025);
+  const std::vector<Polyline3> canes = {
+      Line({0.8, 0.9, 1.5}, {1.0, 0.9, 1.5}),  // far from the vine: a neighbour's cane
+      Line({1.02, 0.9, 1.5}, {1.2, 0.9, 1.5}),  // continuing it
+  };
+  ConnectSummary summary;
+  const auto model = ConnectCanes(canes, trunk, Head(), ConnectOptions(), &summary);
+  ASSERT_TRUE(model.ok()) << model.status();
+  EXPECT_EQ(model->canes.size(), 1u);  // the trunk alone
+  EXPECT_EQ(summary.unattached, 2);
+}
+
+TEST(ConnectCanes, BuildTreeRejectsJoinsOutOfRange) {
+  const Polyline3 trunk = Line({0, 0.8, 0}, {0, 0.8, 0.95}, 0.025);
+  const auto prepared = PrepareCanes({Line({0.06, 0.8, 1.0}, {0.6, 0.8, 1.1})}, trunk, Head(),
+                                     ConnectOptions());
+  ASSERT_TRUE(prepared.ok());
+  std::vector<JoinCandidate> joins = FindJoins(*prepared, Head(), ConnectOptions());
+  ASSERT_FALSE(joins.empty());
+  EXPECT_TRUE(BuildTree(*prepared, joins, Head(), ConnectOptions()).ok());
+  joins[0].child = 5;
+  EXPECT_EQ(BuildTree(*prepared, joins, Head(), ConnectOptions()).status().code(),
+            absl::StatusCode::kInvalidArgument);
+  joins[0].child = 0;
+  joins[0].probability = 2.0;
+  EXPECT_EQ(BuildTree(*prepared, joins, Head(), ConnectOptions()).status().code(),
+            absl::StatusCode::kInvalidArgument);
 }
 
 TEST(ConnectCanes, TheStereoTrunkReplacesTheSilhouetteAxis) {

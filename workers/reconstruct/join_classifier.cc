@@ -1,0 +1,142 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "workers/reconstruct/join_classifier.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "Eigen/Cholesky"
+#include "Eigen/Core"
+
+namespace vb::reconstruct {
+namespace {
+
+// Unit tangent pointing out of the polyline at one end, over a chord of about `chord_m`
+// (noise-robust: the ends of reconstructed canes wobble).
+Eigen::Vector3d OutwardTangent(const Polyline3& line, bool at_last, double chord_m) {
+  const double length = line.Length();
+  const double s = std::min(chord_m, length);
+  const Eigen::Vector3d end = at_last ? line.points.back() : line.points.front();
+  const Eigen::Vector3d inner = line.PointAt(at_last ? length - s : s);
+  const Eigen::Vector3d d = end - inner;
+  const double n = d.norm();
+  return n > 1e-12 ? Eigen::Vector3d(d / n) : Eigen::Vector3d::UnitZ();
+}
+
+double DistanceToLine(const Eigen::Vector3d& p, const Polyline3& line) {
+  double d = 0.0;
+  line.Project(p, &d);
+  return d;
+}
+
+}  // namespace
+
+JoinWeights DefaultJoinWeights() {
+  // Trained by JoinClassifier.DISABLED_TrainOnSimulatedStops (join_classifier_test.cc) on the
+  // candidate joins of the real pipeline on rendered stops, seeds 1000-1099, vine 1, calibration
+  // 1 px off, once from the renderer's label images and once from the segmenter's output:
+  // 114309 joins to a cane (5034 right) and 6362 to the trunk or head (3868 right), gaps up to
+  // 15 cm; training AUC 0.943.
+  JoinWeights w;
+  w.cane = {-1.4190, -0.0850, -1.4005, 0.0000, 0.0000, 2.0327, 0.3107, -1.3065, -0.9402,
+            -0.5694, 0.4303, 0.0171, 2.1391, 1.6675, -0.1815, -0.4049, -1.5714};
+  w.root = {-0.2824, -0.0483, -0.0378, -0.1891, 0.1891, 0.0000, 0.2899, 0.0000, 0.0000,
+            0.1661, 0.3013, 0.0000, 2.1116, -0.7006, 0.0171, 0.0613, 0.9429};
+  return w;
+}
+
+JoinFeatures ComputeJoinFeatures(const JoinGeometry& j) {
+  JoinFeatures f{};
+  const Polyline3& child = *j.child;
+  const double length = std::max(child.Length(), 1e-3);
+  const Eigen::Vector3d base = j.base_is_last ? child.points.back() : child.points.front();
+  const Eigen::Vector3d tip = j.base_is_last ? child.points.front() : child.points.back();
+  const double base_radius = j.base_is_last ? child.radii.back() : child.radii.front();
+  const Eigen::Vector3d outward = OutwardTangent(child, j.base_is_last, 0.03);
+  const bool cane = j.target == JoinTarget::kCane && j.parent != nullptr;
+  f[0] = 1.0;
+  f[1] = j.gap_m / 0.02;
+  f[2] = std::log1p(j.gap_m / 0.003);
+  f[3] = j.target == JoinTarget::kHead ? 1.0 : 0.0;
+  f[4] = j.target == JoinTarget::kTrunk ? 1.0 : 0.0;
+  double s_on_parent = 0.0;
+  if (j.parent != nullptr) s_on_parent = j.parent->Project(j.point);
+  if (cane) {
+    const Eigen::Vector3d t = j.parent->TangentAt(s_on_parent);
+    f[5] = std::abs(outward.dot(t));
+    const double parent_length = j.parent->Length();
+    f[7] = std::min(1.0, std::min(s_on_parent, parent_length - s_on_parent) / 0.05);
+    f[8] = (1.0 - f[7]) * f[5];
+    f[11] = std::log(std::max(parent_length, 1e-3) / 0.1);
+  }
+  const Eigen::Vector3d gap = j.point - base;
+  f[6] = gap.dot(outward) / std::max(gap.norm(), 0.005);
+  if (j.parent != nullptr) {
+    f[9] = std::log(base_radius / std::max(j.parent->RadiusAt(s_on_parent), 1e-4));
+  }
+  f[10] = std::log(length / 0.1);
+  f[12] = ((tip - j.head_centre).norm() - (base - j.head_centre).norm()) / length;
+  f[13] = std::min(j.base_to_head_m / 0.1, 5.0);
+  if (j.parent != nullptr) {
+    f[14] = std::min(DistanceToLine(tip, *j.parent) / 0.1, 3.0);
+  } else {
+    f[14] = std::min(j.base_to_head_m / 0.1 + length / 0.1, 3.0);
+  }
+  f[15] = (tip.z() - base.z()) / length;
+  f[16] = std::min(j.point_to_head_m / 0.1, 5.0);
+  for (double& v : f) {
+    if (!std::isfinite(v)) v = 0.0;
+  }
+  return f;
+}
+
+double JoinProbability(const JoinFeatures& features, const JoinWeights& weights) {
+  const JoinFeatures& w = features[3] != 0.0 || features[4] != 0.0 ? weights.root : weights.cane;
+  double z = 0.0;
+  for (int i = 0; i < kJoinFeatureCount; ++i) z += features[i] * w[i];
+  z = std::clamp(z, -40.0, 40.0);
+  return 1.0 / (1.0 + std::exp(-z));
+}
+
+absl::StatusOr<JoinFeatures> TrainJoinClassifier(const std::vector<LabelledJoin>& examples,
+                                                 double l2, int iterations) {
+  if (examples.empty()) return absl::InvalidArgumentError("examples: empty");
+  int positives = 0;
+  for (size_t i = 0; i < examples.size(); ++i) {
+    positives += examples[i].right ? 1 : 0;
+    for (double v : examples[i].features) {
+      if (!std::isfinite(v)) {
+        return absl::InvalidArgumentError("examples[" + std::to_string(i) +
+                                          "]: non-finite feature");
+      }
+    }
+  }
+  if (positives == 0 || positives == static_cast<int>(examples.size())) {
+    return absl::InvalidArgumentError("examples: need both right and wrong joins");
+  }
+  constexpr int d = kJoinFeatureCount;
+  using Vector = Eigen::Matrix<double, d, 1>;
+  Vector w = Vector::Zero();
+  Vector ridge = Vector::Constant(l2);
+  ridge(0) = 1e-6;
+  for (int it = 0; it < iterations; ++it) {
+    Eigen::Matrix<double, d, d> h = ridge.asDiagonal();
+    Vector g = ridge.cwiseProduct(w);
+    for (const LabelledJoin& e : examples) {
+      const Eigen::Map<const Vector> x(e.features.data());
+      const double z = std::clamp(w.dot(x), -40.0, 40.0);
+      const double p = 1.0 / (1.0 + std::exp(-z));
+      g += (p - (e.right ? 1.0 : 0.0)) * x;
+      h += std::max(p * (1.0 - p), 1e-9) * x * x.transpose();
+    }
+    const Vector step = h.ldlt().solve(g);
+    if (!step.allFinite()) return absl::InternalError("TrainJoinClassifier: diverged");
+    w -= step;
+    if (step.norm() < 1e-8) break;
+  }
+  JoinFeatures out;
+  for (int i = 0; i < d; ++i) out[i] = w(i);
+  return out;
+}
+
+}  // namespace vb::reconstruct

@@ -1,0 +1,80 @@
+// SPDX-License-Identifier: Apache-2.0
+// The probability that a reconstructed cane grows from a given point of the vine: a logistic
+// model on the geometry of the join, as the trained join classifiers of Botterill et al., "A
+// Robot System for Pruning Grape Vines" (J. Field Robotics 2017), sec. 3.2.2-3.2.4, which join
+// cane parts bottom-up on features of lengths, widths, gaps and angles. Here the join is in 3D:
+// one end of a cane (its base, if the join is right) and the nearest point on a possible parent
+// (another cane, the trunk or the head). Weights are trained on simulated stops
+// (TrainJoinClassifier; the tool is JoinClassifier.DISABLED_TrainOnSimulatedStops in
+// join_classifier_test.cc). Pure functions; thread-safe.
+#pragma once
+
+#include <array>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "core/geometry.h"
+#include "core/vine_model.h"
+
+namespace vb::reconstruct {
+
+// Feature vector of a join; index 0 is the constant 1 (bias). See ComputeJoinFeatures.
+inline constexpr int kJoinFeatureCount = 17;
+using JoinFeatures = std::array<double, kJoinFeatureCount>;
+
+enum class JoinTarget { kCane, kTrunk, kHead };
+
+// The geometry of one join, as connect.cc measures it.
+struct JoinGeometry {
+  JoinTarget target = JoinTarget::kCane;
+  const Polyline3* child = nullptr;   // the cane that would hang on the target
+  bool base_is_last = false;          // which end of `child` is its base
+  const Polyline3* parent = nullptr;  // the target cane or the trunk (null for the head)
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();  // the join point on the target
+  double gap_m = 0.0;                 // from the child's base to the target's surface, >= 0
+  Eigen::Vector3d head_centre = Eigen::Vector3d::Zero();  // the head's (or trunk top's) centre
+  double base_to_head_m = 0.0;        // from the child's base to the head's surface, >= 0
+  double point_to_head_m = 0.0;       // from the join point to the head's surface, >= 0
+};
+
+// Features: 1; gap / 2 cm; log(1 + gap / 3 mm); target is the head; target is the trunk;
+// |cos| of the angle between the child's base tangent and the target cane's tangent at the join
+// point (0 for the trunk and head); how straight the gap continues the child backwards (cos of
+// the gap direction with the child's outward base tangent, shrunk for gaps under 5 mm); how far
+// the join point is inside the target cane (distance to its nearer end / 5 cm, at most 1; 0 for
+// trunk and head); continuation (1 - inside) x parallel; log(child base radius / target radius
+// at the point) (0 for the head); log(child length / 10 cm); log(target cane length / 10 cm)
+// (0 for trunk and head); orientation: (distance of the tip from the head centre - that of the
+// base) / child length; base distance to the head's surface / 10 cm (at most 5); the child's other end's
+// distance to the target / 10 cm (at most 3); rise of the child (tip z - base z) / length;
+// join point's distance to the head's surface / 10 cm (at most 5).
+JoinFeatures ComputeJoinFeatures(const JoinGeometry& join);
+
+// Weights of the logistic model: P(right) = 1 / (1 + exp(-w . features)). Joins to another
+// cane and joins to the trunk or head are scored by separate models: what makes them likely
+// differs (a fork leaves its parent's side; a cane from the head starts at its surface).
+struct JoinWeights {
+  JoinFeatures cane{};  // the target is another cane
+  JoinFeatures root{};  // the target is the trunk or head
+};
+
+// The committed, trained weights (see join_classifier.cc for how they were produced).
+JoinWeights DefaultJoinWeights();
+
+// 1 / (1 + exp(-w . features)) with w the weights for the join's target (features[3] or
+// features[4] set: the root model), clamped against overflow.
+double JoinProbability(const JoinFeatures& features, const JoinWeights& weights);
+
+struct LabelledJoin {
+  JoinFeatures features{};
+  bool right = false;
+};
+
+// Maximum a posteriori logistic regression (Newton's method, ridge `l2` on every weight but the
+// bias). INVALID_ARGUMENT if `examples` is empty, holds only one label or a non-finite feature;
+// INTERNAL if the iteration diverges.
+// Trains the weights of one model (the caller splits the examples by target).
+absl::StatusOr<JoinFeatures> TrainJoinClassifier(const std::vector<LabelledJoin>& examples,
+                                                 double l2 = 1.0, int iterations = 50);
+
+}  // namespace vb::reconstruct

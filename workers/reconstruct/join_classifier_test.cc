@@ -1,0 +1,168 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "workers/reconstruct/join_classifier.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include "gtest/gtest.h"
+#include "workers/reconstruct/connect.h"
+#include "workers/reconstruct/correspondence_test_util.h"
+#include "workers/reconstruct/join_test_util.h"
+#include "workers/reconstruct/reconstruct.h"
+
+namespace vb::reconstruct {
+namespace {
+
+Polyline3 Line(Eigen::Vector3d a, Eigen::Vector3d b, double radius = 0.004, int n = 10) {
+  Polyline3 line;
+  for (int i = 0; i <= n; ++i) {
+    line.points.push_back(a + (b - a) * (static_cast<double>(i) / n));
+    line.radii.push_back(radius);
+  }
+  return line;
+}
+
+double Probability(const Polyline3& child, bool base_is_last, const Polyline3& parent,
+                   const Eigen::Vector3d& head_centre = {0, 0.8, 1.0}) {
+  JoinGeometry g;
+  g.child = &child;
+  g.base_is_last = base_is_last;
+  g.parent = &parent;
+  const Eigen::Vector3d base = base_is_last ? child.points.back() : child.points.front();
+  double gap = 0.0;
+  g.point = parent.PointAt(parent.Project(base, &gap));
+  g.gap_m = gap;
+  g.head_centre = head_centre;
+  g.base_to_head_m = std::max(0.0, (base - head_centre).norm() - 0.05);
+  g.point_to_head_m = std::max(0.0, (g.point - head_centre).norm() - 0.05);
+  return JoinProbability(ComputeJoinFeatures(g), DefaultJoinWeights());
+}
+
+// A piece continuing another beyond a gap: the wider the gap, and the more the piece bends away
+// from the line of its parent, the less likely the join. (Whether a continuation beats a cane
+// the piece touches at a crossing is decided in context: ConnectCanes' crossing test.)
+TEST(JoinClassifier, WiderGapsAndBendsAreLessLikely) {
+  const Polyline3 inner = Line({0.06, 0.8, 1.0}, {0.40, 0.8, 1.0});
+  const Polyline3 near = Line({0.41, 0.8, 1.0}, {0.80, 0.8, 1.0});
+  const Polyline3 far = Line({0.46, 0.8, 1.0}, {0.85, 0.8, 1.0});
+  const Polyline3 bent = Line({0.41, 0.8, 1.0}, {0.41 + 0.39 * 0.5, 0.8, 1.0 + 0.39 * 0.866});
+  EXPECT_GT(Probability(near, false, inner), Probability(far, false, inner));
+  EXPECT_GT(Probability(near, false, inner), Probability(bent, false, inner));
+  EXPECT_GT(Probability(near, false, inner), ConnectOptions().min_join_probability);
+}
+
+// The end nearer the head is the base: the same join read backwards is less likely.
+TEST(JoinClassifier, TheBaseIsTheEndNearerTheHead) {
+  const Polyline3 parent = Line({0.06, 0.8, 1.0}, {0.5, 0.8, 1.05}, 0.006);
+  const Polyline3 child = Line({0.3, 0.8, 1.036}, {0.35, 0.8, 1.4}, 0.004);  // 2 mm off
+  EXPECT_GT(Probability(child, false, parent), 3.0 * Probability(child, true, parent));
+}
+
+TEST(JoinClassifier, FeaturesAreFiniteForDegenerateGeometry) {
+  const Polyline3 child = Line({0, 0.8, 1.0}, {0, 0.8, 1.0 + 1e-9});
+  JoinGeometry g;
+  g.child = &child;
+  g.target = JoinTarget::kHead;
+  g.head_centre = child.points.front();
+  for (double v : ComputeJoinFeatures(g)) EXPECT_TRUE(std::isfinite(v));
+}
+
+TEST(JoinClassifier, TrainingSeparatesSeparableJoinsAndRejectsBadExamples) {
+  std::vector<LabelledJoin> examples;
+  for (int i = 0; i < 200; ++i) {
+    LabelledJoin e;
+    e.features[0] = 1.0;
+    e.features[1] = (i % 20) / 10.0;  // gap: right joins are the near ones, with label noise
+    e.right = e.features[1] < 0.9 ? (i % 17 != 0) : (i % 13 == 0);
+    examples.push_back(e);
+  }
+  const auto w = TrainJoinClassifier(examples);
+  ASSERT_TRUE(w.ok()) << w.status();
+  EXPECT_LT((*w)[1], 0.0);  // the wider the gap, the less likely
+  EXPECT_EQ(TrainJoinClassifier({}).status().code(), absl::StatusCode::kInvalidArgument);
+  std::vector<LabelledJoin> one_label(3);
+  EXPECT_EQ(TrainJoinClassifier(one_label).status().code(), absl::StatusCode::kInvalidArgument);
+  examples[5].features[3] = std::nan("");
+  EXPECT_EQ(TrainJoinClassifier(examples).status().code(), absl::StatusCode::kInvalidArgument);
+}
+
+// --- Training tool -------------------------------------------------------------------------
+
+double Auc(const std::vector<LabelledJoin>& examples, const JoinWeights& w) {
+  std::vector<std::pair<double, bool>> scored;
+  for (const LabelledJoin& e : examples) scored.push_back({JoinProbability(e.features, w), e.right});
+  std::sort(scored.begin(), scored.end());
+  double rank_sum = 0.0, positives = 0.0;
+  for (size_t i = 0; i < scored.size(); ++i) {
+    if (scored[i].second) rank_sum += static_cast<double>(i + 1), positives += 1;
+  }
+  const double negatives = static_cast<double>(scored.size()) - positives;
+  return (rank_sum - positives * (positives + 1) / 2) / std::max(1.0, positives * negatives);
+}
+
+// The tool that produced DefaultJoinWeights(): run with
+//   VB_TRAIN_STOPS=100 vb_reconstruct_test --gtest_also_run_disabled_tests
+//       --gtest_filter=JoinClassifier.DISABLED_TrainOnSimulatedStops   (one command line)
+// Candidate joins of the real pipeline (ExtractStructure on the renderer's label images and on
+// the segmenter's output, correspondence, assembly, head) on training seeds 1000 onwards,
+// labelled against the true vine (LabelJoins).
+TEST(JoinClassifier, DISABLED_TrainOnSimulatedStops) {
+  const char* env = std::getenv("VB_TRAIN_STOPS");
+  const int stops = env ? std::atoi(env) : 100;
+  const ReconstructOptions options;
+  std::vector<LabelledJoin> examples;
+  for (bool images : {false, true}) {
+    for (int k = 0; k < stops; ++k) {
+      const SimulatedStop stop = MakeRenderedStop(1000 + k, images);
+      if (stop.views.empty()) continue;
+      const Deadline deadline = Deadline::Infinite();
+      const auto pieces = MatchSegments(stop.views, stop.rig, options.correspondence, deadline);
+      ASSERT_TRUE(pieces.ok()) << pieces.status();
+      auto canes = AssembleCanes(*pieces, options.assembly, deadline);
+      ASSERT_TRUE(canes.ok()) << canes.status();
+      std::erase_if(*canes, [&](const Polyline3& cane) {
+        size_t outside = 0;
+        for (const Eigen::Vector3d& p : cane.points) outside += !options.volume.Contains(p);
+        return outside * 2 > cane.points.size();
+      });
+      std::vector<Eigen::Vector3d> hints;
+      for (const Polyline3& c : *canes) hints.insert(hints.end(), c.points.begin(), c.points.end());
+      const auto head = ReconstructHeadAndTrunk(stop.views, stop.rig, options.volume,
+                                                options.head, deadline, hints);
+      ASSERT_TRUE(head.ok()) << head.status();
+      const auto prepared = PrepareCanes(*canes, head->trunk, head->head, options.connect);
+      ASSERT_TRUE(prepared.ok()) << prepared.status();
+      const std::vector<JoinCandidate> joins = FindJoins(*prepared, head->head, options.connect);
+      const std::vector<LabelledJoin> labelled = LabelJoins(*prepared, joins, stop.scene.vine);
+      examples.insert(examples.end(), labelled.begin(), labelled.end());
+    }
+  }
+  std::vector<LabelledJoin> to_cane, to_root;
+  for (const LabelledJoin& e : examples)
+    (e.features[3] != 0.0 || e.features[4] != 0.0 ? to_root : to_cane).push_back(e);
+  JoinWeights w;
+  for (auto [name, set, out] : {std::tuple{"cane", &to_cane, &w.cane},
+                                std::tuple{"root", &to_root, &w.root}}) {
+    int right = 0;
+    for (const LabelledJoin& e : *set) right += e.right ? 1 : 0;
+    const auto trained = TrainJoinClassifier(*set);
+    ASSERT_TRUE(trained.ok()) << trained.status();
+    *out = *trained;
+    std::printf("seeds 1000-%d, labels and images, joins to a %s: %zu candidates, %d right\n",
+                1000 + stops - 1, name, set->size(), right);
+  }
+  std::printf("training AUC %.3f (committed weights %.3f)\n", Auc(examples, w),
+              Auc(examples, DefaultJoinWeights()));
+  for (auto [name, v] : {std::pair{"cane", &w.cane}, std::pair{"root", &w.root}}) {
+    std::printf("  w.%s = {", name);
+    for (int i = 0; i < kJoinFeatureCount; ++i) std::printf("%s%.4f", i ? ", " : "", (*v)[i]);
+    std::printf("};\n");
+  }
+}
+
+}  // namespace
+}  // namespace vb::reconstruct

@@ -1,0 +1,266 @@
+// SPDX-License-Identifier: Apache-2.0
+// A diagnosis tool, not a test: where cane recall and connectivity are lost, stage by stage, on
+// rendered stops (the bench's stops, MakeRenderedStop). Run with
+//   VB_INPUT=labels|images VB_SEED=1100 VB_STOPS=10 vb_reconstruct_test
+//     --gtest_also_run_disabled_tests --gtest_filter='PipelineStages.DISABLED_*'
+// Tuning seeds only (1100-1999; docs/reconstruction.md "Seeds").
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "core/model_metrics.h"
+#include "gtest/gtest.h"
+#include "workers/reconstruct/correspondence_test_util.h"
+#include "workers/reconstruct/join_test_util.h"
+#include "workers/reconstruct/reconstruct.h"
+
+namespace vb::reconstruct {
+namespace {
+
+// Every polyline as a cane on a stand-in trunk (the first), so that recall and precision of a
+// bag of unconnected polylines can be scored with the bench's metrics.
+VineModel Flat(const std::vector<Polyline3>& lines) {
+  VineModel model;
+  for (const Polyline3& line : lines) {
+    const bool first = model.canes.empty();
+    model.canes.push_back({.id = CaneId(static_cast<int64_t>(model.canes.size()) + 1),
+                           .parent_id = first ? std::nullopt : std::optional(CaneId(1)),
+                           .kind = first ? CaneKind::kTrunk : CaneKind::kCane,
+                           .polyline = line});
+  }
+  return model;
+}
+
+struct Row {
+  double recall = 0, precision = 0, connectivity = 0;
+  void Add(const ReconstructionMetrics& m, int n) {
+    recall += m.cane_recall / n;
+    precision += m.cane_precision / n;
+    connectivity += m.connectivity / n;
+  }
+};
+
+// For the model's canes: how the recalled but unconnected true length is explained by the
+// matched model cane's parent: a cane reconstructing some other true cane, or a ghost.
+struct ParentBreakdown {
+  double wrong_parent_m = 0, ghost_parent_m = 0, truth_m = 0;
+};
+
+int Majority(const Polyline3& line, const VineModel& truth) {
+  std::vector<double> votes(truth.canes.size(), 0.0);
+  for (const Eigen::Vector3d& p : line.Sample(0.005)) {
+    int best = -1;
+    double best_d = 0.01;
+    for (size_t g = 0; g < truth.canes.size(); ++g) {
+      const double d = DistanceToPolyline(p, truth.canes[g].polyline);
+      if (d <= best_d) best_d = d, best = static_cast<int>(g);
+    }
+    if (best >= 0) votes[best] += 1;
+  }
+  int best = -1;
+  double most = 0;
+  for (size_t g = 0; g < votes.size(); ++g)
+    if (votes[g] > most) most = votes[g], best = static_cast<int>(g);
+  return best;
+}
+
+TEST(PipelineStages, DISABLED_Report) {
+  const char* env = std::getenv("VB_SEED");
+  const uint64_t first = env ? std::atoi(env) : 1100;
+  const char* count_env = std::getenv("VB_STOPS");
+  const int count = count_env ? std::atoi(count_env) : 8;
+  const char* input_env = std::getenv("VB_INPUT");
+  const bool images = input_env && std::string(input_env) == "images";
+  const bool verbose = std::getenv("VB_VERBOSE") != nullptr;
+  ReconstructOptions options;
+  if (const char* v = std::getenv("VB_MIN_JOIN")) options.connect.min_join_probability = std::atof(v);
+  if (const char* v = std::getenv("VB_MERGE")) options.connect.merge_continuations = std::atoi(v);
+  if (const char* v = std::getenv("VB_MAX_BRIDGE")) options.connect.max_bridge_m = std::atof(v);
+  if (const char* v = std::getenv("VB_MAX_ATTACH")) options.connect.max_attach_m = std::atof(v);
+  Row pieces_row, assembled_row, connected_row, final_row;
+  double unattached_recall = 0;
+  ParentBreakdown parents;
+  for (int k = 0; k < count; ++k) {
+    const uint64_t seed = first + k;
+    const SimulatedStop stop = MakeRenderedStop(seed, images);
+    ASSERT_FALSE(stop.views.empty());
+    const VineModel& truth = stop.scene.vine;
+    const Deadline deadline = Deadline::Infinite();
+    const auto pieces = MatchSegments(stop.views, stop.rig, options.correspondence, deadline);
+    ASSERT_TRUE(pieces.ok()) << pieces.status();
+    std::vector<Polyline3> piece_lines;
+    for (const Piece3D& p : *pieces) piece_lines.push_back(p.polyline);
+    auto canes = AssembleCanes(*pieces, options.assembly, deadline);
+    ASSERT_TRUE(canes.ok()) << canes.status();
+    std::erase_if(*canes, [&](const Polyline3& cane) {
+      size_t outside = 0;
+      for (const Eigen::Vector3d& p : cane.points) outside += !options.volume.Contains(p);
+      return outside * 2 > cane.points.size();
+    });
+    std::vector<Eigen::Vector3d> hints;
+    for (const Polyline3& c : *canes) hints.insert(hints.end(), c.points.begin(), c.points.end());
+    const auto head = ReconstructHeadAndTrunk(stop.views, stop.rig, options.volume, options.head,
+                                              deadline, hints);
+    ASSERT_TRUE(head.ok()) << head.status();
+    ConnectSummary summary;
+    const auto prepared = PrepareCanes(*canes, head->trunk, head->head, options.connect);
+    ASSERT_TRUE(prepared.ok()) << prepared.status();
+    std::vector<JoinCandidate> joins = FindJoins(*prepared, head->head, options.connect);
+    if (std::getenv("VB_ORACLE") && *std::getenv("VB_ORACLE")) {
+      // Upper bound of the tree step: the join classifier replaced by the true labels.
+      if (const char* v = std::getenv("VB_BASE_REACH")) kBaseReach = std::atof(v);
+      const std::vector<LabelledJoin> labels = LabelJoins(*prepared, joins, truth);
+      for (size_t j = 0; j < joins.size(); ++j) joins[j].probability = labels[j].right ? 0.95 : 0.01;
+    }
+    auto model = BuildTree(*prepared, joins, head->head, options.connect, &summary);
+    ASSERT_TRUE(model.ok()) << model.status();
+    VineModel connected = *model;
+    ASSERT_TRUE(RefineModel(&*model, stop.views, stop.rig, options.fit, deadline).ok());
+
+    const auto mp = EvaluateReconstruction(Flat(piece_lines), truth).value();
+    std::vector<Polyline3> with_trunk;
+    if (head->trunk) with_trunk.push_back(*head->trunk);
+    with_trunk.insert(with_trunk.end(), canes->begin(), canes->end());
+    const auto ma = EvaluateReconstruction(Flat(with_trunk), truth).value();
+    const auto mc = EvaluateReconstruction(connected, truth).value();
+    const auto mf = EvaluateReconstruction(*model, truth).value();
+    if (verbose) {
+      VineModel bridgeless = connected;
+      for (size_t i = 1; i < bridgeless.canes.size(); ++i) {
+        Polyline3& l = bridgeless.canes[i].polyline;
+        if (l.points.size() > 2) l.points.erase(l.points.begin()), l.radii.erase(l.radii.begin());
+      }
+      const auto mb = EvaluateReconstruction(bridgeless, truth).value();
+      // Bridges: length and imprecise length by target (root / cane) and gap (< 3 cm, 3-8, > 8).
+      double total[2][3] = {}, bad[2][3] = {};
+      for (size_t i = 1; i < connected.canes.size(); ++i) {
+        const Polyline3& l = connected.canes[i].polyline;
+        const double gap = (l.points[1] - l.points[0]).norm();
+        const int t = connected.canes[*connected.IndexOf(*connected.canes[i].parent_id)].kind == CaneKind::kTrunk ? 0 : 1;
+        const int b = gap < 0.03 ? 0 : (gap < 0.08 ? 1 : 2);
+        for (int q = 0; q < 10; ++q) {
+          const Eigen::Vector3d x = l.points[0] + (q + 0.5) / 10.0 * (l.points[1] - l.points[0]);
+          bool near = false;
+          for (const Cane& c : truth.canes) near = near || DistanceToPolyline(x, c.polyline) <= 0.01;
+          total[t][b] += gap / 10;
+          if (!near) bad[t][b] += gap / 10;
+        }
+      }
+      std::printf("  bridges (m, imprecise m): root <3cm %.2f %.2f, 3-8 %.2f %.2f, >8 %.2f %.2f; cane <3cm %.2f %.2f, 3-8 %.2f %.2f, >8 %.2f %.2f\n",
+                  total[0][0], bad[0][0], total[0][1], bad[0][1], total[0][2], bad[0][2], total[1][0], bad[1][0], total[1][1], bad[1][1], total[1][2], bad[1][2]);
+      std::printf("  without bridges: %.3f / %.3f\n", mb.cane_recall, mb.cane_precision);
+    }
+    pieces_row.Add(mp, count);
+    assembled_row.Add(ma, count);
+    connected_row.Add(mc, count);
+    final_row.Add(mf, count);
+
+    // Recall the connection step lost: assembled canes it left out or dropped inside the head.
+    std::vector<Polyline3> left_out;
+    if (head->trunk) left_out.push_back(*head->trunk);
+    for (const Polyline3& c : *canes) {
+      bool in_model = false;
+      for (const Cane& m : connected.canes) {
+        // Attached canes keep their points (plus a base point on the parent).
+        if (m.polyline.points.size() >= c.points.size() &&
+            ((m.polyline.points.back() - c.points.back()).norm() < 1e-9 ||
+             (m.polyline.points.back() - c.points.front()).norm() < 1e-9)) {
+          in_model = true;
+          break;
+        }
+      }
+      if (!in_model) left_out.push_back(c);
+    }
+    std::vector<Polyline3> model_lines;
+    for (const Cane& m : connected.canes) model_lines.push_back(m.polyline);
+    std::vector<Polyline3> both = model_lines;
+    both.insert(both.end(), left_out.begin() + (head->trunk ? 1 : 0), left_out.end());
+    const double recall_with_left_out = EvaluateReconstruction(Flat(both), truth)->cane_recall;
+    unattached_recall += (recall_with_left_out - mc.cane_recall) / count;
+
+    // Unconnected recalled length by the parent of the matched model cane.
+    std::vector<int> majority;
+    for (const Cane& m : connected.canes) majority.push_back(Majority(m.polyline, truth));
+    ParentBreakdown pb;
+    for (size_t i = 0; i < connected.canes.size(); ++i) {
+      const Cane& m = connected.canes[i];
+      if (!m.parent_id || majority[i] < 0) continue;
+      const size_t parent = *connected.IndexOf(*m.parent_id);
+      if (connected.canes[parent].kind == CaneKind::kTrunk) continue;
+      // Is the parent a reconstruction of an ancestor (or the cane itself)?
+      const int g = majority[i];
+      bool ok = false;
+      for (int at = g; at >= 0;) {
+        if (majority[parent] == at) ok = true;
+        const auto& pid = truth.canes[at].parent_id;
+        at = pid ? static_cast<int>(*truth.IndexOf(*pid)) : -1;
+      }
+      if (ok) continue;
+      const double length = m.polyline.Length();
+      if (majority[parent] < 0) pb.ghost_parent_m += length;
+      else pb.wrong_parent_m += length;
+      if (std::getenv("VB_CASES") && majority[parent] >= 0) {
+        // Is the parent's true cane a descendant of the child's (hung upside down)?
+        bool inverted = false;
+        for (int at = majority[parent]; at >= 0;) {
+          if (at == g) inverted = true;
+          const auto& pid = truth.canes[at].parent_id;
+          at = pid ? static_cast<int>(*truth.IndexOf(*pid)) : -1;
+        }
+        const Polyline3& c = m.polyline;
+        const Polyline3& par = connected.canes[parent].polyline;
+        Eigen::Vector3d tc = (c.points[std::min<size_t>(3, c.points.size() - 1)] - c.points[1]);
+        double s_best = 1e9, at_s = 0, acc = 0;
+        Eigen::Vector3d tp = Eigen::Vector3d::UnitX();
+        for (size_t q = 0; q + 1 < par.points.size(); ++q) {
+          const double d = PointSegmentDistance(c.points[0], par.points[q], par.points[q + 1]);
+          if (d < s_best) s_best = d, at_s = acc, tp = par.points[q + 1] - par.points[q];
+          acc += (par.points[q + 1] - par.points[q]).norm();
+        }
+        const double angle = std::acos(std::min(1.0, std::abs(tc.normalized().dot(tp.normalized())))) * 57.3;
+        // Distance from the child's base to the true parent's reconstruction, if any.
+        double to_true = 1e9;
+        const int true_parent = truth.canes[g].parent_id ? static_cast<int>(*truth.IndexOf(*truth.canes[g].parent_id)) : -1;
+        for (size_t j = 0; j < connected.canes.size(); ++j) {
+          if (majority[j] != g && majority[j] != true_parent && !(true_parent == 0 && j == 0)) continue;
+          if (j == i) continue;
+          for (const Eigen::Vector3d& p : {c.points[1], c.points.back()})
+            to_true = std::min(to_true, DistanceToPolyline(p, connected.canes[j].polyline));
+        }
+        std::printf("  case seed %llu: cane %zu (true %d, %.2f m, r %.4f) on %zu (true %d%s) parent pos %.2f/%.2f m, angle %.0f deg, true-route piece at %.3f m\n",
+                    static_cast<unsigned long long>(seed), i, g, length, c.radii[1], parent, majority[parent],
+                    inverted ? " INVERTED" : "", at_s, par.Length(), angle, to_true);
+      }
+    }
+    for (const Cane& c : truth.canes)
+      if (c.kind != CaneKind::kSpur) pb.truth_m += c.polyline.Length();
+    parents.wrong_parent_m += pb.wrong_parent_m / pb.truth_m / count;
+    parents.ghost_parent_m += pb.ghost_parent_m / pb.truth_m / count;
+    if (verbose) {
+      std::printf("seed %llu: pieces %.3f/%.3f assembled %.3f/%.3f connected %.3f/%.3f/%.3f "
+                  "final %.3f/%.3f/%.3f attached %d unattached %d inside %d; left-out recall "
+                  "+%.3f; wrong-parent %.3f ghost-parent %.3f (of truth length)\n",
+                  static_cast<unsigned long long>(seed), mp.cane_recall, mp.cane_precision,
+                  ma.cane_recall, ma.cane_precision, mc.cane_recall, mc.cane_precision,
+                  mc.connectivity, mf.cane_recall, mf.cane_precision, mf.connectivity,
+                  summary.attached, summary.unattached, summary.inside_trunk_or_head,
+                  recall_with_left_out - mc.cane_recall, pb.wrong_parent_m / pb.truth_m,
+                  pb.ghost_parent_m / pb.truth_m);
+    }
+  }
+  std::printf("mean over %d stops (recall / precision / connectivity):\n", count);
+  std::printf("  pieces     %.3f / %.3f\n", pieces_row.recall, pieces_row.precision);
+  std::printf("  assembled  %.3f / %.3f (with the silhouette trunk)\n", assembled_row.recall,
+              assembled_row.precision);
+  std::printf("  connected  %.3f / %.3f / %.3f; recall of canes left out or dropped: %.3f\n",
+              connected_row.recall, connected_row.precision, connected_row.connectivity,
+              unattached_recall);
+  std::printf("  refined    %.3f / %.3f / %.3f\n", final_row.recall, final_row.precision,
+              final_row.connectivity);
+  std::printf("  hung on a wrong true cane: %.3f, on a ghost: %.3f (cane length / truth length)\n",
+              parents.wrong_parent_m, parents.ghost_parent_m);
+}
+
+}  // namespace
+}  // namespace vb::reconstruct
