@@ -81,6 +81,19 @@ double Polyline3::RadiusAt(double s) const {
   return radii[i] + f * (radii[i + 1] - radii[i]);
 }
 
+double Polyline3::MeanBaseDiameter(double span_m) const {
+  const std::vector<double> arc = ArcLengths();
+  const double span = std::min(span_m, arc.back());
+  if (span <= 0.0) return 2.0 * radii.front();
+  // The radius is linear in arc length on each segment, so the trapezoid rule is exact.
+  double area = 0.0;
+  for (size_t i = 0; i + 1 < arc.size() && arc[i] < span; ++i) {
+    const double s1 = std::min(arc[i + 1], span);
+    area += 0.5 * (radii[i] + RadiusAt(s1)) * (s1 - arc[i]);
+  }
+  return 2.0 * area / span;
+}
+
 Eigen::Vector3d Polyline3::TangentAt(double s) const {
   if (points.size() < 2) return Eigen::Vector3d::UnitX();
   size_t i;

@@ -27,6 +27,10 @@ struct Polyline3 {
   double RadiusAt(double s) const;
   // Unit tangent at arc length s (direction base -> tip).
   Eigen::Vector3d TangentAt(double s) const;
+  // Mean diameter over the first `span_m` of the polyline (all of it if shorter): how a pruner
+  // reads a cane's thickness, along a hand-width rather than at one knot. 2 * radii.front() if
+  // span_m <= 0.
+  double MeanBaseDiameter(double span_m) const;
   // Arc length of the point of the polyline nearest to p (ties: the nearest to the base);
   // `distance_m` (optional) receives the distance. 0 for an empty polyline.
   double Project(const Eigen::Vector3d& p, double* distance_m = nullptr) const;

@@ -131,3 +131,21 @@ TEST(Distance, SegmentSegmentCrossingParallelAndDegenerate) {
 
 }  // namespace
 }  // namespace vb
+
+namespace vb {
+namespace {
+
+TEST(Polyline3, MeanBaseDiameterAveragesTheTaperOverTheSpan) {
+  Polyline3 line;
+  line.points = {{0, 0, 0}, {0.1, 0, 0}, {0.3, 0, 0}};
+  line.radii = {0.006, 0.004, 0.002};
+  // Radius 6 -> 4 mm over the first 0.1 m: mean diameter 10 mm.
+  EXPECT_NEAR(line.MeanBaseDiameter(0.1), 0.010, 1e-12);
+  // Over 0.2 m: (0.1 * 5 mm + 0.1 * 3.5 mm) / 0.2 = 4.25 mm radius.
+  EXPECT_NEAR(line.MeanBaseDiameter(0.2), 0.0085, 1e-12);
+  EXPECT_NEAR(line.MeanBaseDiameter(5.0), line.MeanBaseDiameter(0.3), 1e-12);
+  EXPECT_NEAR(line.MeanBaseDiameter(0.0), 0.012, 1e-12);
+}
+
+}  // namespace
+}  // namespace vb

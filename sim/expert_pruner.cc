@@ -17,21 +17,6 @@ namespace {
 
 int OriginRank(ExpertOrigin origin) { return static_cast<int>(origin); }
 
-// Mean diameter over [0, min(span, length)] (the radius is linear along each segment, so the
-// trapezoid rule is exact): one knot at the base must not decide the reading; a pruner looks
-// along the first hand-width of the cane.
-double BaseDiameter(const Polyline3& line) {
-  const std::vector<double> arc = line.ArcLengths();
-  const double span = std::min(kExpertBaseSpanM, arc.back());
-  if (span <= 0.0) return 2.0 * line.radii.front();
-  double area = 0.0;
-  for (size_t i = 0; i + 1 < arc.size() && arc[i] < span; ++i) {
-    const double s1 = std::min(arc[i + 1], span);
-    area += 0.5 * (line.radii[i] + line.RadiusAt(s1)) * (s1 - arc[i]);
-  }
-  return 2.0 * area / span;
-}
-
 Eigen::Vector3d HeadCentre(const VineModel& model, const Cane& trunk) {
   if (model.head.spheres.empty()) return trunk.polyline.points.back();
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
@@ -141,7 +126,7 @@ absl::StatusOr<std::vector<ExpertCaneView>> AssessCanes(const VineModel& model,
       v.origin = parent.kind == CaneKind::kTrunk ? ExpertOrigin::kTrunk : ExpertOrigin::kCane;
     }
     v.length_m = line.Length();
-    v.base_diameter_m = BaseDiameter(line);
+    v.base_diameter_m = line.MeanBaseDiameter(kExpertBaseSpanM);
     v.diameter_outside_mm = DiameterOutsideMm(v.base_diameter_m, policy);
     v.base_distance_from_head_m = (base - head).norm();
     v.base_below_wire_m = wire_z - base.z();

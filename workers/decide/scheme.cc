@@ -161,20 +161,6 @@ bool NearHead(const VineModel& model, const Cane& trunk, const Eigen::Vector3d& 
   return p.z() >= lowest;
 }
 
-// Mean diameter over the first `span` metres (radius is linear in arc length on each segment, so
-// the trapezoid rule is exact).
-double MeanBaseDiameter(const Polyline3& line, double span) {
-  const std::vector<double> arc = line.ArcLengths();
-  span = std::min(span, arc.back());
-  if (span <= 0.0) return 2.0 * line.radii.front();
-  double area = 0.0;
-  for (size_t i = 0; i + 1 < arc.size() && arc[i] < span; ++i) {
-    const double s1 = std::min(arc[i + 1], span);
-    area += 0.5 * (line.radii[i] + line.RadiusAt(s1)) * (s1 - arc[i]);
-  }
-  return 2.0 * area / span;
-}
-
 }  // namespace
 
 absl::StatusOr<std::vector<Candidate>> FindCandidates(const VineModel& model,
@@ -207,7 +193,7 @@ absl::StatusOr<std::vector<Candidate>> FindCandidates(const VineModel& model,
                                                               : CaneOrigin::kTrunk;
     }
     c.length_m = line.Length();
-    c.base_diameter_m = MeanBaseDiameter(line, kBaseSpanM);
+    c.base_diameter_m = line.MeanBaseDiameter(kBaseSpanM);
     c.base = line.points.front();
     c.base_distance_from_head_m = (c.base - head).norm();
     c.side = c.base.x() < head.x() ? -1 : +1;
