@@ -285,20 +285,24 @@ absl::StatusOr<RigCalibration> RefineRig(const std::vector<View2D>& views,
 
 void ReexpressLines(const CameraCalibration& from, const CameraCalibration& to,
                     std::vector<Line2D>* lines) {
-  constexpr int kSamples = 9;
+  constexpr int kSamples = 33;
   for (Line2D& line : *lines) {
-    // Points along the line's support, through the pixels, into the new normalised coordinates.
+    // Points along the line's support that the camera sees (inside the image, and inside the fold
+    // of the distortion, where the pixel maps back to the same normalised point: lines drawn
+    // from a model may end far outside the image), through their pixels into the new normalised
+    // coordinates.
     std::vector<Eigen::Vector2d> points;
     for (int k = 0; k < kSamples; ++k) {
       const double f = static_cast<double>(k) / (kSamples - 1);
       const Eigen::Vector2d on_line = (1.0 - f) * line.begin + f * line.end;
-      points.push_back(to.PixelToNormalised(from.NormalisedToPixel(on_line)));
+      const Eigen::Vector2d uv = from.NormalisedToPixel(on_line);
+      if (!from.InImage(uv) || (from.PixelToNormalised(uv) - on_line).norm() > 1e-6) continue;
+      points.push_back(to.PixelToNormalised(uv));
     }
-    const Eigen::Vector2d mean = [&] {
-      Eigen::Vector2d m = Eigen::Vector2d::Zero();
-      for (const Eigen::Vector2d& p : points) m += p;
-      return Eigen::Vector2d(m / kSamples);
-    }();
+    if (points.size() < 2) continue;  // not seen: nothing to re-express
+    Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+    for (const Eigen::Vector2d& p : points) mean += p;
+    mean /= static_cast<double>(points.size());
     Eigen::Matrix2d scatter = Eigen::Matrix2d::Zero();
     for (const Eigen::Vector2d& p : points) scatter += (p - mean) * (p - mean).transpose();
     const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> solver(scatter);

@@ -70,7 +70,8 @@ absl::StatusOr<RigCalibration> RefineRig(const std::vector<View2D>& views,
 
 // Re-expresses wire or post lines found in the normalised coordinates of camera `from` in those of
 // `to` (the same camera after RefineRig changed its focal length): the lines' supports are mapped
-// through their pixels and refitted.
+// through their pixels and refitted. begin/end become the ends of the part inside the image; a
+// line the camera does not see is left as it is.
 void ReexpressLines(const CameraCalibration& from, const CameraCalibration& to,
                     std::vector<Line2D>* lines);
 

@@ -168,3 +168,39 @@ TEST(RigRefine, RejectsMismatchedViews) {
 
 }  // namespace
 }  // namespace vb::reconstruct
+
+namespace vb::reconstruct {
+namespace {
+
+// Wires drawn from a model end far outside the image (beyond the lens's fold); re-expressing them
+// for the same camera must give the same line, and for a longer focal length the line seen
+// through the same pixels.
+TEST(ReexpressLines, KeepsLinesThatEndOutsideTheImage) {
+  const Stop stop = MakeStop(1106);
+  const CameraCalibration& camera = stop.true_rig.cameras[0];
+  std::vector<Line2D> wires = stop.views[0].wires;
+  ASSERT_FALSE(wires.empty());
+  std::vector<Line2D> same = wires;
+  ReexpressLines(camera, camera, &same);
+  CameraCalibration longer = camera;
+  longer.camera_matrix(0, 0) *= 1.002;
+  longer.camera_matrix(1, 1) *= 1.002;
+  std::vector<Line2D> scaled = wires;
+  ReexpressLines(camera, longer, &scaled);
+  // A quarter pixel in normalised units: the lens maps a line through a new focal length to a
+  // slightly curved one, which the refit straightens.
+  const double quarter_px = 0.25 / camera.camera_matrix(0, 0);
+  for (size_t i = 0; i < wires.size(); ++i) {
+    ASSERT_GT((same[i].end - same[i].begin).norm(), 0.1) << "wire " << i << " lost its support";
+    for (double f : {0.1, 0.5, 0.9}) {
+      const Eigen::Vector2d p = same[i].begin + f * (same[i].end - same[i].begin);
+      EXPECT_NEAR(wires[i].line.dot(p.homogeneous()), 0.0, 1e-9) << "wire " << i;
+      const Eigen::Vector2d uv = camera.NormalisedToPixel(p);
+      EXPECT_NEAR(scaled[i].line.dot(longer.PixelToNormalised(uv).homogeneous()), 0.0, quarter_px)
+          << "wire " << i;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace vb::reconstruct
