@@ -5,8 +5,8 @@
 #include <cmath>
 #include <string>
 
-#include "Eigen/Cholesky"
 #include "Eigen/Core"
+#include "workers/reconstruct/logistic.h"
 
 namespace vb::reconstruct {
 namespace {
@@ -91,52 +91,13 @@ JoinFeatures ComputeJoinFeatures(const JoinGeometry& j) {
 }
 
 double JoinProbability(const JoinFeatures& features, const JoinWeights& weights) {
-  const JoinFeatures& w = features[3] != 0.0 || features[4] != 0.0 ? weights.root : weights.cane;
-  double z = 0.0;
-  for (int i = 0; i < kJoinFeatureCount; ++i) z += features[i] * w[i];
-  z = std::clamp(z, -40.0, 40.0);
-  return 1.0 / (1.0 + std::exp(-z));
+  return LogisticProbability(features, features[3] != 0.0 || features[4] != 0.0 ? weights.root
+                                                                                : weights.cane);
 }
 
 absl::StatusOr<JoinFeatures> TrainJoinClassifier(const std::vector<LabelledJoin>& examples,
                                                  double l2, int iterations) {
-  if (examples.empty()) return absl::InvalidArgumentError("examples: empty");
-  int positives = 0;
-  for (size_t i = 0; i < examples.size(); ++i) {
-    positives += examples[i].right ? 1 : 0;
-    for (double v : examples[i].features) {
-      if (!std::isfinite(v)) {
-        return absl::InvalidArgumentError("examples[" + std::to_string(i) +
-                                          "]: non-finite feature");
-      }
-    }
-  }
-  if (positives == 0 || positives == static_cast<int>(examples.size())) {
-    return absl::InvalidArgumentError("examples: need both right and wrong joins");
-  }
-  constexpr int d = kJoinFeatureCount;
-  using Vector = Eigen::Matrix<double, d, 1>;
-  Vector w = Vector::Zero();
-  Vector ridge = Vector::Constant(l2);
-  ridge(0) = 1e-6;
-  for (int it = 0; it < iterations; ++it) {
-    Eigen::Matrix<double, d, d> h = ridge.asDiagonal();
-    Vector g = ridge.cwiseProduct(w);
-    for (const LabelledJoin& e : examples) {
-      const Eigen::Map<const Vector> x(e.features.data());
-      const double z = std::clamp(w.dot(x), -40.0, 40.0);
-      const double p = 1.0 / (1.0 + std::exp(-z));
-      g += (p - (e.right ? 1.0 : 0.0)) * x;
-      h += std::max(p * (1.0 - p), 1e-9) * x * x.transpose();
-    }
-    const Vector step = h.ldlt().solve(g);
-    if (!step.allFinite()) return absl::InternalError("TrainJoinClassifier: diverged");
-    w -= step;
-    if (step.norm() < 1e-8) break;
-  }
-  JoinFeatures out;
-  for (int i = 0; i < d; ++i) out[i] = w(i);
-  return out;
+  return TrainLogistic<kJoinFeatureCount>(examples, l2, iterations, "joins", "TrainJoinClassifier");
 }
 
 }  // namespace vb::reconstruct

@@ -5,8 +5,8 @@
 #include <cmath>
 #include <limits>
 
-#include "Eigen/Cholesky"
 #include "Eigen/Core"
+#include "workers/reconstruct/logistic.h"
 
 namespace vb::reconstruct {
 
@@ -78,50 +78,13 @@ MatchFeatures ComputeMatchFeatures(const MatchCandidate& candidate, const Polyli
 }
 
 double MatchProbability(const MatchFeatures& features, const MatchFeatures& weights) {
-  double z = 0.0;
-  for (int i = 0; i < kMatchFeatureCount; ++i) z += features[i] * weights[i];
-  z = std::clamp(z, -40.0, 40.0);
-  return 1.0 / (1.0 + std::exp(-z));
+  return LogisticProbability(features, weights);
 }
 
 absl::StatusOr<MatchFeatures> TrainMatchClassifier(const std::vector<LabelledMatch>& examples,
                                                    const TrainOptions& options) {
-  if (examples.empty()) return absl::InvalidArgumentError("examples: empty");
-  int positives = 0;
-  for (size_t i = 0; i < examples.size(); ++i) {
-    positives += examples[i].right ? 1 : 0;
-    for (double v : examples[i].features) {
-      if (!std::isfinite(v)) {
-        return absl::InvalidArgumentError("examples[" + std::to_string(i) +
-                                          "]: non-finite feature");
-      }
-    }
-  }
-  if (positives == 0 || positives == static_cast<int>(examples.size())) {
-    return absl::InvalidArgumentError("examples: need both right and wrong matches");
-  }
-  constexpr int d = kMatchFeatureCount;
-  Eigen::Matrix<double, d, 1> w = Eigen::Matrix<double, d, 1>::Zero();
-  Eigen::Matrix<double, d, 1> ridge = Eigen::Matrix<double, d, 1>::Constant(options.l2);
-  ridge(0) = 1e-6;
-  for (int it = 0; it < options.iterations; ++it) {
-    Eigen::Matrix<double, d, d> h = ridge.asDiagonal();
-    Eigen::Matrix<double, d, 1> g = ridge.cwiseProduct(w);
-    for (const LabelledMatch& e : examples) {
-      const Eigen::Map<const Eigen::Matrix<double, d, 1>> x(e.features.data());
-      const double z = std::clamp(w.dot(x), -40.0, 40.0);
-      const double p = 1.0 / (1.0 + std::exp(-z));
-      g += (p - (e.right ? 1.0 : 0.0)) * x;
-      h += std::max(p * (1.0 - p), 1e-9) * x * x.transpose();
-    }
-    const Eigen::Matrix<double, d, 1> step = h.ldlt().solve(g);
-    if (!step.allFinite()) return absl::InternalError("TrainMatchClassifier: diverged");
-    w -= step;
-    if (step.norm() < 1e-8) break;
-  }
-  MatchFeatures out;
-  for (int i = 0; i < d; ++i) out[i] = w(i);
-  return out;
+  return TrainLogistic<kMatchFeatureCount>(examples, options.l2, options.iterations, "matches",
+                                           "TrainMatchClassifier");
 }
 
 double DistanceToPolyline(const Eigen::Vector3d& p, const Polyline3& polyline) {
