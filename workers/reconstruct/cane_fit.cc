@@ -4,12 +4,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <exception>
 #include <memory>
 #include <optional>
 #include <unordered_map>
 
 #include "absl/strings/str_cat.h"
+#include "core/status_macros.h"
 #include "ceres/ceres.h"
 #include "ceres/cubic_interpolation.h"
 #include "workers/reconstruct/ceres_camera.h"
@@ -377,19 +377,9 @@ absl::Status RefineModel(VineModel* model, const std::vector<View2D>& views,
   solver_options.num_threads = 1;
   solver_options.max_num_iterations = options.max_iterations;
   solver_options.function_tolerance = options.function_tolerance;
-  solver_options.logging_type = ceres::SILENT;
-  solver_options.minimizer_progress_to_stdout = false;
-  const double remaining_s = deadline.RemainingS();
-  solver_options.max_solver_time_in_seconds = std::min(remaining_s, 1e6);
-  DeadlineCallback callback(deadline);
-  solver_options.callbacks.push_back(&callback);
-  ceres::Solver::Summary ceres_summary;
-  try {
-    ceres::Solve(solver_options, &problem, &ceres_summary);
-  } catch (const std::exception& e) {
-    return absl::InternalError(absl::StrCat("RefineModel: Ceres threw: ", e.what()));
-  }
-  if (callback.cancelled()) return absl::CancelledError("RefineModel: cancelled");
+  VB_ASSIGN_OR_RETURN(const DeadlineSolve solve,
+                      SolveWithDeadline(solver_options, &problem, deadline, "RefineModel"));
+  const ceres::Solver::Summary& ceres_summary = solve.summary;
   if (!ceres_summary.IsSolutionUsable()) {
     return absl::InternalError(
         absl::StrCat("RefineModel: Ceres failed: ", ceres_summary.message));
@@ -398,7 +388,7 @@ absl::Status RefineModel(VineModel* model, const std::vector<View2D>& views,
   out.initial_cost = ceres_summary.initial_cost;
   out.final_cost = ceres_summary.final_cost;
   out.message = ceres_summary.BriefReport();
-  if (callback.expired() || (ceres_summary.termination_type == ceres::NO_CONVERGENCE &&
+  if (solve.expired || (ceres_summary.termination_type == ceres::NO_CONVERGENCE &&
                              deadline.Expired())) {
     out.termination = FitTermination::kDeadline;
   } else if (ceres_summary.termination_type == ceres::NO_CONVERGENCE) {

@@ -7,10 +7,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <exception>
 #include <memory>
+#include <string>
 #include <tuple>
 #include <vector>
 
+#include "absl/status/statusor.h"
 #include "ceres/ceres.h"
 #include "ceres/cubic_interpolation.h"
 #include "core/calibration.h"
@@ -144,5 +147,33 @@ class DeadlineCallback : public ceres::IterationCallback {
   bool cancelled_ = false;
   bool expired_ = false;
 };
+
+struct DeadlineSolve {
+  ceres::Solver::Summary summary;
+  bool expired = false;  // the deadline stopped the solve (the iterate is the best so far)
+};
+
+// Solves `problem` with `options` made quiet (no logging) and bounded by `deadline` (time limit
+// and a DeadlineCallback). `caller` names the stage in errors: INTERNAL if Ceres throws,
+// CANCELLED on cancellation. An unusable solution is left for the caller to judge.
+inline absl::StatusOr<DeadlineSolve> SolveWithDeadline(ceres::Solver::Options options,
+                                                       ceres::Problem* problem,
+                                                       const Deadline& deadline,
+                                                       const std::string& caller) {
+  options.logging_type = ceres::SILENT;
+  options.minimizer_progress_to_stdout = false;
+  options.max_solver_time_in_seconds = std::min(deadline.RemainingS(), 1e6);
+  DeadlineCallback callback(deadline);
+  options.callbacks.push_back(&callback);
+  DeadlineSolve out;
+  try {
+    ceres::Solve(options, problem, &out.summary);
+  } catch (const std::exception& e) {
+    return absl::InternalError(caller + ": Ceres threw: " + e.what());
+  }
+  if (callback.cancelled()) return absl::CancelledError(caller + ": cancelled");
+  out.expired = callback.expired();
+  return out;
+}
 
 }  // namespace vb::reconstruct

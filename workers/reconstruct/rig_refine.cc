@@ -3,13 +3,13 @@
 
 #include <algorithm>
 #include <cmath>
-#include <exception>
 #include <memory>
 #include <optional>
 #include <vector>
 
 #include "absl/strings/str_cat.h"
 #include "ceres/rotation.h"
+#include "core/status_macros.h"
 #include "Eigen/Eigenvalues"
 #include "workers/reconstruct/ceres_camera.h"
 
@@ -243,19 +243,10 @@ absl::StatusOr<RigCalibration> RefineRig(const std::vector<View2D>& views,
   solver_options.linear_solver_type = ceres::DENSE_SCHUR;  // points eliminated, cameras dense
   solver_options.num_threads = 1;
   solver_options.max_num_iterations = options.max_iterations;
-  solver_options.logging_type = ceres::SILENT;
-  solver_options.minimizer_progress_to_stdout = false;
-  solver_options.max_solver_time_in_seconds = std::min(deadline.RemainingS(), 1e6);
-  DeadlineCallback callback(deadline);
-  solver_options.callbacks.push_back(&callback);
-  ceres::Solver::Summary ceres_summary;
-  try {
-    ceres::Solve(solver_options, &problem, &ceres_summary);
-  } catch (const std::exception& e) {
-    return absl::InternalError(absl::StrCat("RefineRig: Ceres threw: ", e.what()));
-  }
-  if (callback.cancelled()) return absl::CancelledError("RefineRig: cancelled");
-  if (callback.expired()) return absl::DeadlineExceededError("RefineRig: deadline exceeded");
+  VB_ASSIGN_OR_RETURN(const DeadlineSolve solve,
+                      SolveWithDeadline(solver_options, &problem, deadline, "RefineRig"));
+  if (solve.expired) return absl::DeadlineExceededError("RefineRig: deadline exceeded");
+  const ceres::Solver::Summary& ceres_summary = solve.summary;
   if (!ceres_summary.IsSolutionUsable()) {
     out.reason = absl::StrCat("solve failed: ", ceres_summary.message);
     return rig;
