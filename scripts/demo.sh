@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: Apache-2.0
 # The main job, as far as it is built: simulate a few stops along a row, capture each through the
-# simulated camera rig, check every bundle imports, reconstruct each vine and score the model
-# against the simulator's ground truth. Grows with every stage.
+# simulated camera rig, check every bundle imports, reconstruct each vine, decide its pruning,
+# measure its phenomics and score the model and cuts against the simulator's ground truth. Grows
+# with every stage.
 # Usage: scripts/demo.sh path/to/vinebot [OUT_DIR]
 set -euo pipefail
 vinebot=${1:?usage: scripts/demo.sh path/to/vinebot [OUT_DIR]}
@@ -18,8 +19,10 @@ for vine in 0 1 2; do
     --pixel-format bayer_rg8 --calibration-error-px 1.0
   "$vinebot" bundle info --bundle "$dir" > "$dir/info.json"
   "$vinebot" reconstruct --bundle "$dir" --out "$dir/model.json" > "$dir/reconstruct.json"
+  "$vinebot" decide --model "$dir/model.json" --out "$dir/cut_plan.json" > "$dir/decide.json"
+  "$vinebot" phenomics --model "$dir/model.json" --plan "$dir/cut_plan.json" > "$dir/phenomics.json"
   "$vinebot" evaluate --model "$dir/model.json" --truth "$dir/ground_truth.json" > "$dir/metrics.json"
   echo "  vine $vine: $(tr -d ' \n' < "$dir/metrics.json" | cut -c1-160)"
 done
-echo "vinebot demo: bundles, model.json and metrics.json per vine in $out."
-echo "Later stages (decide, plan, cut) are not built yet."
+echo "vinebot demo: bundles, model.json, cut_plan.json, phenomics.json and metrics.json per vine in $out."
+echo "Later stages (plan, cut) are not built yet."
