@@ -23,3 +23,14 @@ foreach(module core imgproc imgcodecs calib3d)
 endforeach()
 
 pkg_check_modules(ARAVIS REQUIRED IMPORTED_TARGET aravis-0.8)
+
+# Planning: OMPL (RRT-Connect) and FCL (the collision-checking baseline). Debian's OMPL config
+# sets variables rather than an imported target, and its OMPL_LIBRARIES names Boost's -dev
+# symlinks that libompl-dev does not install; libompl.so resolves those itself.
+find_package(ompl REQUIRED)
+find_library(VB_OMPL_LIBRARY ompl HINTS ${OMPL_LIBRARY_DIRS} REQUIRED)
+add_library(vb_ompl INTERFACE IMPORTED)
+set_target_properties(vb_ompl PROPERTIES
+  INTERFACE_INCLUDE_DIRECTORIES "${OMPL_INCLUDE_DIRS}"
+  INTERFACE_LINK_LIBRARIES "${VB_OMPL_LIBRARY}")
+find_package(fcl REQUIRED)

@@ -14,6 +14,8 @@ packages=(
   libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev libopencv-calib3d-dev
   # reconstruction: joint 3D optimisation
   libceres-dev
+  # planning: RRT-Connect and the FCL collision-checking baseline
+  libompl-dev libfcl-dev
   # cameras: Aravis (GigE Vision / USB3 Vision); its pkg-config file needs libusb's;
   # aravis-tools provides arv-fake-gv-camera-0.8, which the camera tests start on loopback
   libaravis-dev libusb-1.0-0-dev aravis-tools

@@ -1,0 +1,62 @@
+// SPDX-License-Identifier: Apache-2.0
+// The arm as the planner sees it: a UR5 mounted on the platform, its joint limits, the cutter on
+// its flange, and the collision geometry of its links (capsules in each DH link frame), plus the
+// platform's own fixed geometry (walls, ground, roof, camera rig) that the arm must not touch.
+// Plain value types; thread-compatible.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "absl/status/status.h"
+#include "core/geometry.h"
+#include "core/trajectory.h"
+#include "Eigen/Geometry"
+#include "workers/plan/ur5_kinematics.h"
+
+namespace vb::plan {
+
+// Collision geometry of one link, in DH frame `frame` (0 = base .. 6 = flange; see LinkFrames).
+struct LinkBody {
+  std::string name;            // "base", "shoulder", "upper_arm", ..., "tool"
+  int frame = 0;               // 0..6
+  std::vector<Capsule> capsules;
+};
+
+struct RobotModel {
+  Eigen::Isometry3d platform_from_arm_base = Eigen::Isometry3d::Identity();
+  JointLimits limits;
+  ToolGeometry tool;           // its capsules become the last LinkBody ("tool", frame 6)
+  std::vector<LinkBody> links; // arm links (without the tool), base first
+
+  // Pairs of indices into BodiesWithTool() that may never touch (self-collision pairs): every
+  // pair of bodies at least two links apart along the chain.
+  std::vector<std::pair<int, int>> SelfCollisionPairs() const;
+  // links plus the tool as a last body in frame 6.
+  std::vector<LinkBody> BodiesWithTool() const;
+  // INVALID_ARGUMENT naming the field: non-orthonormal mount rotation, bad limits, negative radii,
+  // non-finite geometry, frame outside [0, 6].
+  absl::Status Validate() const;
+};
+
+// A UR5 with the capsule model of ARCHITECTURE.md (upper arm and forearm 0.06 m, wrists
+// 0.0375-0.06 m), the given tool, and the default mount on the platform (documented in
+// docs/plan.md with the reachability study that chose it).
+RobotModel DefaultUr5(const ToolGeometry& tool);
+
+// The platform's fixed geometry in the platform frame: the arm may touch none of it.
+struct PlatformGeometry {
+  double ground_z_m = 0.0;            // ground plane
+  double roof_z_m = 2.2;              // platform roof
+  double camera_side_wall_y_m = -0.25;// wall behind the camera rig (free side: y greater)
+  double backdrop_y_m = 1.25;         // backdrop panel across the row (free side: y smaller)
+  std::vector<Sphere> fixed_spheres;  // e.g. the cameras of the rig, as enclosing spheres
+
+  absl::Status Validate() const;
+};
+
+// The default platform around the simulator's default rig (sim/rig.h): walls and ground as
+// above and one 0.07 m sphere around each of the three cameras.
+PlatformGeometry DefaultPlatform();
+
+}  // namespace vb::plan

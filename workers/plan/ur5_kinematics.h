@@ -1,0 +1,44 @@
+// SPDX-License-Identifier: Apache-2.0
+// UR5 kinematics in the ur_kinematics DH convention (ARCHITECTURE.md "Reference values"): forward
+// kinematics of every link frame and closed-form inverse kinematics returning all solutions.
+// Frames: `base` is the arm's base frame (DH frame 0), `flange` the tool flange (DH frame 6).
+// Thread-safe (pure functions).
+#pragma once
+
+#include <array>
+
+#include "absl/status/status.h"
+#include "Eigen/Core"
+#include "Eigen/Geometry"
+
+namespace vb::plan {
+
+using Joints = Eigen::Matrix<double, 6, 1>;  // rad, shoulder pan .. wrist 3
+
+// Standard DH: link i transform = Rz(theta_i) Tz(d_i) Tx(a_i) Rx(alpha_i), theta_i = q_i.
+struct DhParameters {
+  std::array<double, 6> d{};
+  std::array<double, 6> a{};
+  std::array<double, 6> alpha{};
+};
+
+// d1 0.089159, a2 -0.425, a3 -0.39225, d4 0.10915, d5 0.09465, d6 0.0823; alpha [pi/2,0,0,pi/2,-pi/2,0].
+const DhParameters& Ur5Dh();
+
+struct JointLimits {
+  Joints lower = Joints::Constant(-2.0 * 3.141592653589793);   // rad
+  Joints upper = Joints::Constant(2.0 * 3.141592653589793);    // rad
+  Joints max_velocity = Joints::Constant(3.141592653589793);   // rad/s (UR5: 180 deg/s)
+  Joints max_acceleration = Joints::Constant(1.4);             // rad/s^2 (URScript movej default)
+
+  // INVALID_ARGUMENT naming the joint: non-finite, lower >= upper, velocity or acceleration <= 0.
+  absl::Status Validate() const;
+  bool Contains(const Joints& q) const;
+};
+
+// base_from_link[i] for i = 0 (the base itself, identity) .. 6 (the flange).
+std::array<Eigen::Isometry3d, 7> LinkFrames(const Joints& q, const DhParameters& dh = Ur5Dh());
+// base_from_flange.
+Eigen::Isometry3d ForwardKinematics(const Joints& q, const DhParameters& dh = Ur5Dh());
+
+}  // namespace vb::plan
