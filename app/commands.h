@@ -53,4 +53,13 @@ absl::Status RunSimDecideLabels(Flags& flags);
 // train and held-out agreement with the labels as JSON.
 absl::Status RunTrainDecide(Flags& flags);
 
+// vinebot plan --model model.json --cuts cut_plan.json --out trajectory.json [--tool T]
+// [--checker C] [--deadline-s T]: plans the arm's motions to every cut (workers/plan); prints a
+// one-line JSON summary (planned cuts, unplanned cuts with reasons, duration).
+absl::Status RunPlan(Flags& flags);
+
+// vinebot bench plan --vines N --seed-base S [--checkers a,b,c] [--verify]: plans N simulated
+// vines with each collision checker and prints the planning benchmark of issue 5 as JSON.
+absl::Status RunBenchPlan(Flags& flags);
+
 }  // namespace vb::app

@@ -46,6 +46,14 @@ const std::vector<Command>& Commands() {
       {"bench reconstruct",
        "--vines N --seed-base S [--calibration-error-px X] [--policy policy.json]",
        vb::app::RunBenchReconstruct},
+      {"plan",
+       "--model model.json --cuts cut_plan.json --out trajectory.json [--tool mill_end|secateur] "
+       "[--checker primitives|fcl_primitives|fcl_mesh] [--deadline-s T]",
+       vb::app::RunPlan},
+      {"bench plan",
+       "--vines N --seed-base S [--checkers primitives,fcl_primitives,fcl_mesh] [--verify] "
+       "[--tool T] [--json]",
+       vb::app::RunBenchPlan},
       {"train segmenter", "--out FILE [--vines N --seed-base S]", vb::app::RunTrainSegmenter},
       {"sim decide-labels", "--vines N --out DIR [--seed-base S] [--policy policy.json]",
        vb::app::RunSimDecideLabels},

@@ -1,0 +1,108 @@
+// SPDX-License-Identifier: Apache-2.0
+// The plan stage of one vine: a vine model and its cut plan in, a timed joint trajectory that
+// visits every cut it can out. Steps (Botterill et al. 2017 section 3.4, made fast):
+//   1. the collision scene of the model and the platform (collision_scene.h);
+//   2. a cut motion for every cut, ranked by clearance, slid outward where none is free
+//      (cut_motion.h);
+//   3. adaptive safety margins around the chosen cut motions (safety_margins.h);
+//   4. the order of the cuts: exact Held-Karp on estimated move times (cut_order.h);
+//   5. RRT-Connect paths between consecutive cut motions in the inflated scene, shortcut and
+//      smoothed (path_planner.h); a cut whose path fails is dropped and the next one is
+//      joined to the last cut reached;
+//   6. time parameterisation within the joint velocity and acceleration limits
+//      (time_parameterization.h), home -> cuts -> home.
+// Every cut ends planned or with its reason in Trajectory::unplanned. Thread-safe (pure function).
+#pragma once
+
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "core/cut_plan.h"
+#include "core/deadline.h"
+#include "core/trajectory.h"
+#include "core/vine_model.h"
+#include "workers/plan/collision_checker.h"
+#include "workers/plan/collision_scene.h"
+#include "workers/plan/cut_motion.h"
+#include "workers/plan/path_planner.h"
+#include "workers/plan/robot_model.h"
+#include "workers/plan/safety_margins.h"
+
+namespace vb::plan {
+
+enum class CheckerKind { kPrimitives, kFclPrimitives, kFclMesh };
+std::string_view CheckerKindName(CheckerKind kind);  // "primitives", "fcl_primitives", "fcl_mesh"
+std::unique_ptr<CollisionChecker> MakeChecker(CheckerKind kind, const RobotModel& robot,
+                                              const CollisionScene& scene);
+
+struct PlanOptions {
+  CheckerKind checker = CheckerKind::kPrimitives;  // the fast one; FCL for baselines
+  SceneOptions scene;
+  CutMotionOptions cut_motion;
+  MarginOptions margins;
+  PathOptions path;
+  // Where the arm starts and ends: folded clear of the cameras' view (DefaultHome()).
+  Joints home = Joints::Zero();
+  bool return_home = true;
+  double sample_dt_s = 0.05;   // trajectory samples at most this far apart (waypoints always kept)
+  // INVALID_ARGUMENT naming the field ("options.path.time_limit_s: ...").
+  absl::Status Validate() const;
+};
+
+// The arm's parking configuration for the default mount (robot_model.h).
+Joints DefaultHome();
+
+// One path between two consecutive configurations of the plan (timing of step 5).
+struct PathRecord {
+  CutId to_cut;               // 0 for the path back home
+  PathOutcome outcome = PathOutcome::kSolved;
+  double planning_s = 0.0;
+  int64_t checks = 0;
+  bool direct = false;        // the straight line was free
+};
+
+struct PlanStats {
+  double scene_s = 0.0, cut_motions_s = 0.0, margins_s = 0.0, ordering_s = 0.0, paths_s = 0.0,
+         timing_s = 0.0, total_s = 0.0;
+  int cuts = 0, planned = 0, unreachable = 0;
+  int64_t checks = 0;                     // configuration checks in the whole plan
+  std::vector<PathRecord> paths;
+  MarginSummary margins;
+  // Estimated move time (s) of the transits in the chosen order, the given order and the
+  // nearest-neighbour order, all on the same estimates; order_exact: Held-Karp (not heuristic).
+  double order_cost_s = 0.0, given_order_cost_s = 0.0, nearest_neighbour_cost_s = 0.0;
+  bool order_exact = true;
+  std::vector<std::string> notes;         // e.g. "cut 4: slid 0.02 m outward along cane 7"
+};
+
+struct PlanResult {
+  Trajectory trajectory;
+  // The planned cuts as they will be made: a slid cut's point is where the tool cuts.
+  std::vector<Cut> cuts;
+  PlanStats stats;
+};
+
+// INVALID_ARGUMENT naming the field for an invalid model, plan (CutPlan::ValidateAgainst), robot,
+// platform or options, or a home configuration outside the limits; FAILED_PRECONDITION if the home
+// configuration is in collision. Everything that goes wrong with one cut is that cut's outcome in
+// trajectory.unplanned, not an error. DEADLINE_EXCEEDED / CANCELLED only if the deadline expires
+// before any trajectory exists; once cut motions exist, cuts not reached in time are unplanned
+// with reason "no_path_within_deadline".
+absl::StatusOr<PlanResult> PlanVine(const VineModel& model, const CutPlan& plan,
+                                    const RobotModel& robot, const PlatformGeometry& platform,
+                                    const PlanOptions& options = {},
+                                    const Deadline& deadline = Deadline::Infinite());
+
+// Re-checks every segment of `trajectory` densely (no point of the arm moves more than
+// `max_step_m` between checks) with `checker` on `scene` (transits) or on the scene without the cut
+// cane near its cut (cut segments, as planned; `cuts` are PlanResult::cuts). Returns the number of colliding configurations
+// (0 means collision-free) and counts them per segment in `bad_segments` (optional).
+int64_t CountTrajectoryCollisions(const Trajectory& trajectory, std::span<const Cut> cuts,
+                                  const RobotModel& robot, const CollisionScene& scene,
+                                  CheckerKind checker, double max_step_m, double cut_radius_m,
+                                  std::vector<int>* bad_segments = nullptr);
+
+}  // namespace vb::plan
