@@ -2,6 +2,7 @@
 #include "workers/plan/cut_order.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -193,41 +194,52 @@ OrderResult HeldKarpOrder(const Eigen::MatrixXd& cost, bool return_to_start) {
   if (n > kHeldKarpCap) return HeuristicOrder(cost, return_to_start);
   const Eigen::MatrixXd c = Sanitised(cost);
   // best[mask * n + j]: cheapest path from node 0 through the cuts in mask (bit j = node j + 1),
-  // ending at node j + 1; from[...] its previous cut (-1: node 0).
+  // ending at node j + 1; +infinity when j is not in mask. Computed by pulling from the mask
+  // without j: the inner loop runs over every previous end j' without branches (absent ones are
+  // +infinity) and over contiguous costs, so the compiler can vectorise it. Predecessors are not
+  // stored; they are recovered at the end by finding the same sum again.
   const uint32_t full = (1u << n) - 1;
   std::vector<double> best(static_cast<size_t>(full + 1) * n, kInf);
-  std::vector<int8_t> from(static_cast<size_t>(full + 1) * n, -1);
-  for (int j = 0; j < n; ++j) best[(1u << j) * n + j] = c(0, j + 1);
+  // into[k * n + j] = c(j + 1, k + 1): the moves into cut k, contiguous over j.
+  std::vector<double> into(static_cast<size_t>(n) * n);
+  for (int k = 0; k < n; ++k) {
+    for (int j = 0; j < n; ++j) into[k * n + j] = c(j + 1, k + 1);
+  }
+  for (int k = 0; k < n; ++k) best[(1u << k) * n + k] = c(0, k + 1);
   for (uint32_t mask = 1; mask <= full; ++mask) {
-    for (int j = 0; j < n; ++j) {
-      if (!(mask & (1u << j))) continue;
-      const double here = best[static_cast<size_t>(mask) * n + j];
-      if (here == kInf) continue;
-      for (int k = 0; k < n; ++k) {
-        if (mask & (1u << k)) continue;
-        const uint32_t next = mask | (1u << k);
-        const double via = here + c(j + 1, k + 1);
-        double& slot = best[static_cast<size_t>(next) * n + k];
-        if (via < slot) {
-          slot = via;
-          from[static_cast<size_t>(next) * n + k] = static_cast<int8_t>(j);
-        }
-      }
+    if ((mask & (mask - 1)) == 0) continue;  // singletons are set above
+    double* out = &best[static_cast<size_t>(mask) * n];
+    for (uint32_t bits = mask; bits != 0; bits &= bits - 1) {
+      const int k = std::countr_zero(bits);
+      const double* prev = &best[static_cast<size_t>(mask & ~(1u << k)) * n];
+      const double* in = &into[static_cast<size_t>(k) * n];
+      double m = kInf;
+      for (int j = 0; j < n; ++j) m = std::min(m, prev[j] + in[j]);
+      out[k] = m;
     }
   }
+  auto total = [&](int j) {
+    return best[static_cast<size_t>(full) * n + j] + (return_to_start ? c(j + 1, 0) : 0.0);
+  };
   int end = 0;
-  double end_cost = kInf;
-  for (int j = 0; j < n; ++j) {
-    const double total = best[static_cast<size_t>(full) * n + j] + (return_to_start ? c(j + 1, 0) : 0.0);
-    if (total < end_cost) end_cost = total, end = j;
+  for (int j = 1; j < n; ++j) {
+    if (total(j) < total(end)) end = j;
   }
   OrderResult r;
   uint32_t mask = full;
-  for (int j = end; j >= 0;) {
-    r.order.push_back(j + 1);
-    const int prev = from[static_cast<size_t>(mask) * n + j];
-    mask &= ~(1u << j);
-    j = prev;
+  for (int k = end;;) {
+    r.order.push_back(k + 1);
+    const double here = best[static_cast<size_t>(mask) * n + k];
+    mask &= ~(1u << k);
+    if (mask == 0) break;
+    // The predecessor attains the minimum: the same sum, recomputed bit for bit.
+    int from = -1;
+    for (int j = 0; j < n && from < 0; ++j) {
+      if ((mask & (1u << j)) && best[static_cast<size_t>(mask) * n + j] + into[k * n + j] == here) {
+        from = j;
+      }
+    }
+    k = from >= 0 ? from : std::countr_zero(mask);  // (always found; guards the index)
   }
   std::reverse(r.order.begin(), r.order.end());
   r.cost = OrderCost(cost, r.order, return_to_start);
