@@ -10,6 +10,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "ompl/base/MotionValidator.h"
+#include "ompl/datastructures/NearestNeighborsLinear.h"
 #include "ompl/base/ProblemDefinition.h"
 #include "ompl/base/SpaceInformation.h"
 #include "ompl/base/StateValidityChecker.h"
@@ -193,7 +194,7 @@ PathPlanner::PathPlanner(CollisionChecker& checker, const JointLimits& limits,
     ompl->planner = std::make_shared<og::RRTConnect>(ompl->si);
     if (options_.range_rad > 0.0) ompl->planner->setRange(options_.range_rad);
     ompl->planner->setProblemDefinition(ompl->pdef);
-    ompl->planner->setup();
+    ompl->planner->setNearestNeighbors<ompl::NearestNeighborsLinear>();  // also runs setup()
     ompl_ = std::move(ompl);
   } catch (const std::exception& e) {
     setup_status_ = absl::InternalError(absl::StrCat("path planner: OMPL setup failed: ", e.what()));
@@ -322,13 +323,26 @@ int ShortcutPath(CollisionChecker& checker, const JointLimits& limits, double ma
   int taken = GreedySkip(checker, limits, max_step_m, deadline, w);
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
+  // Per path: cumulative joint-space length at each waypoint and the time of each segment;
+  // recomputed only when a shortcut is taken, so a rejected round costs a few MoveTimeS.
+  std::vector<double> cumulative, seg_time;
+  double path_time = 0.0;
+  auto measure = [&] {
+    cumulative.assign(w.size(), 0.0);
+    seg_time.assign(w.size() - 1, 0.0);
+    path_time = 0.0;
+    for (size_t k = 1; k < w.size(); ++k) {
+      cumulative[k] = cumulative[k - 1] + (w[k] - w[k - 1]).norm();
+      seg_time[k - 1] = MoveTimeS(w[k - 1], w[k], limits);
+      path_time += seg_time[k - 1];
+    }
+  };
+  measure();
   std::vector<Joints> candidate;
   for (int round = 0; round < rounds && w.size() >= 3; ++round) {
     if (deadline.Expired()) break;
     // Two points drawn uniformly by joint-space length along the path; the segment between
     // them replaces what lies between (OMPL's PathSimplifier::shortcutPath does the same).
-    std::vector<double> cumulative(w.size(), 0.0);
-    for (size_t k = 1; k < w.size(); ++k) cumulative[k] = cumulative[k - 1] + (w[k] - w[k - 1]).norm();
     const double length = cumulative.back();
     double u = unit(rng) * length, v = unit(rng) * length;
     if (u > v) std::swap(u, v);
@@ -345,20 +359,27 @@ int ShortcutPath(CollisionChecker& checker, const JointLimits& limits, double ma
     locate(u, i, qu);
     locate(v, j, qv);
     if (i == j) continue;  // both on one straight segment: nothing to gain
-    candidate.assign(w.begin(), w.begin() + static_cast<std::ptrdiff_t>(i) + 1);
-    if (!NearlyEqual(candidate.back(), qu)) candidate.push_back(qu);
-    if (!NearlyEqual(candidate.back(), qv)) candidate.push_back(qv);
-    for (size_t k = j + 1; k < w.size(); ++k) {
-      if (!NearlyEqual(candidate.back(), w[k])) candidate.push_back(w[k]);
-    }
-    if (PathTimeS(candidate, limits) >= PathTimeS(w, limits) - 1e-9) continue;
+    // Time of w[0..i], qu, qv, w[j+1..]: the segments i..j are replaced by three.
+    double replaced = 0.0;
+    for (size_t k = i; k <= j; ++k) replaced += seg_time[k];
+    const double joined = MoveTimeS(w[i], qu, limits) + MoveTimeS(qu, qv, limits) +
+                          MoveTimeS(qv, w[j + 1], limits);
+    if (joined >= replaced - 1e-9) continue;
     // The new joining segment first (it is the one likely to fail), then the two remnants of
     // old segments: sub-segments of checked segments, but sampled at other points, so they are
     // checked again to keep the contract that every output segment passed IsMotionFree.
     if (!checker.IsMotionFree(qu, qv, max_step_m)) continue;
     if (!checker.IsMotionFree(w[i], qu, max_step_m)) continue;
     if (!checker.IsMotionFree(qv, w[j + 1], max_step_m)) continue;
+    candidate.assign(w.begin(), w.begin() + static_cast<std::ptrdiff_t>(i) + 1);
+    for (const Joints* q : {&qu, &qv}) {
+      if (!NearlyEqual(candidate.back(), *q)) candidate.push_back(*q);
+    }
+    for (size_t k = j + 1; k < w.size(); ++k) {
+      if (!NearlyEqual(candidate.back(), w[k])) candidate.push_back(w[k]);
+    }
     w.swap(candidate);
+    measure();
     ++taken;
   }
   taken += GreedySkip(checker, limits, max_step_m, deadline, w);
