@@ -218,6 +218,44 @@ TEST(PathPlanner, StartEqualsGoal) {
   EXPECT_EQ(r.waypoints.size(), 2u);
 }
 
+// Balls checked pointwise; motions by the base class's sampling (CollisionChecker::IsMotionFree
+// and MotionSteps), as the real checkers do.
+class SampledBallChecker : public CollisionChecker {
+ public:
+  explicit SampledBallChecker(std::vector<std::pair<Joints, double>> balls) : balls_(std::move(balls)) {}
+  bool IsFree(const Joints& q) override {
+    ++checks_;
+    for (const auto& [c, r] : balls_) {
+      if ((q - c).norm() < r) return false;
+    }
+    return true;
+  }
+  double Clearance(const Joints& q) override {
+    ++checks_;
+    double best = 1e9;
+    for (const auto& [c, r] : balls_) best = std::min(best, (q - c).norm() - r);
+    return best;
+  }
+
+ private:
+  std::vector<std::pair<Joints, double>> balls_;
+};
+
+TEST(PathPlanner, EverySegmentPassesASampledChecker) {
+  SampledBallChecker checker({{J(0), 1.0}, {J(1.5, 1.2), 0.5}, {J(-1, -1, 1), 0.7}});
+  const JointLimits limits;
+  PathPlanner planner(checker, limits, PathOptions());
+  for (int k = 0; k < 10; ++k) {
+    const Joints start = J(-2, 0.1 * k), goal = J(2, -0.1 * k, 0.3);
+    const PathResult r = planner.Plan(start, goal, Deadline::Infinite());
+    ASSERT_EQ(r.outcome, PathOutcome::kSolved) << r.message;
+    EXPECT_FALSE(r.direct);
+    for (size_t i = 1; i < r.waypoints.size(); ++i) {
+      EXPECT_TRUE(checker.IsMotionFree(r.waypoints[i - 1], r.waypoints[i], 0.01)) << k << " " << i;
+    }
+  }
+}
+
 TEST(ShortcutPath, RemovesADetourAndChecksEverySegment) {
   JointBallChecker checker;
   checker.AddBall(J(0, 3), 0.5);  // nowhere near
