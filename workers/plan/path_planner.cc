@@ -1,0 +1,389 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "workers/plan/path_planner.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <exception>
+#include <mutex>
+#include <random>
+
+#include "absl/strings/str_cat.h"
+#include "ompl/base/MotionValidator.h"
+#include "ompl/datastructures/NearestNeighborsLinear.h"
+#include "ompl/base/ProblemDefinition.h"
+#include "ompl/base/SpaceInformation.h"
+#include "ompl/base/StateValidityChecker.h"
+#include "ompl/base/goals/GoalState.h"
+#include "ompl/base/spaces/RealVectorStateSpace.h"
+#include "ompl/geometric/PathGeometric.h"
+#include "ompl/geometric/planners/rrt/RRTConnect.h"
+#include "ompl/util/Console.h"
+#include "workers/plan/time_parameterization.h"
+
+namespace vb::plan {
+
+namespace ob = ompl::base;
+namespace og = ompl::geometric;
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double SecondsSince(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+Joints ToJoints(const ob::State* state) {
+  const double* v = state->as<ob::RealVectorStateSpace::StateType>()->values;
+  Joints q;
+  for (int i = 0; i < 6; ++i) q[i] = v[i];
+  return q;
+}
+
+void FromJoints(const Joints& q, ob::State* state) {
+  double* v = state->as<ob::RealVectorStateSpace::StateType>()->values;
+  for (int i = 0; i < 6; ++i) v[i] = q[i];
+}
+
+// Uniform samples from our own generator, reseeded on every query: OMPL's default samplers draw
+// their seeds from one process-wide sequence, so a plan would depend on every planner created
+// before it.
+class SeededSampler : public ob::RealVectorStateSampler {
+ public:
+  SeededSampler(const ob::StateSpace* space, std::uint_fast32_t seed)
+      : ob::RealVectorStateSampler(space) {
+    rng_.setLocalSeed(seed);
+  }
+};
+
+class Validity : public ob::StateValidityChecker {
+ public:
+  Validity(const ob::SpaceInformationPtr& si, CollisionChecker* checker)
+      : ob::StateValidityChecker(si), checker_(checker) {}
+  bool isValid(const ob::State* state) const override { return checker_->IsFree(ToJoints(state)); }
+
+ private:
+  CollisionChecker* checker_;
+};
+
+class Motion : public ob::MotionValidator {
+ public:
+  Motion(const ob::SpaceInformationPtr& si, CollisionChecker* checker, double max_step_m)
+      : ob::MotionValidator(si), checker_(checker), max_step_m_(max_step_m) {}
+
+  bool checkMotion(const ob::State* s1, const ob::State* s2) const override {
+    const bool ok = checker_->IsMotionFree(ToJoints(s1), ToJoints(s2), max_step_m_);
+    ok ? ++valid_ : ++invalid_;
+    return ok;
+  }
+
+  // RRT-Connect does not use this form; other OMPL planners do. The segment is split into
+  // kPieces straight pieces checked in order, so `lastValid` is the end of the last free piece
+  // (conservative: the true last valid point may lie further).
+  bool checkMotion(const ob::State* s1, const ob::State* s2,
+                   std::pair<ob::State*, double>& last_valid) const override {
+    constexpr int kPieces = 16;
+    const Joints a = ToJoints(s1), b = ToJoints(s2);
+    Joints prev = a;
+    for (int k = 1; k <= kPieces; ++k) {
+      const Joints next = k == kPieces ? b : Joints(a + (b - a) * (double(k) / kPieces));
+      if (!checker_->IsMotionFree(prev, next, max_step_m_)) {
+        last_valid.second = double(k - 1) / kPieces;
+        if (last_valid.first != nullptr) FromJoints(prev, last_valid.first);
+        ++invalid_;
+        return false;
+      }
+      prev = next;
+    }
+    ++valid_;
+    return true;
+  }
+
+ private:
+  CollisionChecker* checker_;
+  double max_step_m_;
+};
+
+void SilenceOmpl() {
+  static std::once_flag once;
+  std::call_once(once, [] { ompl::msg::setLogLevel(ompl::msg::LOG_NONE); });
+}
+
+std::uint_fast32_t OmplSeed(uint64_t seed) {
+  // Keep all 64 bits relevant; boost/std generators take 32-bit seeds.
+  return static_cast<std::uint_fast32_t>((seed ^ (seed >> 32)) & 0xffffffffu);
+}
+
+bool NearlyEqual(const Joints& a, const Joints& b) { return (a - b).cwiseAbs().maxCoeff() < 1e-12; }
+
+}  // namespace
+
+absl::Status PathOptions::Validate() const {
+  if (!(max_step_m > 0.0) || !std::isfinite(max_step_m)) {
+    return absl::InvalidArgumentError("path options: max_step_m: must be finite and > 0");
+  }
+  if (!(range_rad >= 0.0) || !std::isfinite(range_rad)) {
+    return absl::InvalidArgumentError("path options: range_rad: must be finite and >= 0");
+  }
+  if (!(time_limit_s > 0.0)) {
+    return absl::InvalidArgumentError("path options: time_limit_s: must be > 0");
+  }
+  if (shortcut_rounds < 0) {
+    return absl::InvalidArgumentError("path options: shortcut_rounds: must be >= 0");
+  }
+  return absl::OkStatus();
+}
+
+std::string_view PathOutcomeName(PathOutcome outcome) {
+  switch (outcome) {
+    case PathOutcome::kSolved: return "solved";
+    case PathOutcome::kStartInCollision: return "start_in_collision";
+    case PathOutcome::kGoalInCollision: return "goal_in_collision";
+    case PathOutcome::kOutsideLimits: return "outside_limits";
+    case PathOutcome::kNoPathWithinDeadline: return "no_path_within_deadline";
+    case PathOutcome::kInvalidInput: return "invalid_input";
+  }
+  return "unknown";
+}
+
+struct PathPlanner::Ompl {
+  std::shared_ptr<ob::RealVectorStateSpace> space;
+  ob::SpaceInformationPtr si;
+  ob::ProblemDefinitionPtr pdef;
+  std::shared_ptr<og::RRTConnect> planner;
+  std::uint_fast32_t seed = 1;  // read by the sampler allocator at every solve
+  ob::State* start = nullptr;
+  ob::State* goal = nullptr;
+
+  ~Ompl() {
+    if (si != nullptr) {
+      if (start != nullptr) si->freeState(start);
+      if (goal != nullptr) si->freeState(goal);
+    }
+  }
+};
+
+PathPlanner::PathPlanner(CollisionChecker& checker, const JointLimits& limits,
+                         const PathOptions& options)
+    : checker_(checker), limits_(limits), options_(options) {
+  SilenceOmpl();
+  setup_status_ = limits_.Validate();
+  if (setup_status_.ok()) setup_status_ = options_.Validate();
+  if (!setup_status_.ok()) return;
+  try {
+    auto ompl = std::make_unique<Ompl>();
+    ompl->space = std::make_shared<ob::RealVectorStateSpace>(6);
+    ob::RealVectorBounds bounds(6);
+    for (int i = 0; i < 6; ++i) {
+      bounds.setLow(i, limits_.lower[i]);
+      bounds.setHigh(i, limits_.upper[i]);
+    }
+    ompl->space->setBounds(bounds);
+    Ompl* raw = ompl.get();
+    ompl->space->setStateSamplerAllocator([raw](const ob::StateSpace* space) -> ob::StateSamplerPtr {
+      return std::make_shared<SeededSampler>(space, raw->seed);
+    });
+    ompl->si = std::make_shared<ob::SpaceInformation>(ompl->space);
+    ompl->si->setStateValidityChecker(std::make_shared<Validity>(ompl->si, &checker_));
+    ompl->si->setMotionValidator(std::make_shared<Motion>(ompl->si, &checker_, options_.max_step_m));
+    ompl->si->setup();
+    ompl->pdef = std::make_shared<ob::ProblemDefinition>(ompl->si);
+    ompl->start = ompl->si->allocState();
+    ompl->goal = ompl->si->allocState();
+    ompl->planner = std::make_shared<og::RRTConnect>(ompl->si);
+    if (options_.range_rad > 0.0) ompl->planner->setRange(options_.range_rad);
+    ompl->planner->setProblemDefinition(ompl->pdef);
+    ompl->planner->setNearestNeighbors<ompl::NearestNeighborsLinear>();  // also runs setup()
+    ompl_ = std::move(ompl);
+  } catch (const std::exception& e) {
+    setup_status_ = absl::InternalError(absl::StrCat("path planner: OMPL setup failed: ", e.what()));
+  }
+}
+
+PathPlanner::~PathPlanner() = default;
+
+PathResult PathPlanner::Plan(const Joints& start, const Joints& goal, const Deadline& deadline) {
+  const Clock::time_point t0 = Clock::now();
+  const int64_t checks0 = checker_.checks();
+  PathResult result;
+  auto finish = [&](PathOutcome outcome, std::string message) {
+    result.outcome = outcome;
+    result.message = std::move(message);
+    if (outcome != PathOutcome::kSolved) result.waypoints.clear();
+    result.checks = checker_.checks() - checks0;
+    result.planning_s = SecondsSince(t0);
+    return result;
+  };
+
+  if (!setup_status_.ok()) return finish(PathOutcome::kInvalidInput, std::string(setup_status_.message()));
+  if (!start.allFinite()) return finish(PathOutcome::kInvalidInput, "start: non-finite joint value");
+  if (!goal.allFinite()) return finish(PathOutcome::kInvalidInput, "goal: non-finite joint value");
+  if (!limits_.Contains(start)) return finish(PathOutcome::kOutsideLimits, "start: outside the joint limits");
+  if (!limits_.Contains(goal)) return finish(PathOutcome::kOutsideLimits, "goal: outside the joint limits");
+  if (!checker_.IsFree(start)) return finish(PathOutcome::kStartInCollision, "start: in collision");
+  if (!checker_.IsFree(goal)) return finish(PathOutcome::kGoalInCollision, "goal: in collision");
+
+  if (NearlyEqual(start, goal) ||
+      (options_.try_direct_first && checker_.IsMotionFree(start, goal, options_.max_step_m))) {
+    result.waypoints = {start, goal};
+    result.direct = true;
+    return finish(PathOutcome::kSolved, "");
+  }
+  if (deadline.Expired()) {
+    return finish(PathOutcome::kNoPathWithinDeadline, "deadline expired before RRT-Connect");
+  }
+
+  const double budget_s = std::min(options_.time_limit_s, deadline.RemainingS());
+  const Clock::time_point end =
+      budget_s >= 1e9 ? Clock::time_point::max()
+                      : Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                           std::chrono::duration<double>(budget_s));
+  try {
+    Ompl& o = *ompl_;
+    o.planner->clear();  // drops both trees and the sampler (re-allocated, seeded, in solve)
+    o.pdef->clearSolutionPaths();
+    o.pdef->clearStartStates();
+    FromJoints(start, o.start);
+    FromJoints(goal, o.goal);
+    o.pdef->addStartState(o.start);
+    auto goal_region = std::make_shared<ob::GoalState>(o.si);
+    goal_region->setState(o.goal);
+    goal_region->setThreshold(1e-9);
+    o.pdef->setGoal(goal_region);
+    o.seed = OmplSeed(options_.seed);
+    const ob::PlannerTerminationCondition ptc(
+        [&end, &deadline] { return Clock::now() >= end || deadline.Cancelled(); });
+    const ob::PlannerStatus status = o.planner->solve(ptc);
+    if (status != ob::PlannerStatus::EXACT_SOLUTION || !o.pdef->hasExactSolution()) {
+      return finish(PathOutcome::kNoPathWithinDeadline,
+                    absl::StrCat("RRT-Connect found no exact path within ", budget_s,
+                                 " s (", status.asString(), ")"));
+    }
+    const auto* path = o.pdef->getSolutionPath()->as<og::PathGeometric>();
+    for (std::size_t k = 0; k < path->getStateCount(); ++k) {
+      const Joints q = ToJoints(path->getState(k));
+      if (result.waypoints.empty() || !NearlyEqual(result.waypoints.back(), q)) {
+        result.waypoints.push_back(q);
+      }
+    }
+  } catch (const std::exception& e) {  // ompl::Exception and allocation failures
+    return finish(PathOutcome::kNoPathWithinDeadline, absl::StrCat("OMPL: ", e.what()));
+  }
+  // RRT-Connect's path runs between exactly our start and goal states (copied), but make the
+  // ends bit-exact so callers can chain paths.
+  if (result.waypoints.size() < 2) {
+    return finish(PathOutcome::kNoPathWithinDeadline, "RRT-Connect returned a degenerate path");
+  }
+  result.waypoints.front() = start;
+  result.waypoints.back() = goal;
+  ShortcutPath(checker_, limits_, options_.max_step_m, options_.shortcut_rounds, options_.seed,
+               deadline, result.waypoints);
+  return finish(PathOutcome::kSolved, "");
+}
+
+PathResult PlanPath(CollisionChecker& checker, const JointLimits& limits, const Joints& start,
+                    const Joints& goal, const PathOptions& options, const Deadline& deadline) {
+  const Clock::time_point t0 = Clock::now();
+  PathPlanner planner(checker, limits, options);
+  PathResult result = planner.Plan(start, goal, deadline);
+  result.planning_s = SecondsSince(t0);
+  return result;
+}
+
+namespace {
+
+// Removes waypoints greedily: from each kept waypoint, jump to the farthest later one whose
+// straight segment is free and faster than the waypoints it skips. Returns shortcuts taken.
+int GreedySkip(CollisionChecker& checker, const JointLimits& limits, double max_step_m,
+               const Deadline& deadline, std::vector<Joints>& w) {
+  int taken = 0;
+  for (size_t i = 0; i + 2 < w.size(); ++i) {
+    for (size_t j = w.size() - 1; j >= i + 2; --j) {
+      if (deadline.Expired()) return taken;
+      const double via = PathTimeS(std::span<const Joints>(w).subspan(i, j - i + 1), limits);
+      if (MoveTimeS(w[i], w[j], limits) >= via) continue;
+      if (checker.IsMotionFree(w[i], w[j], max_step_m)) {
+        w.erase(w.begin() + static_cast<std::ptrdiff_t>(i) + 1, w.begin() + static_cast<std::ptrdiff_t>(j));
+        ++taken;
+        break;
+      }
+    }
+  }
+  return taken;
+}
+
+}  // namespace
+
+int ShortcutPath(CollisionChecker& checker, const JointLimits& limits, double max_step_m,
+                 int rounds, uint64_t seed, const Deadline& deadline,
+                 std::vector<Joints>& waypoints) {
+  std::vector<Joints>& w = waypoints;
+  if (w.size() < 3) return 0;
+  int taken = GreedySkip(checker, limits, max_step_m, deadline, w);
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  // Per path: cumulative joint-space length at each waypoint and the time of each segment;
+  // recomputed only when a shortcut is taken, so a rejected round costs a few MoveTimeS.
+  std::vector<double> cumulative, seg_time;
+  double path_time = 0.0;
+  auto measure = [&] {
+    cumulative.assign(w.size(), 0.0);
+    seg_time.assign(w.size() - 1, 0.0);
+    path_time = 0.0;
+    for (size_t k = 1; k < w.size(); ++k) {
+      cumulative[k] = cumulative[k - 1] + (w[k] - w[k - 1]).norm();
+      seg_time[k - 1] = MoveTimeS(w[k - 1], w[k], limits);
+      path_time += seg_time[k - 1];
+    }
+  };
+  measure();
+  std::vector<Joints> candidate;
+  for (int round = 0; round < rounds && w.size() >= 3; ++round) {
+    if (deadline.Expired()) break;
+    // Two points drawn uniformly by joint-space length along the path; the segment between
+    // them replaces what lies between (OMPL's PathSimplifier::shortcutPath does the same).
+    const double length = cumulative.back();
+    double u = unit(rng) * length, v = unit(rng) * length;
+    if (u > v) std::swap(u, v);
+    auto locate = [&](double s, size_t& seg, Joints& q) {
+      seg = static_cast<size_t>(std::upper_bound(cumulative.begin(), cumulative.end(), s) -
+                                cumulative.begin());
+      seg = std::clamp<size_t>(seg, 1, w.size() - 1) - 1;  // segment seg: w[seg] -> w[seg + 1]
+      const double len = cumulative[seg + 1] - cumulative[seg];
+      const double f = len > 0 ? std::clamp((s - cumulative[seg]) / len, 0.0, 1.0) : 0.0;
+      q = w[seg] + f * (w[seg + 1] - w[seg]);
+    };
+    size_t i = 0, j = 0;
+    Joints qu, qv;
+    locate(u, i, qu);
+    locate(v, j, qv);
+    if (i == j) continue;  // both on one straight segment: nothing to gain
+    // Time of w[0..i], qu, qv, w[j+1..]: the segments i..j are replaced by three.
+    double replaced = 0.0;
+    for (size_t k = i; k <= j; ++k) replaced += seg_time[k];
+    const double joined = MoveTimeS(w[i], qu, limits) + MoveTimeS(qu, qv, limits) +
+                          MoveTimeS(qv, w[j + 1], limits);
+    if (joined >= replaced - 1e-9) continue;
+    // The new joining segment first (it is the one likely to fail), then the two remnants of
+    // old segments: sub-segments of checked segments, but sampled at other points, so they are
+    // checked again to keep the contract that every output segment passed IsMotionFree.
+    if (!checker.IsMotionFree(qu, qv, max_step_m)) continue;
+    if (!checker.IsMotionFree(w[i], qu, max_step_m)) continue;
+    if (!checker.IsMotionFree(qv, w[j + 1], max_step_m)) continue;
+    candidate.assign(w.begin(), w.begin() + static_cast<std::ptrdiff_t>(i) + 1);
+    for (const Joints* q : {&qu, &qv}) {
+      if (!NearlyEqual(candidate.back(), *q)) candidate.push_back(*q);
+    }
+    for (size_t k = j + 1; k < w.size(); ++k) {
+      if (!NearlyEqual(candidate.back(), w[k])) candidate.push_back(w[k]);
+    }
+    w.swap(candidate);
+    measure();
+    ++taken;
+  }
+  taken += GreedySkip(checker, limits, max_step_m, deadline, w);
+  return taken;
+}
+
+}  // namespace vb::plan

@@ -1,0 +1,110 @@
+// SPDX-License-Identifier: Apache-2.0
+// Collision-free joint-space paths between two configurations of the arm: the straight segment
+// when it is free (as VAMP does, Thomason et al. ICRA 2024), else RRT-Connect (Kuffner & LaValle,
+// ICRA 2000; OMPL's implementation) with our CollisionChecker as OMPL's StateValidityChecker and
+// MotionValidator, then shortcutting. Every segment of a returned path has been checked with
+// CollisionChecker::IsMotionFree at the requested resolution; the arm is meant to follow those
+// straight joint-space segments exactly (see time_parameterization.h).
+//
+// Determinism: a result depends only on the checker, limits, start, goal and options (the seed
+// included) — not on earlier calls or other planners in the process — as long as the planning
+// time limit is not reached. OMPL's global seed (ompl::RNG::setSeed) is not used: the random
+// samples RRT-Connect draws come from our own state sampler seeded from options.seed on every
+// call, and shortcutting uses its own generator. A plan cut short by the time limit or deadline
+// depends on timing, and so cannot be reproduced.
+//
+// OMPL and its exceptions stay inside path_planner.cc; nothing here throws. OMPL's console log
+// is silenced (process-wide, at the first PathPlanner) down to errors.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "absl/status/status.h"
+#include "core/deadline.h"
+#include "workers/plan/collision_checker.h"
+#include "workers/plan/ur5_kinematics.h"
+
+namespace vb::plan {
+
+struct PathOptions {
+  double max_step_m = 0.01;       // motion-check resolution: max travel of any arm point, m
+  double range_rad = 0.0;         // RRT-Connect step (joint-space length); 0 = OMPL's default
+  double time_limit_s = 1.0;      // planning time per call (also bounded by the deadline)
+  int shortcut_rounds = 60;       // random shortcut attempts after RRT-Connect (0 = none)
+  uint64_t seed = 1;              // seeds RRT-Connect's samples and the shortcuts
+  bool try_direct_first = true;   // check the straight segment before running RRT-Connect
+
+  // INVALID_ARGUMENT naming the field: max_step_m <= 0 or non-finite, range_rad < 0,
+  // time_limit_s <= 0 or NaN, shortcut_rounds < 0.
+  absl::Status Validate() const;
+};
+
+enum class PathOutcome {
+  kSolved,
+  kStartInCollision,
+  kGoalInCollision,
+  kOutsideLimits,         // start or goal outside the joint limits
+  kNoPathWithinDeadline,  // RRT-Connect found no exact path in time (approximate ones count here)
+  kInvalidInput,          // non-finite joints, invalid limits or options
+};
+// "solved", "start_in_collision", "goal_in_collision", "outside_limits",
+// "no_path_within_deadline", "invalid_input".
+std::string_view PathOutcomeName(PathOutcome outcome);
+
+struct PathResult {
+  PathOutcome outcome = PathOutcome::kInvalidInput;
+  std::string message;              // why, on anything but kSolved
+  std::vector<Joints> waypoints;    // start .. goal on kSolved (>= 2; start == goal gives 2)
+  int64_t checks = 0;               // configuration checks spent (checker.checks() delta)
+  double planning_s = 0.0;          // wall time of the call
+  bool direct = false;              // the straight segment start -> goal was free
+};
+
+// A planning context bound to one checker and one set of limits and options: holds OMPL's state
+// space, space information, RRT-Connect and problem definition so that repeated queries pay no
+// setup. Not thread-safe (nor is the checker); use one per thread. The checker must outlive it.
+class PathPlanner {
+ public:
+  // Invalid limits or options are reported by every Plan() call as kInvalidInput.
+  PathPlanner(CollisionChecker& checker, const JointLimits& limits, const PathOptions& options);
+  ~PathPlanner();
+  PathPlanner(const PathPlanner&) = delete;
+  PathPlanner& operator=(const PathPlanner&) = delete;
+
+  // A path from start to goal. Checks, in this order: finite joints (kInvalidInput), limits
+  // (kOutsideLimits), start then goal free (kStartInCollision, kGoalInCollision); then the
+  // straight segment, then RRT-Connect within min(options.time_limit_s, deadline), then
+  // shortcuts (only while the deadline allows; a shortcut is taken when it shortens the
+  // execution time of the path, MoveTimeS summed over segments). Never throws, never runs past
+  // the bound by more than one collision check batch.
+  PathResult Plan(const Joints& start, const Joints& goal, const Deadline& deadline);
+
+  const PathOptions& options() const { return options_; }
+
+ private:
+  struct Ompl;  // OMPL objects, defined in the .cc
+  CollisionChecker& checker_;
+  JointLimits limits_;
+  PathOptions options_;
+  absl::Status setup_status_;
+  std::unique_ptr<Ompl> ompl_;
+};
+
+// One-shot form: builds a PathPlanner and plans once (OMPL setup included in planning_s).
+PathResult PlanPath(CollisionChecker& checker, const JointLimits& limits, const Joints& start,
+                    const Joints& goal, const PathOptions& options, const Deadline& deadline);
+
+// Shortens `waypoints` in place (first and last kept): `rounds` times, two random points on the
+// path (anywhere along its segments, drawn from `seed`) are joined by a straight segment when
+// IsMotionFree(max_step_m) and the path's total MoveTimeS drops; then waypoints that can be
+// skipped are removed greedily (each new segment checked). Stops early at the deadline. Returns
+// the number of shortcuts taken. The input segments are assumed already checked.
+int ShortcutPath(CollisionChecker& checker, const JointLimits& limits, double max_step_m,
+                 int rounds, uint64_t seed, const Deadline& deadline,
+                 std::vector<Joints>& waypoints);
+
+}  // namespace vb::plan

@@ -1,0 +1,285 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "workers/plan/path_planner.h"
+
+#include <cmath>
+#include <atomic>
+#include <chrono>
+#include <limits>
+
+#include "gtest/gtest.h"
+#include "workers/plan/fake_checker_test_util.h"
+#include "workers/plan/time_parameterization.h"
+
+namespace vb::plan {
+namespace {
+
+using testing::JointBallChecker;
+
+Joints J(double a, double b = 0, double c = 0, double d = 0, double e = 0, double f = 0) {
+  Joints q;
+  q << a, b, c, d, e, f;
+  return q;
+}
+
+// Every segment of the path is free, it starts and ends where asked, and stays in the limits.
+void ExpectValidPath(JointBallChecker& checker, const JointLimits& limits, const PathResult& r,
+                     const Joints& start, const Joints& goal) {
+  ASSERT_EQ(r.outcome, PathOutcome::kSolved) << r.message;
+  ASSERT_GE(r.waypoints.size(), 2u);
+  EXPECT_EQ(r.waypoints.front(), start);
+  EXPECT_EQ(r.waypoints.back(), goal);
+  for (size_t k = 0; k < r.waypoints.size(); ++k) {
+    EXPECT_TRUE(limits.Contains(r.waypoints[k])) << "waypoint " << k;
+    if (k > 0) {
+      EXPECT_TRUE(checker.IsMotionFree(r.waypoints[k - 1], r.waypoints[k], 0.01)) << "segment " << k;
+    }
+  }
+}
+
+TEST(PathPlanner, StraightLineWhenFree) {
+  JointBallChecker checker;
+  checker.AddBall(J(0, 3), 0.5);
+  const PathResult r = PlanPath(checker, JointLimits(), J(-1), J(1), PathOptions(), Deadline::Infinite());
+  ExpectValidPath(checker, JointLimits(), r, J(-1), J(1));
+  EXPECT_TRUE(r.direct);
+  EXPECT_EQ(r.waypoints.size(), 2u);
+  EXPECT_GT(r.checks, 0);
+}
+
+TEST(PathPlanner, GoesAroundAJointSpaceObstacle) {
+  JointBallChecker checker;
+  checker.AddBall(J(0), 1.0);
+  const JointLimits limits;
+  const Joints start = J(-2, 0.1), goal = J(2, -0.1, 0.2);
+  const PathResult r = PlanPath(checker, limits, start, goal, PathOptions(), Deadline::Infinite());
+  ExpectValidPath(checker, limits, r, start, goal);
+  EXPECT_FALSE(r.direct);
+  EXPECT_GE(r.waypoints.size(), 3u);
+  // Shortcutting brings the path near the shortest way round (two tangents and an arc: ~4.5 rad
+  // of joint-space length for this geometry); RRT-Connect alone wanders far more.
+  double length = 0;
+  for (size_t k = 1; k < r.waypoints.size(); ++k) length += (r.waypoints[k] - r.waypoints[k - 1]).norm();
+  EXPECT_LT(length, 6.0);
+}
+
+TEST(PathPlanner, ShortcuttingNeverSlowsThePath) {
+  JointBallChecker checker;
+  checker.AddBall(J(0), 1.0);
+  checker.AddBall(J(1.5, 1.0), 0.6);
+  const JointLimits limits;
+  PathOptions raw;
+  raw.shortcut_rounds = 0;
+  PathOptions shortcut = raw;
+  shortcut.shortcut_rounds = 100;
+  const Joints start = J(-2, 0.2), goal = J(2.5, 0.5, 0.3);
+  const PathResult a = PlanPath(checker, limits, start, goal, raw, Deadline::Infinite());
+  const PathResult b = PlanPath(checker, limits, start, goal, shortcut, Deadline::Infinite());
+  ExpectValidPath(checker, limits, a, start, goal);
+  ExpectValidPath(checker, limits, b, start, goal);
+  EXPECT_LE(PathTimeS(b.waypoints, limits), PathTimeS(a.waypoints, limits) + 1e-9);
+}
+
+TEST(PathPlanner, SameSeedSamePath) {
+  JointBallChecker checker;
+  checker.AddBall(J(0), 1.0);
+  PathOptions options;
+  options.seed = 7;
+  const Joints start = J(-2, 0.1), goal = J(2, -0.1, 0.2);
+  PathPlanner planner(checker, JointLimits(), options);
+  const PathResult a = planner.Plan(start, goal, Deadline::Infinite());
+  // Another planner in between must not change the next result (no shared RNG state).
+  PathOptions other = options;
+  other.seed = 99;
+  (void)PlanPath(checker, JointLimits(), start, goal, other, Deadline::Infinite());
+  const PathResult b = planner.Plan(start, goal, Deadline::Infinite());
+  const PathResult c = PlanPath(checker, JointLimits(), start, goal, options, Deadline::Infinite());
+  ASSERT_EQ(a.outcome, PathOutcome::kSolved);
+  EXPECT_EQ(a.waypoints, b.waypoints);
+  EXPECT_EQ(a.waypoints, c.waypoints);
+}
+
+TEST(PathPlanner, ReusedPlannerSolvesManyQueries) {
+  JointBallChecker checker;
+  checker.AddBall(J(0), 1.0);
+  const JointLimits limits;
+  PathPlanner planner(checker, limits, PathOptions());
+  for (int k = 0; k < 20; ++k) {
+    const double s = 0.1 * k;
+    const Joints start = J(-2, s - 1.0, 0.1), goal = J(2, 1.0 - s, -0.2, 0.3);
+    const PathResult r = planner.Plan(start, goal, Deadline::Infinite());
+    ExpectValidPath(checker, limits, r, start, goal);
+  }
+}
+
+TEST(PathPlanner, DirectDisabledStillFindsAPath) {
+  JointBallChecker checker;
+  PathOptions options;
+  options.try_direct_first = false;
+  const PathResult r = PlanPath(checker, JointLimits(), J(-1), J(1, 1), options, Deadline::Infinite());
+  ExpectValidPath(checker, JointLimits(), r, J(-1), J(1, 1));
+  EXPECT_FALSE(r.direct);
+  EXPECT_EQ(r.waypoints.size(), 2u);  // shortcutting finds the straight line
+}
+
+TEST(PathPlanner, StartInCollisionFails) {
+  JointBallChecker checker;
+  checker.AddBall(J(0), 1.0);
+  const PathResult r = PlanPath(checker, JointLimits(), J(0.5), J(2), PathOptions(), Deadline::Infinite());
+  EXPECT_EQ(r.outcome, PathOutcome::kStartInCollision);
+  EXPECT_TRUE(r.waypoints.empty());
+  EXPECT_EQ(PathOutcomeName(r.outcome), "start_in_collision");
+}
+
+TEST(PathPlanner, GoalInCollisionFails) {
+  JointBallChecker checker;
+  checker.AddBall(J(0), 1.0);
+  const PathResult r = PlanPath(checker, JointLimits(), J(2), J(0.5), PathOptions(), Deadline::Infinite());
+  EXPECT_EQ(r.outcome, PathOutcome::kGoalInCollision);
+}
+
+TEST(PathPlanner, EnclosedGoalFailsWithinTheDeadline) {
+  JointBallChecker checker;
+  checker.AddShell(J(2), 0.5, 0.8);  // the goal at the centre is free, but walled in
+  PathOptions options;
+  options.time_limit_s = 30.0;  // the deadline, not the time limit, must stop it
+  const auto t0 = std::chrono::steady_clock::now();
+  const PathResult r = PlanPath(checker, JointLimits(), J(-2), J(2), options, Deadline::In(0.2));
+  const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  EXPECT_EQ(r.outcome, PathOutcome::kNoPathWithinDeadline) << r.message;
+  EXPECT_TRUE(r.waypoints.empty());
+  EXPECT_LT(elapsed, 10.0);  // generous: a hang, not speed, is what this catches
+}
+
+TEST(PathPlanner, EnclosedGoalFailsWithinTheTimeLimit) {
+  JointBallChecker checker;
+  checker.AddShell(J(2), 0.5, 0.8);
+  PathOptions options;
+  options.time_limit_s = 0.1;
+  const PathResult r = PlanPath(checker, JointLimits(), J(-2), J(2), options, Deadline::Infinite());
+  EXPECT_EQ(r.outcome, PathOutcome::kNoPathWithinDeadline);
+  EXPECT_LT(r.planning_s, 10.0);
+}
+
+TEST(PathPlanner, CancelledDeadlineStopsAtOnce) {
+  JointBallChecker checker;
+  checker.AddBall(J(0), 1.0);
+  std::atomic<bool> cancelled{true};
+  const PathResult r = PlanPath(checker, JointLimits(), J(-2), J(2), PathOptions(),
+                                Deadline::In(100.0, &cancelled));
+  EXPECT_EQ(r.outcome, PathOutcome::kNoPathWithinDeadline);
+}
+
+TEST(PathPlanner, NonFiniteInputIsRejected) {
+  JointBallChecker checker;
+  Joints bad = J(0);
+  bad[3] = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(PlanPath(checker, JointLimits(), bad, J(1), PathOptions(), Deadline::Infinite()).outcome,
+            PathOutcome::kInvalidInput);
+  const PathResult r = PlanPath(checker, JointLimits(), J(1), bad, PathOptions(), Deadline::Infinite());
+  EXPECT_EQ(r.outcome, PathOutcome::kInvalidInput);
+  EXPECT_NE(r.message.find("goal"), std::string::npos);
+  bad[3] = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(PlanPath(checker, JointLimits(), bad, J(1), PathOptions(), Deadline::Infinite()).outcome,
+            PathOutcome::kInvalidInput);
+}
+
+TEST(PathPlanner, OutsideLimitsIsRejected) {
+  JointBallChecker checker;
+  JointLimits limits;
+  limits.upper[1] = 1.0;
+  const PathResult r = PlanPath(checker, limits, J(0), J(0, 1.5), PathOptions(), Deadline::Infinite());
+  EXPECT_EQ(r.outcome, PathOutcome::kOutsideLimits);
+  EXPECT_NE(r.message.find("goal"), std::string::npos);
+}
+
+TEST(PathPlanner, BadOptionsAndLimitsAreRejected) {
+  JointBallChecker checker;
+  PathOptions options;
+  options.max_step_m = 0.0;
+  EXPECT_NE(options.Validate().message().find("max_step_m"), std::string::npos);
+  PathResult r = PlanPath(checker, JointLimits(), J(0), J(1), options, Deadline::Infinite());
+  EXPECT_EQ(r.outcome, PathOutcome::kInvalidInput);
+  options = PathOptions();
+  options.time_limit_s = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(options.Validate().ok());
+  options = PathOptions();
+  options.shortcut_rounds = -1;
+  EXPECT_FALSE(options.Validate().ok());
+  JointLimits limits;
+  limits.max_velocity[2] = -1;
+  r = PlanPath(checker, limits, J(0), J(1), PathOptions(), Deadline::Infinite());
+  EXPECT_EQ(r.outcome, PathOutcome::kInvalidInput);
+}
+
+TEST(PathPlanner, StartEqualsGoal) {
+  JointBallChecker checker;
+  const PathResult r = PlanPath(checker, JointLimits(), J(0.3), J(0.3), PathOptions(), Deadline::Infinite());
+  ASSERT_EQ(r.outcome, PathOutcome::kSolved);
+  EXPECT_EQ(r.waypoints.size(), 2u);
+}
+
+// Balls checked pointwise; motions by the base class's sampling (CollisionChecker::IsMotionFree
+// and MotionSteps), as the real checkers do.
+class SampledBallChecker : public CollisionChecker {
+ public:
+  explicit SampledBallChecker(std::vector<std::pair<Joints, double>> balls) : balls_(std::move(balls)) {}
+  bool IsFree(const Joints& q) override {
+    ++checks_;
+    for (const auto& [c, r] : balls_) {
+      if ((q - c).norm() < r) return false;
+    }
+    return true;
+  }
+  double Clearance(const Joints& q) override {
+    ++checks_;
+    double best = 1e9;
+    for (const auto& [c, r] : balls_) best = std::min(best, (q - c).norm() - r);
+    return best;
+  }
+
+ private:
+  std::vector<std::pair<Joints, double>> balls_;
+};
+
+TEST(PathPlanner, EverySegmentPassesASampledChecker) {
+  SampledBallChecker checker({{J(0), 1.0}, {J(1.5, 1.2), 0.5}, {J(-1, -1, 1), 0.7}});
+  const JointLimits limits;
+  PathPlanner planner(checker, limits, PathOptions());
+  for (int k = 0; k < 10; ++k) {
+    const Joints start = J(-2, 0.1 * k), goal = J(2, -0.1 * k, 0.3);
+    const PathResult r = planner.Plan(start, goal, Deadline::Infinite());
+    ASSERT_EQ(r.outcome, PathOutcome::kSolved) << r.message;
+    EXPECT_FALSE(r.direct);
+    for (size_t i = 1; i < r.waypoints.size(); ++i) {
+      EXPECT_TRUE(checker.IsMotionFree(r.waypoints[i - 1], r.waypoints[i], 0.01)) << k << " " << i;
+    }
+  }
+}
+
+TEST(ShortcutPath, RemovesADetourAndChecksEverySegment) {
+  JointBallChecker checker;
+  checker.AddBall(J(0, 3), 0.5);  // nowhere near
+  std::vector<Joints> w = {J(-1), J(-0.5, 1.0), J(0, -1.0), J(0.5, 1.0), J(1)};
+  const int taken = ShortcutPath(checker, JointLimits(), 0.01, 20, 3, Deadline::Infinite(), w);
+  EXPECT_GE(taken, 1);
+  ASSERT_EQ(w.size(), 2u);
+  EXPECT_EQ(w.front(), J(-1));
+  EXPECT_EQ(w.back(), J(1));
+}
+
+TEST(ShortcutPath, KeepsAPathThatCannotBeShortened) {
+  JointBallChecker checker;
+  checker.AddBall(J(0), 1.0);
+  // Around the ball by its tangent corners: any shortcut between segments cuts into it.
+  std::vector<Joints> w = {J(-2), J(-1.0, 1.2), J(1.0, 1.2), J(2)};
+  ASSERT_TRUE(checker.IsMotionFree(w[0], w[1], 0.01) && checker.IsMotionFree(w[1], w[2], 0.01) &&
+              checker.IsMotionFree(w[2], w[3], 0.01));
+  const double before = PathTimeS(w, JointLimits());
+  ShortcutPath(checker, JointLimits(), 0.01, 50, 1, Deadline::Infinite(), w);
+  for (size_t k = 1; k < w.size(); ++k) EXPECT_TRUE(checker.IsMotionFree(w[k - 1], w[k], 0.01));
+  EXPECT_LE(PathTimeS(w, JointLimits()), before + 1e-12);
+  EXPECT_GE(w.size(), 3u);
+}
+
+}  // namespace
+}  // namespace vb::plan

@@ -1,0 +1,48 @@
+// SPDX-License-Identifier: Apache-2.0
+// Timing of piecewise-linear joint paths: the arm stops at every waypoint and moves along each
+// straight joint-space segment with one synchronised trapezoidal (or, for short moves,
+// triangular) velocity profile, so that it follows the collision-checked segments exactly. All
+// joints share the path parameter s(t) in [0, 1], q(t) = a + s(t) (b - a); s accelerates at
+// A = min_i amax_i / |d_i|, cruises at V = min_i vmax_i / |d_i| and decelerates at A, so every joint
+// stays within its velocity and acceleration limits and the slowest joint saturates. This is the
+// fastest rest-to-rest motion that stays on the segment. (URScript movej moves the same way.)
+// Thread-safe (pure functions).
+#pragma once
+
+#include <span>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "workers/plan/ur5_kinematics.h"
+
+namespace vb::plan {
+
+struct TimedJoints {
+  double t = 0.0;  // s
+  Joints q;        // rad
+};
+
+// Duration of the rest-to-rest move a -> b on the straight segment: 0 when a == b, otherwise
+// 2 sqrt(1/A) (triangular, when 1 < V^2/A) or 1/V + V/A (trapezoidal). Limits are assumed valid
+// (JointLimits::Validate); joint position limits are not consulted. This is also the cost of
+// going from a to b used to order the cuts.
+double MoveTimeS(const Joints& a, const Joints& b, const JointLimits& limits);
+
+// Sum of MoveTimeS over consecutive waypoints (0 for fewer than two).
+double PathTimeS(std::span<const Joints> waypoints, const JointLimits& limits);
+
+// Samples of the timed path: for each segment, samples every `sample_dt_s` from its start, plus
+// every waypoint exactly (the first at start_time_s, the last at start_time_s + PathTimeS).
+// Times are strictly increasing: a waypoint equal to the one before it (a zero-length segment)
+// is merged with it. INVALID_ARGUMENT naming the field: no waypoints, a non-finite joint value,
+// invalid limits, sample_dt_s <= 0 or non-finite start_time_s, or more than 10 million samples.
+absl::StatusOr<std::vector<TimedJoints>> TimeParameterize(std::span<const Joints> waypoints,
+                                                          const JointLimits& limits,
+                                                          double start_time_s,
+                                                          double sample_dt_s);
+
+// Position of the timed move a -> b at time t in [0, MoveTimeS(a, b)] after its start (clamped
+// outside). Exposed for tests and for executors that interpolate themselves.
+Joints MoveStateAt(const Joints& a, const Joints& b, const JointLimits& limits, double t);
+
+}  // namespace vb::plan

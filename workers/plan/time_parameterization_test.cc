@@ -1,0 +1,167 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "workers/plan/time_parameterization.h"
+
+#include <cmath>
+#include <limits>
+#include <random>
+
+#include "gtest/gtest.h"
+
+namespace vb::plan {
+namespace {
+
+Joints J(double a, double b = 0, double c = 0, double d = 0, double e = 0, double f = 0) {
+  Joints q;
+  q << a, b, c, d, e, f;
+  return q;
+}
+
+TEST(MoveTime, TrapezoidMatchesClosedForm) {
+  JointLimits limits;  // v = pi, a = 1.4
+  // One joint, 3 rad: v^2/a = 7.05 rad > 3, so triangular: 2 sqrt(3 / 1.4).
+  EXPECT_NEAR(MoveTimeS(J(0), J(3), limits), 2.0 * std::sqrt(3.0 / 1.4), 1e-12);
+  // With a = 10: v^2/a = 0.987 < 3, trapezoidal: d/v + v/a.
+  limits.max_acceleration = Joints::Constant(10.0);
+  EXPECT_NEAR(MoveTimeS(J(0), J(3), limits), 3.0 / M_PI + M_PI / 10.0, 1e-12);
+  // Sign does not matter.
+  EXPECT_NEAR(MoveTimeS(J(3), J(0), limits), MoveTimeS(J(0), J(3), limits), 1e-15);
+}
+
+TEST(MoveTime, SlowestJointSetsTheTime) {
+  JointLimits limits;
+  limits.max_acceleration = Joints::Constant(10.0);
+  limits.max_velocity[2] = 0.5;
+  // Joint 1 moves 3 rad (alone: 1.27 s); joint 3 moves 1 rad at most at 0.5 rad/s. Synchronised,
+  // the path parameter cruises at V = 0.5 / 1 (joint 3) and accelerates at A = 10 / 3 (joint 1).
+  EXPECT_NEAR(MoveTimeS(J(0, 0, 0), J(3, 0, 1), limits), 1.0 / 0.5 + 0.5 / (10.0 / 3.0), 1e-12);
+  EXPECT_NEAR(MoveTimeS(J(0), J(0), limits), 0.0, 0.0);
+}
+
+TEST(TimeParameterize, StaysWithinLimitsOnRandomPaths) {
+  JointLimits limits;
+  limits.max_velocity << 3.14, 3.14, 2.0, 3.14, 1.0, 3.14;
+  limits.max_acceleration << 1.4, 2.0, 1.4, 5.0, 1.4, 0.7;
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-3.0, 3.0);
+  for (int trial = 0; trial < 20; ++trial) {
+    std::vector<Joints> w;
+    for (int k = 0; k < 5; ++k) {
+      Joints q;
+      for (int i = 0; i < 6; ++i) q[i] = u(rng) * (trial % 2 == 0 ? 1.0 : 0.02);  // long and short
+      w.push_back(q);
+    }
+    const double dt = 0.004;
+    auto samples = TimeParameterize(w, limits, 5.0, dt);
+    ASSERT_TRUE(samples.ok()) << samples.status();
+    const auto& s = *samples;
+    EXPECT_DOUBLE_EQ(s.front().t, 5.0);
+    EXPECT_NEAR(s.back().t, 5.0 + PathTimeS(w, limits), 1e-9);
+    // Every waypoint appears at its time.
+    double t = 5.0;
+    size_t found = 0;
+    for (size_t k = 0; k < w.size(); ++k) {
+      if (k > 0) t += MoveTimeS(w[k - 1], w[k], limits);
+      for (const TimedJoints& p : s) {
+        if (std::abs(p.t - t) < 1e-9 && p.q == w[k]) {
+          ++found;
+          break;
+        }
+      }
+    }
+    EXPECT_EQ(found, w.size());
+    for (size_t k = 1; k < s.size(); ++k) {
+      const double h = s[k].t - s[k - 1].t;
+      ASSERT_GT(h, 0.0);
+      const Joints v = (s[k].q - s[k - 1].q) / h;
+      for (int i = 0; i < 6; ++i) {
+        EXPECT_LE(std::abs(v[i]), limits.max_velocity[i] * (1 + 1e-9)) << "sample " << k;
+      }
+      if (k + 1 < s.size()) {
+        // The second divided difference is a weighted average of the acceleration.
+        const double h2 = s[k + 1].t - s[k].t;
+        const Joints v2 = (s[k + 1].q - s[k].q) / h2;
+        const Joints acc = 2.0 * (v2 - v) / (h + h2);
+        for (int i = 0; i < 6; ++i) {
+          EXPECT_LE(std::abs(acc[i]), limits.max_acceleration[i] * (1 + 1e-6) + 1e-9) << "sample " << k;
+        }
+      }
+    }
+  }
+}
+
+TEST(TimeParameterize, SlowestJointReachesItsLimit) {
+  // The profile is time-optimal on the segment: some joint hits its velocity or acceleration
+  // limit (here velocity: a long move with high acceleration).
+  JointLimits limits;
+  limits.max_acceleration = Joints::Constant(20.0);
+  std::vector<Joints> w = {J(0), J(3, 1)};
+  auto s = TimeParameterize(w, limits, 0.0, 0.001);
+  ASSERT_TRUE(s.ok());
+  double vmax = 0;
+  for (size_t k = 1; k < s->size(); ++k) {
+    vmax = std::max(vmax, std::abs(((*s)[k].q[0] - (*s)[k - 1].q[0]) / ((*s)[k].t - (*s)[k - 1].t)));
+  }
+  EXPECT_GT(vmax, 0.99 * M_PI);
+}
+
+TEST(TimeParameterize, PathStaysOnTheSegments) {
+  JointLimits limits;
+  std::vector<Joints> w = {J(0), J(1, 2), J(-1, 0.5, 0.3)};
+  auto s = TimeParameterize(w, limits, 0.0, 0.01);
+  ASSERT_TRUE(s.ok());
+  const double t1 = MoveTimeS(w[0], w[1], limits);
+  for (const TimedJoints& p : *s) {
+    const Joints& a = p.t <= t1 ? w[0] : w[1];
+    const Joints& b = p.t <= t1 ? w[1] : w[2];
+    // On the line a-b: the residual after projecting onto it is zero.
+    const Joints ab = b - a;
+    const double f = (p.q - a).dot(ab) / ab.squaredNorm();
+    EXPECT_GE(f, -1e-12);
+    EXPECT_LE(f, 1 + 1e-12);
+    EXPECT_LT((a + f * ab - p.q).norm(), 1e-12);
+  }
+}
+
+TEST(TimeParameterize, ZeroLengthSegmentsAreMerged) {
+  JointLimits limits;
+  std::vector<Joints> w = {J(0), J(0), J(1), J(1), J(1)};
+  auto s = TimeParameterize(w, limits, 1.0, 0.05);
+  ASSERT_TRUE(s.ok());
+  EXPECT_EQ(s->front().q, J(0));
+  EXPECT_EQ(s->back().q, J(1));
+  EXPECT_NEAR(s->back().t, 1.0 + MoveTimeS(J(0), J(1), limits), 1e-12);
+  for (size_t k = 1; k < s->size(); ++k) EXPECT_GT((*s)[k].t, (*s)[k - 1].t);
+  auto single = TimeParameterize(std::vector<Joints>{J(0.5)}, limits, 2.0, 0.05);
+  ASSERT_TRUE(single.ok());
+  ASSERT_EQ(single->size(), 1u);
+  EXPECT_EQ((*single)[0].t, 2.0);
+}
+
+TEST(TimeParameterize, MoveStateAtEndsExactly) {
+  JointLimits limits;
+  const Joints a = J(0.1, 0.2), b = J(-0.7, 1.1, 0.4);
+  const double T = MoveTimeS(a, b, limits);
+  EXPECT_EQ(MoveStateAt(a, b, limits, 0.0), a);
+  EXPECT_EQ(MoveStateAt(a, b, limits, T), b);
+  EXPECT_EQ(MoveStateAt(a, b, limits, T + 1), b);
+  // Symmetric profile: half way in time is half way in space.
+  EXPECT_LT((MoveStateAt(a, b, limits, T / 2) - 0.5 * (a + b)).norm(), 1e-12);
+}
+
+TEST(TimeParameterize, BadInputIsRejected) {
+  JointLimits limits;
+  std::vector<Joints> w = {J(0), J(1)};
+  EXPECT_NE(TimeParameterize({}, limits, 0, 0.01).status().message().find("waypoints"), std::string::npos);
+  EXPECT_NE(TimeParameterize(w, limits, 0, 0.0).status().message().find("sample_dt_s"), std::string::npos);
+  EXPECT_FALSE(TimeParameterize(w, limits, std::numeric_limits<double>::infinity(), 0.01).ok());
+  w[1][2] = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_NE(TimeParameterize(w, limits, 0, 0.01).status().message().find("waypoints[1]"), std::string::npos);
+  w[1][2] = 0;
+  limits.max_acceleration[4] = 0;
+  EXPECT_FALSE(TimeParameterize(w, limits, 0, 0.01).ok());
+  limits = JointLimits();
+  EXPECT_FALSE(TimeParameterize(w, limits, 0, 1e-9).ok());  // too many samples
+}
+
+}  // namespace
+}  // namespace vb::plan
