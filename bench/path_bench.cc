@@ -7,6 +7,11 @@
 //    balls, 200 random free start/goal pairs per iteration; counters give the median and p95 per
 //    path (and over the paths that needed RRT-Connect), that fraction and the success rate. The fake's checks are
 //    nearly free, so this measures the planner's own cost (OMPL included), not collision checking.
+//  - BM_PlanPathScene: the primitive checker on simulated vine scenes (sim::GenerateScene, tuning
+//    seeds 1100-1104, mill-end tool, no margin), 40 pairs of random collision-free configurations
+//    per vine (within +-1.2 rad of a working pose, or anywhere in [-pi, pi]; the UR5's limits,
+//    elbow +-pi); same counters, plus dense_failures: returned
+//    segments that fail a re-check at 2 mm (the planner checks at 10 mm).
 //  - BM_PlanPathOneShot / BM_PlanPathReused: one query needing RRT-Connect, with and without the
 //    OMPL setup (PlanPath vs PathPlanner::Plan).
 // Run (JSON: the console printer of Debian's Google Benchmark garbles counters below 1):
@@ -17,6 +22,8 @@
 #include <vector>
 
 #include "benchmark/benchmark.h"
+#include "sim/vine_generator.h"
+#include "workers/plan/collision_checker.h"
 #include "workers/plan/cut_order.h"
 #include "workers/plan/fake_checker_test_util.h"
 #include "workers/plan/path_planner.h"
@@ -109,6 +116,99 @@ void BM_PlanPathFake(benchmark::State& state) {
   state.counters["checks_per_path"] = double(checks) / total;
 }
 BENCHMARK(BM_PlanPathFake)->Unit(benchmark::kMillisecond);
+
+ToolGeometry MillEnd() {
+  ToolGeometry tool;
+  tool.name = "mill_end";
+  tool.flange_from_tcp.translation() = Eigen::Vector3d(0, 0, 0.17);
+  tool.capsules = {{Eigen::Vector3d(0, 0, 0.0), Eigen::Vector3d(0, 0, 0.12), 0.035},
+                   {Eigen::Vector3d(0, 0, 0.12), Eigen::Vector3d(0, 0, 0.17), 0.006}};
+  return tool;
+}
+
+struct SceneWorld {
+  std::unique_ptr<CollisionChecker> checker;
+  std::vector<std::pair<Joints, Joints>> queries;
+};
+
+// spread_rad > 0: joints uniform within +-spread_rad of a working pose in front of the vine
+// (closer to the travel between cuts); 0: uniform in [-pi, pi] (adversarial: many pairs lie in
+// different components of the free space and are unsolvable).
+std::vector<SceneWorld> MakeSceneWorlds(double spread_rad) {
+  std::vector<SceneWorld> worlds;
+  const RobotModel robot = DefaultUr5(MillEnd());
+  for (uint64_t seed = 1100; seed < 1105; ++seed) {
+    sim::VineGeneratorOptions options;
+    options.neighbours = false;
+    auto sim_scene = sim::GenerateScene(seed, 0, options);
+    if (!sim_scene.ok()) continue;
+    auto scene = CollisionScene::Build(sim_scene->vine, DefaultPlatform(), robot);
+    if (!scene.ok()) continue;
+    SceneWorld w;
+    w.checker = MakePrimitiveChecker(robot, *scene);
+    std::mt19937 rng(static_cast<uint32_t>(seed));
+    const double spread = spread_rad > 0 ? spread_rad : M_PI;
+    std::uniform_real_distribution<double> u(-spread, spread);
+    Joints centre = Joints::Zero();
+    if (spread_rad > 0) centre << 0.0, -1.57, 1.2, -1.2, -1.57, 0.0;
+    auto random_free = [&] {
+      for (;;) {
+        Joints q = centre;
+        for (int i = 0; i < 6; ++i) q[i] += u(rng);
+        if (robot.limits.Contains(q) && w.checker->IsFree(q)) return q;
+      }
+    };
+    while (w.queries.size() < 40) {
+      const Joints a = random_free();
+      w.queries.push_back({a, random_free()});
+    }
+    worlds.push_back(std::move(w));
+  }
+  return worlds;
+}
+
+void BM_PlanPathScene(benchmark::State& state) {
+  std::vector<SceneWorld> worlds = MakeSceneWorlds(0.1 * static_cast<double>(state.range(1)));
+  const JointLimits limits = DefaultUr5(MillEnd()).limits;
+  PathOptions options;
+  options.range_rad = 0.1 * static_cast<double>(state.range(0));
+  std::vector<double> times, rrt_times;
+  int solved = 0, rrt = 0, total = 0, dense_failures = 0;
+  int64_t checks = 0;
+  for (auto _ : state) {
+    for (SceneWorld& w : worlds) {
+      PathPlanner planner(*w.checker, limits, options);
+      for (const auto& [a, b] : w.queries) {
+        const PathResult r = planner.Plan(a, b, Deadline::In(2.0));
+        times.push_back(r.planning_s);
+        solved += r.outcome == PathOutcome::kSolved;
+        rrt += !r.direct;
+        if (!r.direct) rrt_times.push_back(r.planning_s);
+        checks += r.checks;
+        ++total;
+        state.PauseTiming();
+        for (size_t k = 1; k < r.waypoints.size(); ++k) {
+          dense_failures += !w.checker->IsMotionFree(r.waypoints[k - 1], r.waypoints[k], 0.002);
+        }
+        state.ResumeTiming();
+      }
+    }
+  }
+  std::sort(times.begin(), times.end());
+  std::sort(rrt_times.begin(), rrt_times.end());
+  state.counters["median_us"] = 1e6 * times[times.size() / 2];
+  state.counters["p95_us"] = 1e6 * times[times.size() * 95 / 100];
+  if (!rrt_times.empty()) state.counters["rrt_median_us"] = 1e6 * rrt_times[rrt_times.size() / 2];
+  state.counters["rrt_fraction"] = double(rrt) / total;
+  state.counters["success_rate"] = double(solved) / total;
+  state.counters["checks_per_path"] = double(checks) / total;
+  state.counters["dense_failures"] = dense_failures;
+}
+// Arguments: RRT-Connect range in tenths of a radian (0: OMPL's default, 0.2 x the extent of the
+// joint box, ~5 rad here); query spread in tenths of a radian (0: whole joint box).
+BENCHMARK(BM_PlanPathScene)
+    ->Args({0, 12})->Args({10, 12})->Args({20, 12})->Args({0, 0})->Args({10, 0})
+    ->Unit(benchmark::kMillisecond)->Iterations(1);
 
 // A query that needs RRT-Connect: through a ball at the origin.
 void BM_PlanPathOneShot(benchmark::State& state) {

@@ -32,7 +32,7 @@ namespace vb::plan {
 
 struct PathOptions {
   double max_step_m = 0.01;       // motion-check resolution: max travel of any arm point, m
-  double range_rad = 0.0;         // RRT-Connect step (joint-space length); 0 = OMPL's default
+  double range_rad = 1.0;         // RRT-Connect step (joint-space length); 0 = OMPL's default
   double time_limit_s = 1.0;      // planning time per call (also bounded by the deadline)
   int shortcut_rounds = 60;       // random shortcut attempts after RRT-Connect (0 = none)
   uint64_t seed = 1;              // seeds RRT-Connect's samples and the shortcuts

@@ -5,9 +5,14 @@
 #include <atomic>
 #include <chrono>
 #include <limits>
+#include <memory>
+#include <random>
 
 #include "gtest/gtest.h"
+#include "sim/vine_generator.h"
+#include "workers/plan/collision_scene.h"
 #include "workers/plan/fake_checker_test_util.h"
+#include "workers/plan/robot_model.h"
 #include "workers/plan/time_parameterization.h"
 
 namespace vb::plan {
@@ -254,6 +259,55 @@ TEST(PathPlanner, EverySegmentPassesASampledChecker) {
       EXPECT_TRUE(checker.IsMotionFree(r.waypoints[i - 1], r.waypoints[i], 0.01)) << k << " " << i;
     }
   }
+}
+
+ToolGeometry MillEnd() {
+  ToolGeometry tool;
+  tool.name = "mill_end";
+  tool.flange_from_tcp.translation() = Eigen::Vector3d(0, 0, 0.17);
+  tool.capsules = {{Eigen::Vector3d(0, 0, 0.0), Eigen::Vector3d(0, 0, 0.12), 0.035},
+                   {Eigen::Vector3d(0, 0, 0.12), Eigen::Vector3d(0, 0, 0.17), 0.006}};
+  return tool;
+}
+
+// The primitive checker on a simulated vine (tuning seed): paths between random free
+// configurations near a working pose are found, and every segment passes the checker.
+TEST(PathPlanner, PlansOnASimulatedVineScene) {
+  sim::VineGeneratorOptions vine_options;
+  vine_options.neighbours = false;
+  auto sim_scene = sim::GenerateScene(1100, 0, vine_options);
+  ASSERT_TRUE(sim_scene.ok()) << sim_scene.status();
+  const RobotModel robot = DefaultUr5(MillEnd());
+  auto scene = CollisionScene::Build(sim_scene->vine, DefaultPlatform(), robot);
+  ASSERT_TRUE(scene.ok()) << scene.status();
+  std::unique_ptr<CollisionChecker> checker = MakePrimitiveChecker(robot, *scene);
+  std::mt19937 rng(1100);
+  std::uniform_real_distribution<double> u(-1.2, 1.2);
+  Joints working;
+  working << 0.0, -1.57, 1.2, -1.2, -1.57, 0.0;
+  auto random_free = [&] {
+    for (int tries = 0; tries < 10000; ++tries) {
+      Joints q = working;
+      for (int i = 0; i < 6; ++i) q[i] += u(rng);
+      if (robot.limits.Contains(q) && checker->IsFree(q)) return q;
+    }
+    ADD_FAILURE() << "no free configuration";
+    return working;
+  };
+  PathPlanner planner(*checker, robot.limits, PathOptions());
+  int solved = 0;
+  for (int k = 0; k < 10; ++k) {
+    const Joints a = random_free(), b = random_free();
+    const PathResult r = planner.Plan(a, b, Deadline::In(5.0));
+    if (r.outcome != PathOutcome::kSolved) continue;
+    ++solved;
+    EXPECT_EQ(r.waypoints.front(), a);
+    EXPECT_EQ(r.waypoints.back(), b);
+    for (size_t i = 1; i < r.waypoints.size(); ++i) {
+      EXPECT_TRUE(checker->IsMotionFree(r.waypoints[i - 1], r.waypoints[i], 0.01)) << k << " " << i;
+    }
+  }
+  EXPECT_GE(solved, 8);
 }
 
 TEST(ShortcutPath, RemovesADetourAndChecksEverySegment) {
