@@ -9,6 +9,7 @@
 #include <numeric>
 #include <vector>
 
+int64_t vb_coll_stats[4];
 namespace vb::plan {
 namespace {
 
@@ -28,73 +29,90 @@ inline F4 Min(F4 a, F4 b) { return a < b ? a : b; }
 inline F4 Max(F4 a, F4 b) { return a > b ? a : b; }
 inline F4 Clamp01(F4 x) { return Min(Max(x, Splat(0.f)), Splat(1.f)); }
 inline unsigned Bits(I4 m) {
+#if defined(__SSE__)
+  return static_cast<unsigned>(__builtin_ia32_movmskps((F4)m));
+#else
   return (m[0] ? 1u : 0u) | (m[1] ? 2u : 0u) | (m[2] ? 4u : 0u) | (m[3] ? 8u : 0u);
+#endif
 }
 
-// Eight obstacle capsules, SoA: q0 + t d for t in [0, 1], e = |d|^2, inv_e = 1/e (0 for a
-// sphere), rad = radius + margin.
-struct Leaf {
+// Eight capsules, SoA: q0 + t d for t in [0, 1], e = |d|^2, inv_e = 1/e (0 for a sphere),
+// rad = radius (+ margin). Obstacle pieces in a leaf, or the bounding capsules of a node's leaves
+// or of a group of nodes: long thin canes are bounded far more tightly by capsules than by spheres.
+struct CapsuleSet {
   F4 q0x[kHalves], q0y[kHalves], q0z[kHalves];
   F4 dx[kHalves], dy[kHalves], dz[kHalves];
   F4 e[kHalves], inv_e[kHalves], rad[kHalves];
 };
 
-// Eight bounding spheres (of a node's leaves, or of a group of nodes).
-struct SphereSet {
-  F4 cx[kHalves], cy[kHalves], cz[kHalves], r[kHalves];
+// Eight axis-aligned boxes, SoA: the coarse levels. A box test is a handful of compares, several
+// times cheaper than a capsule test, and canes (mostly along x or z) fill their boxes well.
+struct BoxSet {
+  F4 lox[kHalves], loy[kHalves], loz[kHalves], hix[kHalves], hiy[kHalves], hiz[kHalves];
 };
 
 // One arm capsule in the base frame, prepared for the lanes.
 struct ArmSeg {
   F4 p0x, p0y, p0z, d1x, d1y, d1z, a, inv_a, r;
+  F4 lox, loy, loz, hix, hiy, hiz;  // its bounding box
 };
 
 ArmSeg PrepareSeg(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double r) {
   const Eigen::Vector3d d = b - a;
   const double len2 = d.squaredNorm();
+  const Eigen::Vector3d lo = a.cwiseMin(b).array() - r, hi = a.cwiseMax(b).array() + r;
   return ArmSeg{Splat(a.x()), Splat(a.y()), Splat(a.z()),
                 Splat(d.x()), Splat(d.y()), Splat(d.z()),
-                Splat(len2),  Splat(len2 > 0 ? 1.0 / len2 : 0.0), Splat(r)};
+                Splat(len2),  Splat(len2 > 0 ? 1.0 / len2 : 0.0), Splat(r),
+                Splat(lo.x()), Splat(lo.y()), Splat(lo.z()),
+                Splat(hi.x()), Splat(hi.y()), Splat(hi.z())};
 }
 
-// Bit k set if arm segment s comes within s.r + r_k of sphere centre k.
-inline unsigned SegVsSpheres(const ArmSeg& s, const SphereSet& set) {
+// Lanes of `set` whose box overlaps the arm segment's box.
+inline unsigned SegVsBoxes(const ArmSeg& s, const BoxSet& set) {
   unsigned bits = 0;
   for (int h = 0; h < kHalves; ++h) {
-    const F4 wx = set.cx[h] - s.p0x, wy = set.cy[h] - s.p0y, wz = set.cz[h] - s.p0z;
-    const F4 t = Clamp01((wx * s.d1x + wy * s.d1y + wz * s.d1z) * s.inv_a);
-    const F4 ex = wx - s.d1x * t, ey = wy - s.d1y * t, ez = wz - s.d1z * t;
-    const F4 rr = s.r + set.r[h];
-    bits |= Bits(ex * ex + ey * ey + ez * ez < rr * rr) << (4 * h);
+    const I4 overlap = (set.lox[h] <= s.hix) & (set.hix[h] >= s.lox) & (set.loy[h] <= s.hiy) &
+                       (set.hiy[h] >= s.loy) & (set.loz[h] <= s.hiz) & (set.hiz[h] >= s.loz);
+    bits |= Bits(overlap) << (4 * h);
   }
   return bits;
 }
 
-// True if arm segment s touches any of the leaf's capsules: closest points of two segments
-// (Ericson, Real-Time Collision Detection, 5.1.9), branch-free over the lanes.
-inline bool SegVsLeaf(const ArmSeg& s, const Leaf& l) {
+// Lanes where capsule (p0 + s d1, s in [0, 1]) comes within rr of capsule (q0 + t d2): closest
+// points of two segments (Ericson, Real-Time Collision Detection, 5.1.9), branch-free. a = |d1|^2,
+// e = |d2|^2, inv_* their inverses or 0 for a sphere.
+inline I4 CapsulesTouch(F4 p0x, F4 p0y, F4 p0z, F4 d1x, F4 d1y, F4 d1z, F4 a, F4 inv_a, F4 q0x,
+                        F4 q0y, F4 q0z, F4 d2x, F4 d2y, F4 d2z, F4 e, F4 inv_e, F4 rr) {
+  const F4 rx = p0x - q0x, ry = p0y - q0y, rz = p0z - q0z;
+  const F4 b = d1x * d2x + d1y * d2y + d1z * d2z;
+  const F4 c = d1x * rx + d1y * ry + d1z * rz;
+  const F4 f = d2x * rx + d2y * ry + d2z * rz;
+  const F4 denom = a * e - b * b;
+  const I4 skew = denom > Splat(1e-12f);
+  F4 sp = skew ? Clamp01((b * f - c * e) / (skew ? denom : Splat(1.f))) : Splat(0.f);
+  // A sphere second (e = 0): the closest point of the first segment to its centre.
+  sp = e > Splat(0.f) ? sp : Clamp01(-c * inv_a);
+  const F4 tn = (b * sp + f) * inv_e;
+  const F4 s_lo = Clamp01(-c * inv_a), s_hi = Clamp01((b - c) * inv_a);
+  sp = tn < Splat(0.f) ? s_lo : (tn > Splat(1.f) ? s_hi : sp);
+  const F4 t = Clamp01(tn);
+  const F4 ex = rx + d1x * sp - d2x * t;
+  const F4 ey = ry + d1y * sp - d2y * t;
+  const F4 ez = rz + d1z * sp - d2z * t;
+  return ex * ex + ey * ey + ez * ez < rr * rr;
+}
+
+// Lanes of `set` that arm segment s touches (bit k for lane k).
+inline unsigned SegVsSet(const ArmSeg& s, const CapsuleSet& l) {
+  unsigned bits = 0;
   for (int h = 0; h < kHalves; ++h) {
-    const F4 rx = s.p0x - l.q0x[h], ry = s.p0y - l.q0y[h], rz = s.p0z - l.q0z[h];
-    const F4 b = s.d1x * l.dx[h] + s.d1y * l.dy[h] + s.d1z * l.dz[h];
-    const F4 c = s.d1x * rx + s.d1y * ry + s.d1z * rz;
-    const F4 f = l.dx[h] * rx + l.dy[h] * ry + l.dz[h] * rz;
-    const F4 e = l.e[h];
-    const F4 denom = s.a * e - b * b;
-    const F4 safe = denom > Splat(1e-12f) ? denom : Splat(1.f);
-    F4 sp = denom > Splat(1e-12f) ? Clamp01((b * f - c * e) / safe) : Splat(0.f);
-    // Obstacle spheres (e = 0): the closest point of the arm segment to the centre.
-    sp = e > Splat(0.f) ? sp : Clamp01(-c * s.inv_a);
-    const F4 tn = (b * sp + f) * l.inv_e[h];
-    const F4 s_lo = Clamp01(-c * s.inv_a), s_hi = Clamp01((b - c) * s.inv_a);
-    sp = tn < Splat(0.f) ? s_lo : (tn > Splat(1.f) ? s_hi : sp);
-    const F4 t = Clamp01(tn);
-    const F4 ex = rx + s.d1x * sp - l.dx[h] * t;
-    const F4 ey = ry + s.d1y * sp - l.dy[h] * t;
-    const F4 ez = rz + s.d1z * sp - l.dz[h] * t;
-    const F4 rr = s.r + l.rad[h];
-    if (Bits(ex * ex + ey * ey + ez * ez < rr * rr)) return true;
+    bits |= Bits(CapsulesTouch(s.p0x, s.p0y, s.p0z, s.d1x, s.d1y, s.d1z, s.a, s.inv_a, l.q0x[h],
+                               l.q0y[h], l.q0z[h], l.dx[h], l.dy[h], l.dz[h], l.e[h], l.inv_e[h],
+                               s.r + l.rad[h]))
+            << (4 * h);
   }
-  return false;
+  return bits;
 }
 
 struct Piece {
@@ -102,8 +120,9 @@ struct Piece {
   double rad;  // radius + margin
 };
 
+// A bounding capsule (a sphere when a == b).
 struct Bound {
-  Eigen::Vector3d center;
+  Eigen::Vector3d a, b;
   double radius;
 };
 
@@ -119,45 +138,90 @@ struct Frame {
   Eigen::Vector3d x, y, z, p;
 };
 
-Bound BoundPieces(const std::vector<Piece>& pieces, int begin, int end) {
-  Eigen::AlignedBox3d box;
-  for (int i = begin; i < end; ++i) {
-    box.extend(pieces[i].a);
-    box.extend(pieces[i].b);
+// The capsule around spheres (centre, radius) and capsules given by their end spheres (a capsule
+// lies inside a capsule that holds both its end spheres: the distance to a segment is convex).
+// The axis joins the two points found by two farthest-point sweeps.
+Bound Enclose(const std::vector<std::pair<Eigen::Vector3d, double>>& balls) {
+  auto farthest = [&](const Eigen::Vector3d& from) {
+    Eigen::Vector3d best = from;
+    double best_d = -1;
+    for (const auto& [c, r] : balls) {
+      if ((c - from).squaredNorm() > best_d) best_d = (c - from).squaredNorm(), best = c;
+    }
+    return best;
+  };
+  const Eigen::Vector3d p1 = farthest(balls.front().first);
+  const Eigen::Vector3d p2 = farthest(p1);
+  Eigen::Vector3d axis = p2 - p1;
+  const double length = axis.norm();
+  if (length <= 1e-9) {
+    double r = 0;
+    for (const auto& [c, rr] : balls) r = std::max(r, (c - p1).norm() + rr);
+    return Bound{p1, p1, r};
   }
-  Bound out{box.center(), 0.0};
-  for (int i = begin; i < end; ++i) {
-    out.radius = std::max(out.radius, std::max((pieces[i].a - out.center).norm(),
-                                               (pieces[i].b - out.center).norm()) +
-                                          pieces[i].rad);
+  axis /= length;
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (const auto& [c, r] : balls) {
+    lo = std::min(lo, (c - p1).dot(axis));
+    hi = std::max(hi, (c - p1).dot(axis));
+  }
+  Bound out{p1 + lo * axis, p1 + hi * axis, 0.0};
+  for (const auto& [c, r] : balls) {
+    out.radius = std::max(out.radius, PointSegmentDistance(c, out.a, out.b) + r);
   }
   return out;
 }
 
-Bound BoundBounds(const std::vector<Bound>& bounds, int begin, int end) {
-  Eigen::AlignedBox3d box;
+Bound BoundPieces(const std::vector<Piece>& pieces, int begin, int end) {
+  std::vector<std::pair<Eigen::Vector3d, double>> balls;
   for (int i = begin; i < end; ++i) {
-    box.extend(bounds[i].center - Eigen::Vector3d::Constant(bounds[i].radius));
-    box.extend(bounds[i].center + Eigen::Vector3d::Constant(bounds[i].radius));
+    balls.emplace_back(pieces[i].a, pieces[i].rad);
+    balls.emplace_back(pieces[i].b, pieces[i].rad);
   }
-  Bound out{box.center(), 0.0};
-  for (int i = begin; i < end; ++i) {
-    out.radius = std::max(out.radius, (bounds[i].center - out.center).norm() + bounds[i].radius);
-  }
-  return out;
+  return Enclose(balls);
 }
 
 void SetLane(F4* v, int lane, float value) { v[lane / 4][lane % 4] = value; }
 
-SphereSet MakeSphereSet(const std::vector<Bound>& bounds, int begin, int end) {
-  SphereSet set;
+// Lane k of `set` := capsule (a, b, rad); lanes past the end are far away and empty.
+void SetCapsule(CapsuleSet& set, int k, bool real, const Eigen::Vector3d& a,
+                const Eigen::Vector3d& b, double rad) {
+  const Eigen::Vector3d d = real ? Eigen::Vector3d(b - a) : Eigen::Vector3d::Zero();
+  const double e = d.squaredNorm();
+  SetLane(set.q0x, k, real ? a.x() : kFarAway);
+  SetLane(set.q0y, k, real ? a.y() : kFarAway);
+  SetLane(set.q0z, k, real ? a.z() : kFarAway);
+  SetLane(set.dx, k, d.x());
+  SetLane(set.dy, k, d.y());
+  SetLane(set.dz, k, d.z());
+  SetLane(set.e, k, e);
+  SetLane(set.inv_e, k, e > 0 ? 1.0 / e : 0.0);
+  SetLane(set.rad, k, real ? rad : 0.0);
+}
+
+using Box = Eigen::AlignedBox3d;
+
+Box BoxOfPieces(const std::vector<Piece>& pieces, int begin, int end) {
+  Box box;
+  for (int i = begin; i < end; ++i) {
+    const Eigen::Vector3d r = Eigen::Vector3d::Constant(pieces[i].rad + kCoarseSlackM);
+    box.extend(pieces[i].a - r).extend(pieces[i].a + r).extend(pieces[i].b - r).extend(pieces[i].b + r);
+  }
+  return box;
+}
+
+BoxSet MakeBoxSet(const std::vector<Box>& boxes, int begin, int end) {
+  BoxSet set;
   for (int k = 0; k < kLeaf; ++k) {
     const bool real = begin + k < end;
-    const Bound& b = real ? bounds[begin + k] : bounds[begin];
-    SetLane(set.cx, k, real ? b.center.x() : kFarAway);
-    SetLane(set.cy, k, real ? b.center.y() : kFarAway);
-    SetLane(set.cz, k, real ? b.center.z() : kFarAway);
-    SetLane(set.r, k, real ? b.radius + kCoarseSlackM : 0.f);
+    const Box& b = boxes[real ? begin + k : begin];
+    // Empty lanes: an inverted box overlaps nothing.
+    SetLane(set.lox, k, real ? b.min().x() : kFarAway);
+    SetLane(set.loy, k, real ? b.min().y() : kFarAway);
+    SetLane(set.loz, k, real ? b.min().z() : kFarAway);
+    SetLane(set.hix, k, real ? b.max().x() : -kFarAway);
+    SetLane(set.hiy, k, real ? b.max().y() : -kFarAway);
+    SetLane(set.hiz, k, real ? b.max().z() : -kFarAway);
   }
   return set;
 }
@@ -198,15 +262,18 @@ struct PrimitiveChecker::Impl {
   // Capsule pairs (indices into `all`, the capsules in body order) that must not touch.
   std::vector<ArmCapsule> all;
   std::vector<std::pair<int, int>> self_pairs;
+  // self_pairs in groups of 4: 4 first capsules then 4 second ones; padded with a pair of far
+  // apart capsules.
+  std::vector<int> self_lanes;
+  std::vector<float> cap_soa;  // scratch, see Free()
   std::vector<HalfSpace> planes;
   bool base_blocked = false;
 
   std::vector<Piece> pieces;        // in leaf order
   std::vector<Bound> leaf_bounds;   // one per leaf
-  std::vector<Bound> node_bounds;   // one per node (8 leaves)
-  std::vector<Leaf> leaves;
-  std::vector<SphereSet> node_children;  // per node: its leaves' spheres
-  std::vector<SphereSet> top;            // per group of 8 nodes: the nodes' spheres
+  std::vector<CapsuleSet> leaves;
+  std::vector<BoxSet> node_children;  // per node: its leaves' boxes
+  std::vector<BoxSet> top;            // per group of 8 nodes: the nodes' boxes
 
   // Per-configuration scratch: the base-frame ends of every capsule in `all`.
   std::vector<Eigen::Vector3d> world_a, world_b;
@@ -242,15 +309,18 @@ struct PrimitiveChecker::Impl {
   bool SegHitsObstacles(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double r) const {
     const ArmSeg s = PrepareSeg(a, b, r);
     for (size_t g = 0; g < top.size(); ++g) {
-      unsigned nodes = SegVsSpheres(s, top[g]);
+      ++vb_coll_stats[0];
+      unsigned nodes = SegVsBoxes(s, top[g]);
       while (nodes) {
         const int n = static_cast<int>(g) * kLeaf + __builtin_ctz(nodes);
         nodes &= nodes - 1;
-        unsigned ls = SegVsSpheres(s, node_children[n]);
+        ++vb_coll_stats[1];
+        unsigned ls = SegVsBoxes(s, node_children[n]);
         while (ls) {
           const int l = n * kLeaf + __builtin_ctz(ls);
           ls &= ls - 1;
-          if (SegVsLeaf(s, leaves[l])) return true;
+          ++vb_coll_stats[2];
+          if (SegVsSet(s, leaves[l])) return true;
         }
       }
     }
@@ -274,16 +344,27 @@ struct PrimitiveChecker::Impl {
     for (size_t i = 0; i < moving.size(); ++i) {
       if (SegHitsObstacles(world_a[i], world_b[i], all[i].radius)) return false;
     }
-    for (const auto& [i, j] : self_pairs) {
-      // Bounding spheres first: most pairs are far apart.
-      const Eigen::Vector3d mi = 0.5 * (world_a[i] + world_b[i]);
-      const Eigen::Vector3d mj = 0.5 * (world_a[j] + world_b[j]);
-      const double reach = 0.5 * ((world_b[i] - world_a[i]).norm() +
-                                  (world_b[j] - world_a[j]).norm()) +
-                           all[i].radius + all[j].radius;
-      if ((mi - mj).squaredNorm() >= reach * reach) continue;
-      if (CapsuleCapsuleGap(world_a[i], world_b[i], all[i].radius, world_a[j], world_b[j],
-                            all[j].radius) < 0) {
+    // Self-collision pairs four at a time, gathered from the placed capsules.
+    // cap[k * stride + i]: p0 xyz, d xyz, |d|^2, 1/|d|^2, radius of capsule i.
+    float* cap = cap_soa.data();
+    const size_t stride = all.size() + 2;
+    for (size_t i = 0; i < all.size(); ++i) {
+      const Eigen::Vector3d d = world_b[i] - world_a[i];
+      const double len2 = d.squaredNorm();
+      const double v[9] = {world_a[i].x(), world_a[i].y(), world_a[i].z(), d.x(), d.y(), d.z(),
+                           len2, len2 > 0 ? 1.0 / len2 : 0.0, all[i].radius};
+      for (size_t k = 0; k < 9; ++k) cap[k * stride + i] = static_cast<float>(v[k]);
+    }
+    for (size_t g = 0; g < self_lanes.size(); g += 8) {
+      F4 x[9], y[9];
+      for (int k = 0; k < 9; ++k) {
+        for (int lane = 0; lane < 4; ++lane) {
+          x[k][lane] = cap[k * stride + self_lanes[g + lane]];
+          y[k][lane] = cap[k * stride + self_lanes[g + 4 + lane]];
+        }
+      }
+      if (Bits(CapsulesTouch(x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7], y[0], y[1], y[2],
+                             y[3], y[4], y[5], y[6], y[7], x[8] + y[8]))) {
         return false;
       }
     }
@@ -296,8 +377,8 @@ struct PrimitiveChecker::Impl {
       best = std::min(best, h.offset - std::max(h.normal.dot(a), h.normal.dot(b)) - r - h.margin_m);
     }
     for (size_t l = 0; l < leaf_bounds.size(); ++l) {
-      const double lower = PointSegmentDistance(leaf_bounds[l].center, a, b) - r -
-                           leaf_bounds[l].radius;
+      const double lower = CapsuleCapsuleGap(a, b, r, leaf_bounds[l].a, leaf_bounds[l].b,
+                                             leaf_bounds[l].radius);
       if (lower >= best) continue;
       const int end = std::min<int>(pieces.size(), (l + 1) * kLeaf);
       for (int k = l * kLeaf; k < end; ++k) {
@@ -354,6 +435,17 @@ PrimitiveChecker::PrimitiveChecker(const RobotModel& robot, const CollisionScene
       for (int j : capsules_of[bj]) m.self_pairs.emplace_back(i, j);
     }
   }
+  // Padding lanes pair two points far apart (the two slots after the real capsules).
+  const int n_caps = static_cast<int>(caps.size());
+  m.cap_soa.assign(9 * (n_caps + 2), 0.f);
+  m.cap_soa[n_caps] = kFarAway;
+  m.cap_soa[n_caps + 1] = -kFarAway;
+  std::vector<std::pair<int, int>> padded = m.self_pairs;
+  while (padded.size() % 4 != 0) padded.emplace_back(n_caps, n_caps + 1);
+  for (size_t g = 0; g < padded.size(); g += 4) {
+    for (size_t k = 0; k < 4; ++k) m.self_lanes.push_back(padded[g + k].first);
+    for (size_t k = 0; k < 4; ++k) m.self_lanes.push_back(padded[g + k].second);
+  }
   m.planes = scene.planes;
 
   // Obstacle pieces, split so that none is longer than kMaxPieceM (the union is unchanged).
@@ -372,32 +464,28 @@ PrimitiveChecker::PrimitiveChecker(const RobotModel& robot, const CollisionScene
   for (int l = 0; l < n_leaves; ++l) {
     const int begin = l * kLeaf, end = std::min(n_pieces, begin + kLeaf);
     m.leaf_bounds.push_back(BoundPieces(m.pieces, begin, end));
-    Leaf leaf;
+    CapsuleSet leaf;
     for (int k = 0; k < kLeaf; ++k) {
       const bool real = begin + k < end;
       const Piece& p = m.pieces[real ? begin + k : begin];
-      const Eigen::Vector3d d = real ? Eigen::Vector3d(p.b - p.a) : Eigen::Vector3d::Zero();
-      const double e = d.squaredNorm();
-      SetLane(leaf.q0x, k, real ? p.a.x() : kFarAway);
-      SetLane(leaf.q0y, k, real ? p.a.y() : kFarAway);
-      SetLane(leaf.q0z, k, real ? p.a.z() : kFarAway);
-      SetLane(leaf.dx, k, d.x());
-      SetLane(leaf.dy, k, d.y());
-      SetLane(leaf.dz, k, d.z());
-      SetLane(leaf.e, k, e);
-      SetLane(leaf.inv_e, k, e > 0 ? 1.0 / e : 0.0);
-      SetLane(leaf.rad, k, real ? p.rad : 0.0);
+      SetCapsule(leaf, k, real, p.a, p.b, p.rad);
     }
     m.leaves.push_back(leaf);
+  }
+  std::vector<Box> leaf_boxes, node_boxes;
+  for (int l = 0; l < n_leaves; ++l) {
+    leaf_boxes.push_back(BoxOfPieces(m.pieces, l * kLeaf, std::min(n_pieces, (l + 1) * kLeaf)));
   }
   const int n_nodes = (n_leaves + kLeaf - 1) / kLeaf;
   for (int n = 0; n < n_nodes; ++n) {
     const int begin = n * kLeaf, end = std::min(n_leaves, begin + kLeaf);
-    m.node_bounds.push_back(BoundBounds(m.leaf_bounds, begin, end));
-    m.node_children.push_back(MakeSphereSet(m.leaf_bounds, begin, end));
+    Box box;
+    for (int l = begin; l < end; ++l) box.extend(leaf_boxes[l]);
+    node_boxes.push_back(box);
+    m.node_children.push_back(MakeBoxSet(leaf_boxes, begin, end));
   }
   for (int g = 0; g * kLeaf < n_nodes; ++g) {
-    m.top.push_back(MakeSphereSet(m.node_bounds, g * kLeaf, std::min(n_nodes, (g + 1) * kLeaf)));
+    m.top.push_back(MakeBoxSet(node_boxes, g * kLeaf, std::min(n_nodes, (g + 1) * kLeaf)));
   }
 
   // The base never moves: decide once whether it touches anything.

@@ -1,0 +1,145 @@
+// SPDX-License-Identifier: Apache-2.0
+// Collision checks per configuration (issue 5: <= 200 ns amortised on a typical vine scene) for
+// the primitive checker and the FCL baselines (FCL primitives, FCL meshes), on the scenes of 8
+// simulated vines (sim::GenerateScene, seeds 1100-1107, ground truth, no neighbours) with the
+// default UR5 mount and a mill-end tool. Configurations are drawn uniformly within the joint
+// limits (fixed seed); `free` variants use only configurations that are free (no early exit: the
+// worst case for a checker), `motion` variants check straight joint-space motions between free
+// configurations at 1 cm resolution (IsMotionFree; what a planner asks). Counters: ns_per_check,
+// free_fraction. Run:
+//   build/bench/vb_collision_bench --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+#include <memory>
+#include <random>
+#include <vector>
+
+#include "benchmark/benchmark.h"
+#include "sim/vine_generator.h"
+#include "workers/plan/collision_checker.h"
+#include "workers/plan/primitive_checker.h"
+
+namespace vb::plan {
+namespace {
+
+constexpr int kVines = 8;
+constexpr int kConfigurations = 4096;
+
+ToolGeometry MillEnd() {
+  ToolGeometry tool;
+  tool.name = "mill_end";
+  tool.flange_from_tcp.translation() = Eigen::Vector3d(0, 0, 0.17);
+  tool.capsules = {{Eigen::Vector3d(0, 0, 0.0), Eigen::Vector3d(0, 0, 0.12), 0.035},
+                   {Eigen::Vector3d(0, 0, 0.12), Eigen::Vector3d(0, 0, 0.17), 0.006}};
+  return tool;
+}
+
+struct Fixture {
+  RobotModel robot = DefaultUr5(MillEnd());
+  std::vector<CollisionScene> scenes;
+  std::vector<Joints> random;                  // uniform within the limits
+  std::vector<std::vector<Joints>> free;       // per scene: free configurations only
+
+  Fixture() {
+    sim::VineGeneratorOptions options;
+    options.neighbours = false;
+    for (int v = 0; v < kVines; ++v) {
+      auto sim_scene = sim::GenerateScene(1100 + v, 0, options);
+      auto scene = CollisionScene::Build(sim_scene->vine, DefaultPlatform(), robot);
+      scenes.push_back(*scene);
+    }
+    std::mt19937 rng(1100);
+    for (int k = 0; k < kConfigurations; ++k) {
+      Joints q;
+      for (int i = 0; i < 6; ++i) {
+        q[i] = std::uniform_real_distribution<double>(robot.limits.lower[i],
+                                                      robot.limits.upper[i])(rng);
+      }
+      random.push_back(q);
+    }
+    for (const CollisionScene& scene : scenes) {
+      PrimitiveChecker checker(robot, scene);
+      free.emplace_back();
+      for (const Joints& q : random) {
+        if (checker.IsFree(q)) free.back().push_back(q);
+      }
+    }
+  }
+};
+
+const Fixture& GetFixture() {
+  static const Fixture* fixture = new Fixture();
+  return *fixture;
+}
+
+enum Kind { kPrimitive = 0, kFclPrimitives = 1, kFclMesh = 2 };
+
+std::unique_ptr<CollisionChecker> Make(int kind, const RobotModel& robot,
+                                       const CollisionScene& scene) {
+  if (kind == kPrimitive) return MakePrimitiveChecker(robot, scene);
+  return MakeFclChecker(robot, scene, kind == kFclMesh ? FclMode::kMesh : FclMode::kPrimitives);
+}
+
+// state.range(0): checker kind; state.range(1): 0 random configurations, 1 free ones only.
+void BM_Check(benchmark::State& state) {
+  const Fixture& f = GetFixture();
+  std::vector<std::unique_ptr<CollisionChecker>> checkers;
+  for (const CollisionScene& scene : f.scenes) checkers.push_back(Make(state.range(0), f.robot, scene));
+  const bool free_only = state.range(1) == 1;
+  int64_t checks = 0, free = 0;
+  size_t k = 0;
+  for (auto _ : state) {
+    const int v = static_cast<int>(k % kVines);
+    const std::vector<Joints>& qs = free_only ? f.free[v] : f.random;
+    const bool ok = checkers[v]->IsFree(qs[(k / kVines) % qs.size()]);
+    benchmark::DoNotOptimize(ok);
+    free += ok;
+    ++checks;
+    ++k;
+  }
+  state.counters["ns_per_check"] = benchmark::Counter(
+      static_cast<double>(checks) * 1e-9, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.counters["free_fraction"] = static_cast<double>(free) / std::max<int64_t>(1, checks);
+}
+
+// Motions between consecutive free configurations of a scene, 1 cm resolution.
+void BM_Motion(benchmark::State& state) {
+  const Fixture& f = GetFixture();
+  std::vector<std::unique_ptr<CollisionChecker>> checkers;
+  for (const CollisionScene& scene : f.scenes) checkers.push_back(Make(state.range(0), f.robot, scene));
+  int64_t motions = 0, free = 0;
+  size_t k = 0;
+  for (auto _ : state) {
+    const int v = static_cast<int>(k % kVines);
+    const std::vector<Joints>& qs = f.free[v];
+    const size_t i = (k / kVines) % (qs.size() - 1);
+    const bool ok = checkers[v]->IsMotionFree(qs[i], qs[i + 1], 0.01);
+    benchmark::DoNotOptimize(ok);
+    free += ok;
+    ++motions;
+    ++k;
+  }
+  int64_t checks = 0;
+  for (const auto& c : checkers) checks += c->checks();
+  state.counters["ns_per_check"] = benchmark::Counter(
+      static_cast<double>(checks) * 1e-9, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.counters["checks_per_motion"] = static_cast<double>(checks) / std::max<int64_t>(1, motions);
+  state.counters["free_fraction"] = static_cast<double>(free) / std::max<int64_t>(1, motions);
+}
+
+BENCHMARK(BM_Check)
+    ->ArgNames({"checker", "free_only"})
+    ->Args({kPrimitive, 0})
+    ->Args({kPrimitive, 1})
+    ->Args({kFclPrimitives, 0})
+    ->Args({kFclPrimitives, 1})
+    ->Args({kFclMesh, 0})
+    ->Args({kFclMesh, 1});
+BENCHMARK(BM_Motion)
+    ->ArgNames({"checker"})
+    ->Arg(kPrimitive)
+    ->Arg(kFclPrimitives)
+    ->Arg(kFclMesh);
+
+}  // namespace
+}  // namespace vb::plan
+
+BENCHMARK_MAIN();
