@@ -2,7 +2,8 @@
 // UR5 forward kinematics and closed-form inverse kinematics (all solutions), per call (issue 5:
 // <= 2 us for all IK solutions). Poses come from 1024 random configurations (fixed seed) cycled
 // through, so branch prediction does not learn one pose. Run:
-//   build/bench/vb_kinematics_bench --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+//   build/bench/vb_kinematics_bench --benchmark_repetitions=5
+//   --benchmark_report_aggregates_only=true
 #include <random>
 #include <vector>
 

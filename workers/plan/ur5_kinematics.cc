@@ -75,9 +75,9 @@ Eigen::Isometry3d ForwardKinematics(const Joints& q, const DhParameters& dh) {
 // Notation: p6 and x6, y6, z6 are the flange origin and axes in the base frame, s1 = sin q1 etc.
 // Joints 2, 3 and 4 rotate about one common direction, z1 = (s1, -c1, 0) in the base frame, so
 // every point from frame 2 onward has a constant offset along z1:
-//   wrist centre p5 = p6 - d6 z6 satisfies  p5 . z1 = d4                          -> q1 (2 branches)
-//   z6 . z1 = cos q5, and p6 . z1 = d4 + d6 cos q5                              -> q5 (2 branches)
-//   z1 seen from the flange frame is (s5 c6, -s5 s6, c5)                        -> q6
+//   wrist centre p5 = p6 - d6 z6 satisfies  p5 . z1 = d4         -> q1 (2 branches)
+//   z6 . z1 = cos q5, and p6 . z1 = d4 + d6 cos q5             -> q5 (2 branches)
+//   z1 seen from the flange frame is (s5 c6, -s5 s6, c5)       -> q6
 //   frame 4 seen from frame 1, T14 = T01^-1 T06 T56^-1 T45^-1, is a planar 3R chain:
 //   p14 = (a2 c2 + a3 c23, a2 s2 + a3 s23, d4) -> q3 (2 branches), q2; its x axis is at q2+q3+q4.
 namespace {

@@ -203,7 +203,9 @@ TEST(Ur5InverseKinematics, WristSingularityTakesQ6FromNear) {
     EXPECT_LT(RotationError(ForwardKinematics(ik.q[k]), pose), 1e-9);
   }
   bool q6_from_near = false;
-  for (int k = 0; k < ik.count; ++k) q6_from_near = q6_from_near || std::abs(ik.q[k][5] - 1.9) < 1e-12;
+  for (int k = 0; k < ik.count; ++k) {
+    q6_from_near = q6_from_near || std::abs(ik.q[k][5] - 1.9) < 1e-12;
+  }
   EXPECT_TRUE(q6_from_near);
 }
 
