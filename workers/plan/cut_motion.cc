@@ -76,18 +76,6 @@ std::vector<Eigen::Vector3d> StrokeWaypoints(CutStroke stroke, const CutMotionOp
   return points;
 }
 
-namespace {
-
-// One reachable, collision-free configuration at the cut pose: where a stroke may start.
-struct Candidate {
-  Joints q;
-  double clearance_m = 0;
-  Eigen::Isometry3d base_from_tcp;
-};
-
-double MaxJointChange(const Joints& a, const Joints& b) { return (a - b).cwiseAbs().maxCoeff(); }
-
-// TCP frames of the cut pose at point p with cane tangent d (arm base frame), in sampling order.
 std::vector<Eigen::Isometry3d> SampleCutPoses(const Eigen::Vector3d& p, const Eigen::Vector3d& d,
                                               const CutMotionOptions& options) {
   // theta = 0: the tool axis points from the arm base toward the cane, the natural reach.
@@ -111,6 +99,17 @@ std::vector<Eigen::Isometry3d> SampleCutPoses(const Eigen::Vector3d& p, const Ei
   }
   return poses;
 }
+
+namespace {
+
+// One reachable, collision-free configuration at the cut pose: where a stroke may start.
+struct Candidate {
+  Joints q;
+  double clearance_m = 0;
+  Eigen::Isometry3d base_from_tcp;
+};
+
+double MaxJointChange(const Joints& a, const Joints& b) { return (a - b).cwiseAbs().maxCoeff(); }
 
 // Follows the stroke from the cut configuration outward in both directions, each step on the IK
 // solution nearest the previous configuration. False on a missing solution or a jump.

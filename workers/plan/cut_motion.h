@@ -96,6 +96,12 @@ std::vector<CutMotion> PlanCutMotions(const RobotModel& robot, const VineModel& 
                                       const CutMotionOptions& options, const Deadline& deadline,
                                       const CheckerFactory& make_checker);
 
+// The sampled TCP frames of a cut at `point` with unit cane tangent `direction` (both in the arm
+// base frame), in sampling order (orientation-major, then side); see the convention above.
+std::vector<Eigen::Isometry3d> SampleCutPoses(const Eigen::Vector3d& point,
+                                              const Eigen::Vector3d& direction,
+                                              const CutMotionOptions& options);
+
 // The TCP positions of the stroke of `stroke` in the TCP frame of the cut pose, in path order;
 // `cut_index` receives the index of the cut point (the origin). Exposed for tests and the
 // trajectory writer.
