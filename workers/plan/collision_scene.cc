@@ -1,0 +1,122 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "workers/plan/collision_scene.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "absl/strings/str_cat.h"
+
+namespace vb::plan {
+
+absl::Status SceneOptions::Validate() const {
+  if (!std::isfinite(cane_segment_m) || cane_segment_m < 1e-3 || cane_segment_m > 1.0) {
+    return absl::InvalidArgumentError("scene options: cane_segment_m must be in [0.001, 1] m");
+  }
+  if (!std::isfinite(default_margin_m) || default_margin_m < 0 || default_margin_m > 0.5) {
+    return absl::InvalidArgumentError("scene options: default_margin_m must be in [0, 0.5] m");
+  }
+  return absl::OkStatus();
+}
+
+absl::StatusOr<CollisionScene> CollisionScene::Build(const VineModel& model,
+                                                     const PlatformGeometry& platform,
+                                                     const RobotModel& robot,
+                                                     const SceneOptions& options) {
+  if (auto s = options.Validate(); !s.ok()) return s;
+  if (auto s = model.Validate(); !s.ok()) return s;
+  if (auto s = platform.Validate(); !s.ok()) return s;
+  if (auto s = robot.Validate(); !s.ok()) return s;
+  // VineModel::Validate does not cover every field the scene uses.
+  for (size_t i = 0; i < model.head.spheres.size(); ++i) {
+    const Sphere& s = model.head.spheres[i];
+    if (!s.center.allFinite() || !std::isfinite(s.radius) || s.radius < 0) {
+      return absl::InvalidArgumentError(absl::StrCat("head.spheres[", i, "]: bad geometry"));
+    }
+  }
+  for (size_t i = 0; i < model.wires.size(); ++i) {
+    const Wire& w = model.wires[i];
+    bool ok = w.points.size() >= 2 && std::isfinite(w.radius) && w.radius >= 0;
+    for (const auto& p : w.points) ok = ok && p.allFinite();
+    if (!ok) return absl::InvalidArgumentError(absl::StrCat("wires[", i, "]: bad geometry"));
+  }
+  for (size_t i = 0; i < model.posts.size(); ++i) {
+    const Post& p = model.posts[i];
+    if (!p.base.allFinite() || !p.top.allFinite() || !std::isfinite(p.radius) || p.radius < 0) {
+      return absl::InvalidArgumentError(absl::StrCat("posts[", i, "]: bad geometry"));
+    }
+  }
+
+  const Eigen::Isometry3d base_from_platform = robot.platform_from_arm_base.inverse();
+  const double margin = options.default_margin_m;
+  CollisionScene scene;
+  auto add = [&](ObstacleKind kind, int64_t owner, const Eigen::Vector3d& a,
+                 const Eigen::Vector3d& b, double radius) {
+    scene.obstacles.push_back(
+        Obstacle{kind, owner, Capsule{base_from_platform * a, base_from_platform * b, radius},
+                 margin});
+  };
+  for (const Cane& cane : model.canes) {
+    // Each chord of the resampled cane takes the radius that encloses the cane between its ends:
+    // the larger end radius, or more where the original polyline bends away from the chord. (The
+    // distance to a segment is convex and the radius linear along each original piece, so
+    // enclosing the original vertices and the chord ends encloses the whole cane.)
+    const Polyline3& original = cane.polyline;
+    const std::vector<double> arc = original.ArcLengths();
+    const Polyline3 line = original.Resampled(options.cane_segment_m);
+    const std::vector<double> line_arc = line.ArcLengths();
+    size_t i = 0;
+    for (size_t k = 0; k + 1 < line.points.size(); ++k) {
+      double radius = std::max(line.radii[k], line.radii[k + 1]);
+      while (i < arc.size() && arc[i] <= line_arc[k]) ++i;
+      for (size_t j = i; j < arc.size() && arc[j] < line_arc[k + 1]; ++j) {
+        radius = std::max(radius, PointSegmentDistance(original.points[j], line.points[k],
+                                                       line.points[k + 1]) +
+                                      original.radii[j]);
+      }
+      add(ObstacleKind::kCane, cane.id.value, line.points[k], line.points[k + 1], radius);
+    }
+  }
+  for (const Sphere& s : model.head.spheres) add(ObstacleKind::kHead, 0, s.center, s.center, s.radius);
+  for (const Wire& w : model.wires) {
+    for (size_t k = 0; k + 1 < w.points.size(); ++k) {
+      add(ObstacleKind::kWire, w.id.value, w.points[k], w.points[k + 1], w.radius);
+    }
+  }
+  for (const Post& p : model.posts) add(ObstacleKind::kPost, p.id.value, p.base, p.top, p.radius);
+  for (const Sphere& s : platform.fixed_spheres) {
+    add(ObstacleKind::kPlatform, 0, s.center, s.center, s.radius);
+  }
+
+  // Free sides in the platform frame (n . x <= offset), then into the base frame:
+  // n_p . (R x_b + t) <= o  <=>  (R^T n_p) . x_b <= o - n_p . t.
+  const std::pair<Eigen::Vector3d, double> planes_in_platform[] = {
+      {-Eigen::Vector3d::UnitZ(), -platform.ground_z_m},
+      {Eigen::Vector3d::UnitZ(), platform.roof_z_m},
+      {-Eigen::Vector3d::UnitY(), -platform.camera_side_wall_y_m},
+      {Eigen::Vector3d::UnitY(), platform.backdrop_y_m}};
+  const Eigen::Matrix3d r = robot.platform_from_arm_base.linear();
+  const Eigen::Vector3d t = robot.platform_from_arm_base.translation();
+  for (const auto& [n, o] : planes_in_platform) {
+    scene.planes.push_back(HalfSpace{r.transpose() * n, o - n.dot(t), margin});
+  }
+  return scene;
+}
+
+CollisionScene CollisionScene::WithoutCaneNear(CaneId cane_id,
+                                               const Eigen::Vector3d& point_in_base,
+                                               double radius_m) const {
+  CollisionScene out;
+  out.planes = planes;
+  out.obstacles.reserve(obstacles.size());
+  for (const Obstacle& o : obstacles) {
+    const bool near =
+        o.kind == ObstacleKind::kCane && o.owner_id == cane_id.value &&
+        PointSegmentDistance(point_in_base, o.capsule.a, o.capsule.b) - o.capsule.radius <=
+            radius_m;
+    if (!near) out.obstacles.push_back(o);
+  }
+  return out;
+}
+
+}  // namespace vb::plan

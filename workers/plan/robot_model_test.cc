@@ -1,0 +1,202 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "workers/plan/robot_model.h"
+
+#include <cmath>
+#include <random>
+
+#include "gtest/gtest.h"
+
+namespace vb::plan {
+namespace {
+
+ToolGeometry TestTool() {
+  ToolGeometry tool;
+  tool.name = "mill_end";
+  tool.flange_from_tcp.translation() = Eigen::Vector3d(0, 0, 0.17);
+  tool.capsules = {{Eigen::Vector3d(0, 0, 0.0), Eigen::Vector3d(0, 0, 0.12), 0.035},
+                   {Eigen::Vector3d(0, 0, 0.12), Eigen::Vector3d(0, 0, 0.17), 0.006}};
+  return tool;
+}
+
+// Distance of p from the line through `origin` along unit `axis`, and its coordinate along it.
+std::pair<double, double> AxisCoordinates(const Eigen::Vector3d& p, const Eigen::Vector3d& origin,
+                                          const Eigen::Vector3d& axis) {
+  const double along = (p - origin).dot(axis);
+  return {(p - origin - along * axis).norm(), along};
+}
+
+const Capsule& CapsuleOf(const RobotModel& robot, const std::string& name, int k) {
+  for (const LinkBody& body : robot.links) {
+    if (body.name == name) return body.capsules.at(k);
+  }
+  ADD_FAILURE() << "no body " << name;
+  static const Capsule none;
+  return none;
+}
+
+int FrameOf(const RobotModel& robot, const std::string& name) {
+  for (const LinkBody& body : robot.links) {
+    if (body.name == name) return body.frame;
+  }
+  return -1;
+}
+
+// The capsules run from joint axis to joint axis at the UR5's published offsets, at any q.
+TEST(DefaultUr5, CapsulesChainFromJointToJoint) {
+  const RobotModel robot = DefaultUr5(TestTool());
+  std::mt19937 rng(1100);
+  std::uniform_real_distribution<double> angle(-M_PI, M_PI);
+  for (int trial = 0; trial < 20; ++trial) {
+    Joints q;
+    for (int i = 0; i < 6; ++i) q[i] = angle(rng);
+    const auto f = LinkFrames(q);
+    auto world = [&](const std::string& body, int k, bool end_b) {
+      const Capsule& c = CapsuleOf(robot, body, k);
+      return Eigen::Vector3d(f[FrameOf(robot, body)] * (end_b ? c.b : c.a));
+    };
+    auto expect_on_axis = [&](const Eigen::Vector3d& p, int joint, double offset) {
+      // Joint j (1-based) turns about the z axis of frame j - 1.
+      const auto [off_axis, along] =
+          AxisCoordinates(p, f[joint - 1].translation(), f[joint - 1].linear().col(2));
+      EXPECT_NEAR(off_axis, 0.0, 1e-9) << "joint " << joint;
+      EXPECT_NEAR(along, offset, 1e-9) << "joint " << joint;
+    };
+    // Upper arm: shoulder (joint 2) to elbow (joint 3), 0.13585 m out along both axes.
+    expect_on_axis(world("upper_arm", 0, false), 2, 0.13585);
+    expect_on_axis(world("upper_arm", 0, true), 3, 0.13585);
+    // Elbow housing back to the forearm's plane (elbow offset -0.1197 m).
+    expect_on_axis(world("upper_arm", 1, true), 3, 0.13585 - 0.1197);
+    // Forearm: elbow to wrist 1 (joint 4) in the forearm's plane, then out along joint 4 to d4.
+    expect_on_axis(world("forearm", 0, false), 3, 0.13585 - 0.1197);
+    expect_on_axis(world("forearm", 0, true), 4, 0.13585 - 0.1197);
+    expect_on_axis(world("forearm", 1, true), 4, 0.10915);
+    // Wrist 2 along joint 5 from the joint 4 axis to the joint 6 axis.
+    expect_on_axis(world("wrist_2", 0, false), 5, 0.0);
+    expect_on_axis(world("wrist_2", 0, true), 5, 0.09465);
+    // Wrist 3 along joint 6; its round end reaches the flange.
+    const Capsule& w3 = CapsuleOf(robot, "wrist_3", 0);
+    const Eigen::Vector3d tip = world("wrist_3", 0, true) + w3.radius * f[6].linear().col(2);
+    EXPECT_LT((tip - f[6].translation()).norm(), 1e-9);
+    // Shoulder housing from the base axis out to the upper arm.
+    expect_on_axis(world("shoulder", 0, false), 2, 0.0);
+    expect_on_axis(world("shoulder", 0, true), 2, 0.13585);
+  }
+}
+
+// Consecutive bodies overlap: the chain of capsules has no gap anywhere.
+TEST(DefaultUr5, ConsecutiveBodiesTouch) {
+  const RobotModel robot = DefaultUr5(TestTool());
+  const auto bodies = robot.BodiesWithTool();
+  Joints q;
+  q << 0.4, -1.1, 1.3, -0.7, 1.2, 0.3;
+  const auto f = LinkFrames(q);
+  for (size_t b = 0; b + 1 < bodies.size(); ++b) {
+    double gap = 1e9;
+    for (const Capsule& x : bodies[b].capsules) {
+      for (const Capsule& y : bodies[b + 1].capsules) {
+        gap = std::min(gap, SegmentSegmentDistance(f[bodies[b].frame] * x.a, f[bodies[b].frame] * x.b,
+                                                   f[bodies[b + 1].frame] * y.a,
+                                                   f[bodies[b + 1].frame] * y.b) -
+                                x.radius - y.radius);
+      }
+    }
+    EXPECT_LT(gap, 0.0) << bodies[b].name << " / " << bodies[b + 1].name;
+  }
+}
+
+TEST(DefaultUr5, LimitsMountAndRadii) {
+  const RobotModel robot = DefaultUr5(TestTool());
+  ASSERT_TRUE(robot.Validate().ok()) << robot.Validate();
+  EXPECT_DOUBLE_EQ(robot.limits.upper[2], M_PI);
+  EXPECT_DOUBLE_EQ(robot.limits.lower[2], -M_PI);
+  EXPECT_DOUBLE_EQ(robot.limits.upper[0], 2 * M_PI);
+  EXPECT_TRUE(robot.platform_from_arm_base.isApprox(DefaultPlatformFromArmBase()));
+  EXPECT_NEAR(robot.platform_from_arm_base.translation().y(), 0.35, 1e-12);
+  EXPECT_NEAR(CapsuleOf(robot, "upper_arm", 0).radius, 0.06, 1e-12);
+  EXPECT_NEAR(CapsuleOf(robot, "forearm", 0).radius, 0.06, 1e-12);
+  for (const char* wrist : {"wrist_2", "wrist_3"}) {
+    EXPECT_GE(CapsuleOf(robot, wrist, 0).radius, 0.0375);
+    EXPECT_LE(CapsuleOf(robot, wrist, 0).radius, 0.06);
+  }
+}
+
+TEST(DefaultUr5, ToolIsTheLastBodyAndSelfPairsSkipNeighbours) {
+  const RobotModel robot = DefaultUr5(TestTool());
+  const auto bodies = robot.BodiesWithTool();
+  ASSERT_EQ(bodies.size(), robot.links.size() + 1);
+  EXPECT_EQ(bodies.back().frame, 6);
+  EXPECT_EQ(bodies.back().capsules.size(), 2u);
+  const auto pairs = robot.SelfCollisionPairs();
+  EXPECT_FALSE(pairs.empty());
+  bool tool_vs_upper_arm = false;
+  for (const auto& [i, j] : pairs) {
+    EXPECT_GE(std::abs(bodies[i].frame - bodies[j].frame), 2);
+    tool_vs_upper_arm |= bodies[i].name == "upper_arm" && j == static_cast<int>(bodies.size()) - 1;
+  }
+  EXPECT_TRUE(tool_vs_upper_arm);
+}
+
+// A straight tool on the joint 6 axis stays at one distance from wrist 2 whatever q is: that pair
+// is skipped. A tool bent sideways can reach wrist 2: that pair is checked.
+TEST(RobotModel, SelfPairsSkipPairsAtConstantDistance) {
+  auto has_pair = [](const RobotModel& robot, const std::string& a, const std::string& b) {
+    const auto bodies = robot.BodiesWithTool();
+    for (const auto& [i, j] : robot.SelfCollisionPairs()) {
+      if (bodies[i].name == a && bodies[j].name == b) return true;
+    }
+    return false;
+  };
+  RobotModel straight = DefaultUr5(TestTool());
+  EXPECT_FALSE(has_pair(straight, "wrist_2", "mill_end"));
+  EXPECT_TRUE(has_pair(straight, "forearm", "mill_end"));
+  EXPECT_TRUE(has_pair(straight, "shoulder", "forearm"));
+  ToolGeometry bent = TestTool();
+  bent.capsules.push_back({Eigen::Vector3d(0, 0, 0.05), Eigen::Vector3d(0.1, 0, -0.03), 0.02});
+  EXPECT_TRUE(has_pair(DefaultUr5(bent), "wrist_2", "mill_end"));
+}
+
+TEST(RobotModel, ValidateRejectsBadGeometry) {
+  RobotModel robot = DefaultUr5(TestTool());
+  robot.links[2].capsules[0].radius = -0.01;
+  EXPECT_NE(robot.Validate().message().find("links[2]"), std::string::npos);
+  robot = DefaultUr5(TestTool());
+  robot.links[1].frame = 7;
+  EXPECT_NE(robot.Validate().message().find("frame"), std::string::npos);
+  robot = DefaultUr5(TestTool());
+  robot.platform_from_arm_base.linear() *= 2.0;
+  EXPECT_NE(robot.Validate().message().find("platform_from_arm_base"), std::string::npos);
+  robot = DefaultUr5(TestTool());
+  robot.tool.capsules[0].a.x() = std::nan("");
+  EXPECT_NE(robot.Validate().message().find("tool.capsules[0]"), std::string::npos);
+  robot = DefaultUr5(TestTool());
+  robot.limits.lower[2] = 4.0;
+  EXPECT_FALSE(robot.Validate().ok());
+}
+
+TEST(DefaultPlatform, CamerasFormTheRigTriangle) {
+  const PlatformGeometry platform = DefaultPlatform();
+  ASSERT_TRUE(platform.Validate().ok());
+  ASSERT_EQ(platform.fixed_spheres.size(), 3u);
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (const Sphere& s : platform.fixed_spheres) centroid += s.center / 3.0;
+  EXPECT_LT((centroid - Eigen::Vector3d(0, 0, 1.05)).norm(), 1e-12);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_NEAR((platform.fixed_spheres[i].center - platform.fixed_spheres[(i + 1) % 3].center).norm(),
+                0.22, 1e-12);
+  }
+}
+
+TEST(PlatformGeometry, ValidateRejectsBadPlanes) {
+  PlatformGeometry platform = DefaultPlatform();
+  platform.roof_z_m = -1.0;
+  EXPECT_NE(platform.Validate().message().find("roof_z_m"), std::string::npos);
+  platform = DefaultPlatform();
+  platform.backdrop_y_m = std::nan("");
+  EXPECT_NE(platform.Validate().message().find("backdrop_y_m"), std::string::npos);
+  platform = DefaultPlatform();
+  platform.fixed_spheres[1].radius = -1;
+  EXPECT_NE(platform.Validate().message().find("fixed_spheres[1]"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace vb::plan
