@@ -11,6 +11,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstring>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -145,14 +146,15 @@ void AddNeighbours(const std::vector<VineModel>& neighbours,
 }
 
 nlohmann::json Study(const Mount& mount, const std::vector<Stop>& stops, const ToolGeometry& tool,
-                     bool ik_only, const RigCalibration& rig) {
+                     const CutMotionOptions& options, bool ik_only, bool verbose,
+                     const RigCalibration& rig) {
   RobotModel robot = DefaultUr5(tool);
   robot.platform_from_arm_base = mount.platform_from_arm_base;
   const Eigen::Isometry3d base_from_platform = robot.platform_from_arm_base.inverse();
   const Eigen::Isometry3d tcp_from_flange = tool.flange_from_tcp.inverse();
-  const CutMotionOptions options;
   int cuts = 0, reachable = 0, planned = 0, slid = 0, errors = 0;
   std::vector<double> clearances;
+  std::map<std::string, int> outcomes;
   const auto start = std::chrono::steady_clock::now();
   for (const Stop& stop : stops) {
     cuts += static_cast<int>(stop.cuts.size());
@@ -175,6 +177,10 @@ nlohmann::json Study(const Mount& mount, const std::vector<Stop>& stops, const T
     AddNeighbours(stop.neighbours, base_from_platform, &*scene);
     for (const CutMotion& m :
          PlanCutMotions(robot, stop.model, *scene, stop.cuts, options, Deadline::In(60.0))) {
+      ++outcomes[std::string(CutMotionOutcomeName(m.outcome))];
+      if (verbose && m.outcome != CutMotionOutcome::kPlanned) {
+        std::fprintf(stderr, "%s\n", m.message.c_str());
+      }
       if (m.outcome != CutMotionOutcome::kPlanned) continue;
       ++planned;
       slid += m.slid_m > 0;
@@ -197,6 +203,7 @@ nlohmann::json Study(const Mount& mount, const std::vector<Stop>& stops, const T
     out["slid_fraction_of_planned"] = planned ? static_cast<double>(slid) / planned : 0.0;
     out["median_clearance_m"] = clearances.empty() ? 0.0 : clearances[clearances.size() / 2];
     out["scene_errors"] = errors;
+    out["outcomes"] = outcomes;
     out["ms_per_cut"] = cuts ? 1000.0 * seconds / cuts : 0.0;
   }
   return out;
@@ -207,21 +214,36 @@ nlohmann::json Study(const Mount& mount, const std::vector<Stop>& stops, const T
 
 int main(int argc, char** argv) {
   int vines = 100;
-  bool ik_only = false, grid = false;
-  std::string tool_name = "mill_end";
+  bool ik_only = false, grid = false, verbose = false;
+  vb::plan::CutMotionOptions options;
+  std::string tool_name = "mill_end", only;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--vines") && i + 1 < argc) {
       vines = std::atoi(argv[++i]);
     } else if (!std::strcmp(argv[i], "--ik_only")) {
       ik_only = true;
+    } else if (!std::strcmp(argv[i], "--verbose")) {
+      verbose = true;
+    } else if (!std::strcmp(argv[i], "--max_tilt_deg") && i + 1 < argc) {
+      options.max_tilt_rad = std::atof(argv[++i]) * M_PI / 180;
+    } else if (!std::strcmp(argv[i], "--tilt_steps") && i + 1 < argc) {
+      options.tilt_steps = std::atoi(argv[++i]);
+    } else if (!std::strcmp(argv[i], "--sweep_m") && i + 1 < argc) {
+      options.sweep_m = std::atof(argv[++i]);
+    } else if (!std::strcmp(argv[i], "--max_slide_m") && i + 1 < argc) {
+      options.max_slide_m = std::atof(argv[++i]);
+    } else if (!std::strcmp(argv[i], "--mount") && i + 1 < argc) {
+      only = argv[++i];
     } else if (!std::strcmp(argv[i], "--grid")) {
       grid = true;
     } else if (!std::strcmp(argv[i], "--tool") && i + 1 < argc) {
       tool_name = argv[++i];
     } else {
-      std::fprintf(stderr,
-                   "usage: %s [--vines N] [--ik_only] [--grid] [--tool mill_end|secateur]\n",
-                   argv[0]);
+      std::fprintf(
+          stderr,
+          "usage: %s [--vines N] [--ik_only] [--grid] [--mount NAME] [--tool mill_end|secateur] "
+          "[--max_tilt_deg D --tilt_steps N] [--sweep_m S] [--max_slide_m M] [--verbose]\n",
+          argv[0]);
       return 2;
     }
   }
@@ -231,8 +253,15 @@ int main(int argc, char** argv) {
   if (!rig.ok()) return 1;
   const auto stops = vb::plan::LoadStops(vines);
   const auto mounts = grid ? vb::plan::GridMounts() : vb::plan::NamedMounts();
+  if (auto status = options.Validate(); !status.ok()) {
+    std::fprintf(stderr, "%s\n", std::string(status.message()).c_str());
+    return 2;
+  }
   for (const auto& mount : mounts) {
-    std::printf("%s\n", vb::plan::Study(mount, stops, tool, ik_only, *rig).dump().c_str());
+    if (!only.empty() && mount.name != only) continue;
+    std::printf(
+        "%s\n",
+        vb::plan::Study(mount, stops, tool, options, ik_only, verbose, *rig).dump().c_str());
     std::fflush(stdout);
   }
   return 0;

@@ -17,6 +17,10 @@ absl::Status CutMotionOptions::Validate() const {
   if (approach_sides < 1 || approach_sides > 2) {
     return absl::InvalidArgumentError("options.approach_sides: must be 1 or 2");
   }
+  if (tilt_steps < 0) return absl::InvalidArgumentError("options.tilt_steps: must be >= 0");
+  if (!(max_tilt_rad >= 0 && max_tilt_rad < M_PI / 2)) {
+    return absl::InvalidArgumentError("options.max_tilt_rad: must be in [0, pi/2)");
+  }
   const std::pair<double, const char*> positive[] = {
       {sweep_m, "sweep_m"},
       {approach_m, "approach_m"},
@@ -84,17 +88,29 @@ std::vector<Eigen::Isometry3d> SampleCutPoses(const Eigen::Vector3d& p, const Ei
   const Eigen::Vector3d e1 = toward_base.normalized();
   const Eigen::Vector3d e2 = d.cross(e1);
   std::vector<Eigen::Isometry3d> poses;
-  for (int i = 0; i < options.orientations; ++i) {
-    const double theta = 2.0 * M_PI * i / options.orientations;
-    const Eigen::Vector3d z = -(std::cos(theta) * e1 + std::sin(theta) * e2);
-    for (int side = 0; side < options.approach_sides; ++side) {
-      const Eigen::Vector3d y = side == 0 ? d : Eigen::Vector3d(-d);
-      Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-      pose.linear().col(0) = y.cross(z);
-      pose.linear().col(1) = y;
-      pose.linear().col(2) = z;
-      pose.translation() = p;
-      poses.push_back(pose);
+  // Tilts 0, +t, -t, +2t, -2t, ... up to max_tilt_rad: perpendicular cuts are tried first.
+  std::vector<double> tilts = {0.0};
+  for (int k = 1; k <= options.tilt_steps; ++k) {
+    const double tilt = options.max_tilt_rad * k / options.tilt_steps;
+    tilts.push_back(tilt);
+    tilts.push_back(-tilt);
+  }
+  for (double tilt : tilts) {
+    for (int i = 0; i < options.orientations; ++i) {
+      const double theta = 2.0 * M_PI * i / options.orientations;
+      const Eigen::Vector3d z_perpendicular = -(std::cos(theta) * e1 + std::sin(theta) * e2);
+      for (int side = 0; side < options.approach_sides; ++side) {
+        const Eigen::Vector3d y_along = side == 0 ? d : Eigen::Vector3d(-d);
+        // Rotation by `tilt` about x = y cross z: x stays across the cane.
+        const Eigen::Vector3d y = std::cos(tilt) * y_along + std::sin(tilt) * z_perpendicular;
+        const Eigen::Vector3d z = -std::sin(tilt) * y_along + std::cos(tilt) * z_perpendicular;
+        Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+        pose.linear().col(0) = y.cross(z);
+        pose.linear().col(1) = y;
+        pose.linear().col(2) = z;
+        pose.translation() = p;
+        poses.push_back(pose);
+      }
     }
   }
   return poses;
@@ -111,51 +127,75 @@ struct Candidate {
 
 double MaxJointChange(const Joints& a, const Joints& b) { return (a - b).cwiseAbs().maxCoeff(); }
 
+// The IK solution for the TCP at `waypoint` (TCP frame of the cut) nearest `previous`, if it is
+// within `max_jump` of it in every joint.
+std::optional<Joints> NearestSolution(const Candidate& start, const Eigen::Vector3d& waypoint,
+                                      const Eigen::Isometry3d& tcp_from_flange,
+                                      const JointLimits& limits, const Joints& previous,
+                                      double max_jump) {
+  Eigen::Isometry3d base_from_tcp = start.base_from_tcp;
+  base_from_tcp.translation() += start.base_from_tcp.linear() * waypoint;
+  const IkSolutions ik = InverseKinematics(base_from_tcp * tcp_from_flange, limits, &previous);
+  int best = -1;
+  double best_change = max_jump;
+  for (int k = 0; k < ik.count; ++k) {
+    const double change = MaxJointChange(ik.q[k], previous);
+    if (change <= best_change) {
+      best_change = change;
+      best = k;
+    }
+  }
+  if (best < 0) return std::nullopt;
+  return ik.q[best];
+}
+
+enum class StrokeResult { kFree, kNoIk, kCollides };
+
 // Follows the stroke from the cut configuration outward in both directions, each step on the IK
-// solution nearest the previous configuration. False on a missing solution or a jump.
-bool FollowStroke(const Candidate& start, const std::vector<Eigen::Vector3d>& waypoints,
-                  int cut_index, const Eigen::Isometry3d& tcp_from_flange,
-                  const JointLimits& limits, double max_jump, std::vector<Joints>* path) {
+// solution nearest the previous configuration, checking each configuration as it goes (IK costs
+// more than a check, so a collision stops the walk early). kNoIk on a missing solution or a jump.
+StrokeResult FollowStroke(const Candidate& start, const std::vector<Eigen::Vector3d>& waypoints,
+                          int cut_index, const Eigen::Isometry3d& tcp_from_flange,
+                          const JointLimits& limits, double max_jump, CollisionChecker& checker,
+                          std::vector<Joints>* path) {
+  // Cheap rejection first: the stroke's two ends, reached directly from the cut configuration
+  // (the nearest solution there is the one the walk would reach on a regular branch; a miss here
+  // only drops a candidate, it never admits a colliding one).
+  const int last = static_cast<int>(waypoints.size()) - 1;
+  for (int end : {0, last}) {
+    if (end == cut_index) continue;
+    const double allowed = max_jump * std::abs(end - cut_index);
+    const auto q =
+        NearestSolution(start, waypoints[end], tcp_from_flange, limits, start.q, allowed);
+    if (q.has_value() && !checker.IsFree(*q)) return StrokeResult::kCollides;
+  }
   path->assign(waypoints.size(), start.q);
   for (int direction : {1, -1}) {
     Joints previous = start.q;
-    for (int i = cut_index + direction; i >= 0 && i < static_cast<int>(waypoints.size());
-         i += direction) {
-      Eigen::Isometry3d base_from_tcp = start.base_from_tcp;
-      base_from_tcp.translation() += start.base_from_tcp.linear() * waypoints[i];
-      const IkSolutions ik = InverseKinematics(base_from_tcp * tcp_from_flange, limits, &previous);
-      int best = -1;
-      double best_change = max_jump;
-      for (int k = 0; k < ik.count; ++k) {
-        const double change = MaxJointChange(ik.q[k], previous);
-        if (change <= best_change) {
-          best_change = change;
-          best = k;
-        }
-      }
-      if (best < 0) return false;
-      previous = ik.q[best];
+    for (int i = cut_index + direction; i >= 0 && i <= last; i += direction) {
+      const auto q =
+          NearestSolution(start, waypoints[i], tcp_from_flange, limits, previous, max_jump);
+      if (!q.has_value()) return StrokeResult::kNoIk;
+      if (!checker.IsFree(*q)) return StrokeResult::kCollides;
+      previous = *q;
       (*path)[i] = previous;
     }
   }
-  return true;
+  return StrokeResult::kFree;
 }
 
-// Min clearance over `path` if every configuration and every motion between consecutive ones is
-// free and the clearance stays above `must_beat`; nullopt otherwise (it cannot win).
+// Min clearance over `path` (whose configurations are free) if every motion between consecutive
+// configurations is free and the clearance stays above `must_beat`; nullopt otherwise (it cannot
+// win).
 std::optional<double> EvaluatePath(CollisionChecker& checker, const std::vector<Joints>& path,
                                    double must_beat, double max_step_m) {
-  double clearance = std::numeric_limits<double>::infinity();
-  for (const Joints& q : path) {
-    const double c = checker.Clearance(q);
-    if (!(c > must_beat)) return std::nullopt;
-    clearance = std::min(clearance, c);
-  }
-  for (const Joints& q : path) {
-    if (!checker.IsFree(q)) return std::nullopt;
-  }
   for (size_t i = 1; i < path.size(); ++i) {
     if (!checker.IsMotionFree(path[i - 1], path[i], max_step_m)) return std::nullopt;
+  }
+  double clearance = std::numeric_limits<double>::infinity();
+  for (const Joints& q : path) {
+    clearance = std::min(clearance, checker.Clearance(q));
+    if (!(clearance > must_beat)) return std::nullopt;
   }
   return clearance;
 }
@@ -196,6 +236,8 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
                          : 0;
 
   bool reachable = false;
+  int free_at_cut = 0, strokes_followed = 0;  // over all slides, for the message
+  // Strokes followed includes those stopped by a collision (IK did not fail first).
   for (int k = 0; k <= slides; ++k) {
     Eigen::Vector3d point = cut.point, direction = cut.direction;
     if (k > 0) {
@@ -218,6 +260,7 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
       reachable = reachable || ik.count > 0;
       for (int i = 0; i < ik.count; ++i) {
         if (!checker->IsFree(ik.q[i])) continue;
+        ++free_at_cut;
         candidates.push_back({ik.q[i], checker->Clearance(ik.q[i]), pose});
       }
     }
@@ -229,10 +272,12 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
     for (const Candidate& candidate : candidates) {
       if (candidate.clearance_m <= best) break;
       if (deadline.Expired()) return Fail(motion, CutMotionOutcome::kDeadline, what + ": deadline");
-      if (!FollowStroke(candidate, waypoints, cut_index, tcp_from_flange, robot.limits,
-                        options.max_joint_jump_rad, &path)) {
-        continue;
-      }
+      const StrokeResult stroke =
+          FollowStroke(candidate, waypoints, cut_index, tcp_from_flange, robot.limits,
+                       options.max_joint_jump_rad, *checker, &path);
+      if (stroke == StrokeResult::kNoIk) continue;
+      ++strokes_followed;
+      if (stroke == StrokeResult::kCollides) continue;
       const std::optional<double> clearance =
           EvaluatePath(*checker, path, best, options.max_step_m);
       if (!clearance.has_value()) continue;
@@ -257,7 +302,8 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
   }
   return Fail(motion, CutMotionOutcome::kNoCollisionFreeMotion,
               absl::StrCat(what, ": no collision-free cut motion within ", options.max_slide_m,
-                           " m of sliding"));
+                           " m of sliding (", free_at_cut, " collision-free cut configurations, ",
+                           strokes_followed, " strokes within the joint limits, none free)"));
 }
 
 }  // namespace

@@ -9,7 +9,9 @@
 // Pose sampling (tool.h gives the TCP frame): at the cut point p with unit cane tangent d (arm
 // base frame), the TCP frame is y = side * d (side = +1 / -1, `approach_sides`), z = the tool axis
 // at angle theta about the cane (`orientations` samples of theta over a full turn, theta = 0
-// pointing from the arm base toward the cane), x = y cross z. The stroke (tool.h StrokeOf) is
+// pointing from the arm base toward the cane), x = y cross z; with tilts, the frame is then
+// rotated about x by each sampled tilt (the sweep stays across the cane, the cut becomes oblique;
+// tilt 0, a perpendicular cut, is sampled first). The stroke (tool.h StrokeOf) is
 // followed in Cartesian steps of `cartesian_step_m` with IK on the same branch: each step takes
 // the IK solution nearest the previous configuration, and a joint jump above
 // `max_joint_jump_rad` rejects the branch (the arm would leave the straight TCP line).
@@ -37,6 +39,8 @@ namespace vb::plan {
 struct CutMotionOptions {
   int orientations = 16;                // tool-axis angles sampled about the cane, full turn
   int approach_sides = 2;               // 1: TCP y along the cane tangent only; 2: both signs
+  double max_tilt_rad = 0.0;            // tool tilt about TCP x (oblique cut), sampled +-
+  int tilt_steps = 0;                   // tilts sampled per sign: k * max_tilt_rad / tilt_steps
   double sweep_m = 0.10;                // mill end: TCP sweep length across the cane, centred
   double approach_m = 0.06;             // secateur: approach (and retract) distance along TCP z
   double cartesian_step_m = 0.005;      // TCP spacing of the configurations along the stroke
@@ -46,7 +50,8 @@ struct CutMotionOptions {
   double cut_cane_free_radius_m = 0.04; // cut-cane capsules within this of the cut may touch
   double max_step_m = 0.005;            // IsMotionFree resolution between path configurations
 
-  // INVALID_ARGUMENT naming the field ("options.sweep_m: ..."): counts < 1 (sides > 2),
+  // INVALID_ARGUMENT naming the field ("options.sweep_m: ..."): counts < 1 (sides > 2, tilt_steps
+  // < 0), max_tilt_rad outside [0, pi/2),
   // non-finite or non-positive lengths (max_slide_m may be 0), slide_step_m > 0 when sliding.
   absl::Status Validate() const;
 };
