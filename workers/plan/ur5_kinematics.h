@@ -41,4 +41,27 @@ std::array<Eigen::Isometry3d, 7> LinkFrames(const Joints& q, const DhParameters&
 // base_from_flange.
 Eigen::Isometry3d ForwardKinematics(const Joints& q, const DhParameters& dh = Ur5Dh());
 
+// Up to 8 joint configurations reaching one flange pose, in the order shoulder branch (2) x
+// wrist branch (2) x elbow branch (2), dropped branches compacted away.
+struct IkSolutions {
+  std::array<Joints, 8> q;
+  int count = 0;
+};
+
+// All closed-form solutions (at most 8: shoulder x wrist x elbow branches) of
+// ForwardKinematics(q) == base_from_flange, for the UR5 geometry (Ur5Dh(); the derivation relies
+// on a1 = a4 = a5 = a6 = 0 and parallel joints 2-4), after Hawkins, "Analytic Inverse Kinematics
+// for the Universal Robots UR-5/UR-10 Arms", 2013. Each joint is moved by multiples of 2*pi to the
+// equivalent nearest `near` (or nearest 0 if null) that lies within `limits`; a solution with a
+// joint that cannot be brought into the limits is dropped. At a wrist singularity (|sin q5| ~ 0)
+// q6 is taken from `near` (or 0) and q4 absorbs the rest of the rotation. Poses at the boundary of
+// the workspace (within 1e-9 of it) are accepted and give coinciding branches once each.
+// Unreachable or non-finite pose (or non-finite `near`): count 0. Thread-safe.
+IkSolutions InverseKinematics(const Eigen::Isometry3d& base_from_flange, const JointLimits& limits,
+                              const Joints* near = nullptr);
+
+// Wraps every joint of q by multiples of 2*pi to the equivalent nearest `near` (or 0) inside
+// `limits`; false (q unspecified) if some joint has no equivalent inside them.
+bool WrapIntoLimits(const JointLimits& limits, const Joints* near, Joints* q);
+
 }  // namespace vb::plan

@@ -1,0 +1,346 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "workers/plan/cut_motion.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <optional>
+#include <string>
+#include <utility>
+
+#include "absl/strings/str_cat.h"
+
+namespace vb::plan {
+
+absl::Status CutMotionOptions::Validate() const {
+  if (orientations < 1) return absl::InvalidArgumentError("options.orientations: must be >= 1");
+  if (approach_sides < 1 || approach_sides > 2) {
+    return absl::InvalidArgumentError("options.approach_sides: must be 1 or 2");
+  }
+  if (tilt_steps < 0) return absl::InvalidArgumentError("options.tilt_steps: must be >= 0");
+  if (!(max_tilt_rad >= 0 && max_tilt_rad < M_PI / 2)) {
+    return absl::InvalidArgumentError("options.max_tilt_rad: must be in [0, pi/2)");
+  }
+  const std::pair<double, const char*> positive[] = {
+      {sweep_m, "sweep_m"},
+      {approach_m, "approach_m"},
+      {cartesian_step_m, "cartesian_step_m"},
+      {max_joint_jump_rad, "max_joint_jump_rad"},
+      {cut_cane_free_radius_m, "cut_cane_free_radius_m"},
+      {max_step_m, "max_step_m"}};
+  for (const auto& [value, name] : positive) {
+    if (!std::isfinite(value) || value <= 0) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("options.", name, ": must be finite and > 0, is ", value));
+    }
+  }
+  if (!std::isfinite(max_slide_m) || max_slide_m < 0) {
+    return absl::InvalidArgumentError("options.max_slide_m: must be finite and >= 0");
+  }
+  if (max_slide_m > 0 && !(std::isfinite(slide_step_m) && slide_step_m > 0)) {
+    return absl::InvalidArgumentError("options.slide_step_m: must be finite and > 0");
+  }
+  return absl::OkStatus();
+}
+
+std::string_view CutMotionOutcomeName(CutMotionOutcome outcome) {
+  switch (outcome) {
+    case CutMotionOutcome::kPlanned:
+      return "planned";
+    case CutMotionOutcome::kUnreachable:
+      return "unreachable";
+    case CutMotionOutcome::kNoCollisionFreeMotion:
+      return "no_collision_free_cut_motion";
+    case CutMotionOutcome::kInvalidInput:
+      return "invalid_input";
+    case CutMotionOutcome::kDeadline:
+      return "deadline";
+  }
+  return "invalid_input";
+}
+
+std::vector<Eigen::Vector3d> StrokeWaypoints(CutStroke stroke, const CutMotionOptions& options,
+                                             int* cut_index) {
+  std::vector<Eigen::Vector3d> points;
+  if (stroke == CutStroke::kSweep) {
+    // Symmetric about the cut so that the cut point itself is a waypoint.
+    const double half = 0.5 * options.sweep_m;
+    const int n = std::max(1, static_cast<int>(std::ceil(half / options.cartesian_step_m)));
+    for (int k = -n; k <= n; ++k) points.push_back(Eigen::Vector3d(half * k / n, 0, 0));
+    *cut_index = n;
+  } else {
+    const int n =
+        std::max(1, static_cast<int>(std::ceil(options.approach_m / options.cartesian_step_m)));
+    for (int k = 0; k <= n; ++k) {
+      points.push_back(Eigen::Vector3d(0, 0, -options.approach_m * (n - k) / n));
+    }
+    for (int k = n - 1; k >= 0; --k) points.push_back(points[k]);
+    *cut_index = n;
+  }
+  return points;
+}
+
+std::vector<Eigen::Isometry3d> SampleCutPoses(const Eigen::Vector3d& p, const Eigen::Vector3d& d,
+                                              const CutMotionOptions& options) {
+  // theta = 0: the tool axis points from the arm base toward the cane, the natural reach.
+  Eigen::Vector3d toward_base = -p - (-p).dot(d) * d;
+  if (toward_base.norm() < 1e-6) toward_base = d.unitOrthogonal();
+  const Eigen::Vector3d e1 = toward_base.normalized();
+  const Eigen::Vector3d e2 = d.cross(e1);
+  std::vector<Eigen::Isometry3d> poses;
+  // Tilts 0, +t, -t, +2t, -2t, ... up to max_tilt_rad: perpendicular cuts are tried first.
+  std::vector<double> tilts = {0.0};
+  for (int k = 1; k <= options.tilt_steps; ++k) {
+    const double tilt = options.max_tilt_rad * k / options.tilt_steps;
+    tilts.push_back(tilt);
+    tilts.push_back(-tilt);
+  }
+  for (double tilt : tilts) {
+    for (int i = 0; i < options.orientations; ++i) {
+      const double theta = 2.0 * M_PI * i / options.orientations;
+      const Eigen::Vector3d z_perpendicular = -(std::cos(theta) * e1 + std::sin(theta) * e2);
+      for (int side = 0; side < options.approach_sides; ++side) {
+        const Eigen::Vector3d y_along = side == 0 ? d : Eigen::Vector3d(-d);
+        // Rotation by `tilt` about x = y cross z: x stays across the cane.
+        const Eigen::Vector3d y = std::cos(tilt) * y_along + std::sin(tilt) * z_perpendicular;
+        const Eigen::Vector3d z = -std::sin(tilt) * y_along + std::cos(tilt) * z_perpendicular;
+        Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+        pose.linear().col(0) = y.cross(z);
+        pose.linear().col(1) = y;
+        pose.linear().col(2) = z;
+        pose.translation() = p;
+        poses.push_back(pose);
+      }
+    }
+  }
+  return poses;
+}
+
+namespace {
+
+// One reachable, collision-free configuration at the cut pose: where a stroke may start.
+struct Candidate {
+  Joints q;
+  double clearance_m = 0;
+  Eigen::Isometry3d base_from_tcp;
+};
+
+double MaxJointChange(const Joints& a, const Joints& b) { return (a - b).cwiseAbs().maxCoeff(); }
+
+// The IK solution for the TCP at `waypoint` (TCP frame of the cut) nearest `previous`, if it is
+// within `max_jump` of it in every joint.
+std::optional<Joints> NearestSolution(const Candidate& start, const Eigen::Vector3d& waypoint,
+                                      const Eigen::Isometry3d& tcp_from_flange,
+                                      const JointLimits& limits, const Joints& previous,
+                                      double max_jump) {
+  Eigen::Isometry3d base_from_tcp = start.base_from_tcp;
+  base_from_tcp.translation() += start.base_from_tcp.linear() * waypoint;
+  const IkSolutions ik = InverseKinematics(base_from_tcp * tcp_from_flange, limits, &previous);
+  int best = -1;
+  double best_change = max_jump;
+  for (int k = 0; k < ik.count; ++k) {
+    const double change = MaxJointChange(ik.q[k], previous);
+    if (change <= best_change) {
+      best_change = change;
+      best = k;
+    }
+  }
+  if (best < 0) return std::nullopt;
+  return ik.q[best];
+}
+
+enum class StrokeResult { kFree, kNoIk, kCollides };
+
+// Follows the stroke from the cut configuration outward in both directions, each step on the IK
+// solution nearest the previous configuration, checking each configuration as it goes (IK costs
+// more than a check, so a collision stops the walk early). kNoIk on a missing solution or a jump.
+StrokeResult FollowStroke(const Candidate& start, const std::vector<Eigen::Vector3d>& waypoints,
+                          int cut_index, const Eigen::Isometry3d& tcp_from_flange,
+                          const JointLimits& limits, double max_jump, CollisionChecker& checker,
+                          std::vector<Joints>* path) {
+  // Cheap rejection first: the stroke's two ends, reached directly from the cut configuration
+  // (the nearest solution there is the one the walk would reach on a regular branch; a miss here
+  // only drops a candidate, it never admits a colliding one).
+  const int last = static_cast<int>(waypoints.size()) - 1;
+  for (int end : {0, last}) {
+    if (end == cut_index) continue;
+    const double allowed = max_jump * std::abs(end - cut_index);
+    const auto q =
+        NearestSolution(start, waypoints[end], tcp_from_flange, limits, start.q, allowed);
+    if (q.has_value() && !checker.IsFree(*q)) return StrokeResult::kCollides;
+  }
+  path->assign(waypoints.size(), start.q);
+  for (int direction : {1, -1}) {
+    Joints previous = start.q;
+    for (int i = cut_index + direction; i >= 0 && i <= last; i += direction) {
+      const auto q =
+          NearestSolution(start, waypoints[i], tcp_from_flange, limits, previous, max_jump);
+      if (!q.has_value()) return StrokeResult::kNoIk;
+      if (!checker.IsFree(*q)) return StrokeResult::kCollides;
+      previous = *q;
+      (*path)[i] = previous;
+    }
+  }
+  return StrokeResult::kFree;
+}
+
+// Min clearance over `path` (whose configurations are free) if every motion between consecutive
+// configurations is free and the clearance stays above `must_beat`; nullopt otherwise (it cannot
+// win).
+std::optional<double> EvaluatePath(CollisionChecker& checker, const std::vector<Joints>& path,
+                                   double must_beat, double max_step_m) {
+  for (size_t i = 1; i < path.size(); ++i) {
+    if (!checker.IsMotionFree(path[i - 1], path[i], max_step_m)) return std::nullopt;
+  }
+  double clearance = std::numeric_limits<double>::infinity();
+  for (const Joints& q : path) {
+    clearance = std::min(clearance, checker.Clearance(q));
+    if (!(clearance > must_beat)) return std::nullopt;
+  }
+  return clearance;
+}
+
+CutMotion Fail(CutMotion motion, CutMotionOutcome outcome, std::string message) {
+  motion.outcome = outcome;
+  motion.message = std::move(message);
+  motion.path.clear();
+  return motion;
+}
+
+CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const CollisionScene& scene,
+                  const Cut& cut, const CutMotionOptions& options, const Deadline& deadline,
+                  const CheckerFactory& make_checker) {
+  CutMotion motion;
+  motion.cut_id = cut.id;
+  motion.cut_point_in_platform = cut.point;
+  const std::string what = absl::StrCat("cut ", cut.id.value);
+  if (!cut.point.allFinite() || !cut.direction.allFinite() ||
+      std::abs(cut.direction.norm() - 1.0) > 1e-6) {
+    return Fail(motion, CutMotionOutcome::kInvalidInput,
+                what + ": point or direction not finite, or direction not unit");
+  }
+  const std::optional<size_t> cane_index = model.IndexOf(cut.cane_id);
+  if (!cane_index.has_value()) {
+    return Fail(motion, CutMotionOutcome::kInvalidInput,
+                absl::StrCat(what, ": cane ", cut.cane_id.value, " is not in the model"));
+  }
+  const Polyline3& cane = model.canes[*cane_index].polyline;
+  const double s0 = cane.Project(cut.point);
+  const Eigen::Isometry3d base_from_platform = robot.platform_from_arm_base.inverse();
+  const Eigen::Isometry3d tcp_from_flange = robot.tool.flange_from_tcp.inverse();
+  int cut_index = 0;
+  const std::vector<Eigen::Vector3d> waypoints =
+      StrokeWaypoints(StrokeOf(robot.tool), options, &cut_index);
+  const int slides = options.max_slide_m > 0
+                         ? static_cast<int>(options.max_slide_m / options.slide_step_m + 1e-9)
+                         : 0;
+
+  bool reachable = false;
+  int free_at_cut = 0, strokes_followed = 0;  // over all slides, for the message
+  // Strokes followed includes those stopped by a collision (IK did not fail first).
+  for (int k = 0; k <= slides; ++k) {
+    Eigen::Vector3d point = cut.point, direction = cut.direction;
+    if (k > 0) {
+      const double s = s0 + k * options.slide_step_m;
+      if (s > cane.Length()) break;  // slid off the tip
+      point = cane.PointAt(s);
+      direction = cane.TangentAt(s);
+    }
+    const Eigen::Vector3d point_in_base = base_from_platform * point;
+    const Eigen::Vector3d direction_in_base = base_from_platform.linear() * direction;
+    const CollisionScene local =
+        scene.WithoutCaneNear(cut.cane_id, point_in_base, options.cut_cane_free_radius_m);
+    std::unique_ptr<CollisionChecker> checker = make_checker(robot, local);
+
+    std::vector<Candidate> candidates;
+    for (const Eigen::Isometry3d& pose :
+         SampleCutPoses(point_in_base, direction_in_base, options)) {
+      if (deadline.Expired()) return Fail(motion, CutMotionOutcome::kDeadline, what + ": deadline");
+      const IkSolutions ik = InverseKinematics(pose * tcp_from_flange, robot.limits);
+      reachable = reachable || ik.count > 0;
+      for (int i = 0; i < ik.count; ++i) {
+        if (!checker->IsFree(ik.q[i])) continue;
+        ++free_at_cut;
+        candidates.push_back({ik.q[i], checker->Clearance(ik.q[i]), pose});
+      }
+    }
+    // A path's clearance is at most its cut configuration's: best-first with a bound.
+    std::sort(candidates.begin(), candidates.end(),
+              [](const Candidate& a, const Candidate& b) { return a.clearance_m > b.clearance_m; });
+    double best = -std::numeric_limits<double>::infinity();
+    std::vector<Joints> path, best_path;
+    for (const Candidate& candidate : candidates) {
+      if (candidate.clearance_m <= best) break;
+      if (deadline.Expired()) return Fail(motion, CutMotionOutcome::kDeadline, what + ": deadline");
+      const StrokeResult stroke =
+          FollowStroke(candidate, waypoints, cut_index, tcp_from_flange, robot.limits,
+                       options.max_joint_jump_rad, *checker, &path);
+      if (stroke == StrokeResult::kNoIk) continue;
+      ++strokes_followed;
+      if (stroke == StrokeResult::kCollides) continue;
+      const std::optional<double> clearance =
+          EvaluatePath(*checker, path, best, options.max_step_m);
+      if (!clearance.has_value()) continue;
+      best = *clearance;
+      best_path = path;
+    }
+    if (!best_path.empty()) {
+      motion.outcome = CutMotionOutcome::kPlanned;
+      motion.path = std::move(best_path);
+      motion.cut_index = cut_index;
+      motion.clearance_m = best;
+      motion.slid_m = k * options.slide_step_m;
+      motion.cut_point_in_platform = point;
+      motion.message =
+          absl::StrCat(what, ": planned, clearance ", best, " m, slid ", motion.slid_m, " m");
+      return motion;
+    }
+  }
+  if (!reachable) {
+    return Fail(motion, CutMotionOutcome::kUnreachable,
+                absl::StrCat(what, ": no sampled tool pose is reachable within the joint limits"));
+  }
+  return Fail(motion, CutMotionOutcome::kNoCollisionFreeMotion,
+              absl::StrCat(what, ": no collision-free cut motion within ", options.max_slide_m,
+                           " m of sliding (", free_at_cut, " collision-free cut configurations, ",
+                           strokes_followed, " strokes within the joint limits, none free)"));
+}
+
+}  // namespace
+
+std::vector<CutMotion> PlanCutMotions(const RobotModel& robot, const VineModel& model,
+                                      const CollisionScene& scene, std::span<const Cut> cuts,
+                                      const CutMotionOptions& options, const Deadline& deadline,
+                                      const CheckerFactory& make_checker) {
+  std::vector<CutMotion> motions;
+  absl::Status status = options.Validate();
+  if (status.ok()) status = robot.Validate();
+  for (const Cut& cut : cuts) {
+    if (status.ok() && deadline.Expired()) {
+      CutMotion motion;
+      motion.cut_id = cut.id;
+      motion.cut_point_in_platform = cut.point;
+      motions.push_back(Fail(motion, CutMotionOutcome::kDeadline,
+                             absl::StrCat("cut ", cut.id.value, ": deadline")));
+      continue;
+    }
+    if (!status.ok()) {
+      CutMotion motion;
+      motion.cut_id = cut.id;
+      motion.cut_point_in_platform = cut.point;
+      motions.push_back(
+          Fail(motion, CutMotionOutcome::kInvalidInput, std::string(status.message())));
+      continue;
+    }
+    motions.push_back(PlanOne(robot, model, scene, cut, options, deadline, make_checker));
+  }
+  return motions;
+}
+
+std::vector<CutMotion> PlanCutMotions(const RobotModel& robot, const VineModel& model,
+                                      const CollisionScene& scene, std::span<const Cut> cuts,
+                                      const CutMotionOptions& options, const Deadline& deadline) {
+  return PlanCutMotions(robot, model, scene, cuts, options, deadline, MakePrimitiveChecker);
+}
+
+}  // namespace vb::plan

@@ -1,0 +1,116 @@
+// SPDX-License-Identifier: Apache-2.0
+// Cut motions: for each cut, the joint path that carries the tool through the cane (pre-cut pose
+// clear of the cane -> through the cut -> post-cut), collision-free except for the cut cane near
+// the cut, with the largest clearance among the sampled tool poses; where none exists, the cut
+// slides outward along its cane (bounded). Botterill et al. 2017 section 3.4 (cut motions are
+// planned first and bound the rest of the plan). Thread-safe (pure functions; each call builds
+// its own checkers).
+//
+// Pose sampling (tool.h gives the TCP frame): at the cut point p with unit cane tangent d (arm
+// base frame), the TCP frame is y = side * d (side = +1 / -1, `approach_sides`), z = the tool axis
+// at angle theta about the cane (`orientations` samples of theta over a full turn, theta = 0
+// pointing from the arm base toward the cane), x = y cross z; with tilts, the frame is then
+// rotated about x by each sampled tilt (the sweep stays across the cane, the cut becomes oblique;
+// tilt 0, a perpendicular cut, is sampled first). The stroke (tool.h StrokeOf) is
+// followed in Cartesian steps of `cartesian_step_m` with IK on the same branch: each step takes
+// the IK solution nearest the previous configuration, and a joint jump above
+// `max_joint_jump_rad` rejects the branch (the arm would leave the straight TCP line).
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "absl/status/status.h"
+#include "core/cut_plan.h"
+#include "core/deadline.h"
+#include "core/vine_model.h"
+#include "Eigen/Core"
+#include "workers/plan/collision_checker.h"
+#include "workers/plan/collision_scene.h"
+#include "workers/plan/robot_model.h"
+#include "workers/plan/tool.h"
+#include "workers/plan/ur5_kinematics.h"
+
+namespace vb::plan {
+
+struct CutMotionOptions {
+  int orientations = 16;                // tool-axis angles sampled about the cane, full turn
+  int approach_sides = 2;               // 1: TCP y along the cane tangent only; 2: both signs
+  double max_tilt_rad = 0.0;            // tool tilt about TCP x (oblique cut), sampled +-
+  int tilt_steps = 0;                   // tilts sampled per sign: k * max_tilt_rad / tilt_steps
+  double sweep_m = 0.10;                // mill end: TCP sweep length across the cane, centred
+  double approach_m = 0.06;             // secateur: approach (and retract) distance along TCP z
+  double cartesian_step_m = 0.005;      // TCP spacing of the configurations along the stroke
+  double max_joint_jump_rad = 0.2;      // largest joint change per Cartesian step (continuity)
+  double max_slide_m = 0.05;            // how far a cut may slide outward when nothing is free
+  double slide_step_m = 0.01;           // slide increment
+  double cut_cane_free_radius_m = 0.04; // cut-cane capsules within this of the cut may touch
+  double max_step_m = 0.005;            // IsMotionFree resolution between path configurations
+
+  // INVALID_ARGUMENT naming the field ("options.sweep_m: ..."): counts < 1 (sides > 2, tilt_steps
+  // < 0), max_tilt_rad outside [0, pi/2),
+  // non-finite or non-positive lengths (max_slide_m may be 0), slide_step_m > 0 when sliding.
+  absl::Status Validate() const;
+};
+
+enum class CutMotionOutcome {
+  kPlanned,                // path holds a collision-free cut motion
+  kUnreachable,            // no sampled cut pose has an IK solution within limits, at any slide
+  kNoCollisionFreeMotion,  // cut poses are reachable, but no whole stroke is free, at any slide
+  kInvalidInput,           // bad options, robot, or cut (message names it)
+  kDeadline,               // the deadline expired before this cut was planned
+};
+std::string_view CutMotionOutcomeName(CutMotionOutcome outcome);  // "planned", "unreachable", ...
+
+struct CutMotion {
+  CutId cut_id;
+  CutMotionOutcome outcome = CutMotionOutcome::kInvalidInput;
+  std::string message;
+  // Pre-cut (tool clear of the cane) -> through the cut -> post-cut; consecutive configurations
+  // are one Cartesian step apart and their straight joint interpolation passed IsMotionFree.
+  // Empty unless planned.
+  std::vector<Joints> path;
+  int cut_index = -1;              // path[cut_index] puts the TCP on the (slid) cut point
+  double clearance_m = 0;          // min Clearance() over the path configurations (ranking key)
+  double slid_m = 0;               // how far the cut point moved outward along the cane
+  Eigen::Vector3d cut_point_in_platform = Eigen::Vector3d::Zero();  // after sliding
+};
+
+// Builds the checker for one scene (MakePrimitiveChecker by default; an FCL checker for
+// baselines). Must not return null.
+using CheckerFactory = std::function<std::unique_ptr<CollisionChecker>(const RobotModel&,
+                                                                      const CollisionScene&)>;
+
+// One CutMotion per cut, in order. For each cut: sample TCP poses about the cane, solve IK (all
+// branches), follow the stroke, and check every configuration and motion with a checker built on
+// scene.WithoutCaneNear(cut cane, cut point, cut_cane_free_radius_m); keep the collision-free
+// motion with the largest clearance. If none, slide the cut outward (toward the tip) along the
+// cane of `model` by slide_step_m up to max_slide_m (and the cane's tip) and report slid_m.
+// `scene` is in the arm base frame (robot.platform_from_arm_base maps base -> platform); cuts and
+// `model` are in the platform frame. Invalid options or robot: every cut kInvalidInput. A cut with
+// non-finite numbers, a non-unit direction, or a cane id absent from `model`: that cut
+// kInvalidInput. Once `deadline` expires, the current and later cuts are kDeadline.
+std::vector<CutMotion> PlanCutMotions(const RobotModel& robot, const VineModel& model,
+                                      const CollisionScene& scene, std::span<const Cut> cuts,
+                                      const CutMotionOptions& options, const Deadline& deadline);
+std::vector<CutMotion> PlanCutMotions(const RobotModel& robot, const VineModel& model,
+                                      const CollisionScene& scene, std::span<const Cut> cuts,
+                                      const CutMotionOptions& options, const Deadline& deadline,
+                                      const CheckerFactory& make_checker);
+
+// The sampled TCP frames of a cut at `point` with unit cane tangent `direction` (both in the arm
+// base frame), in sampling order (orientation-major, then side); see the convention above.
+std::vector<Eigen::Isometry3d> SampleCutPoses(const Eigen::Vector3d& point,
+                                              const Eigen::Vector3d& direction,
+                                              const CutMotionOptions& options);
+
+// The TCP positions of the stroke of `stroke` in the TCP frame of the cut pose, in path order;
+// `cut_index` receives the index of the cut point (the origin). Exposed for tests and the
+// trajectory writer.
+std::vector<Eigen::Vector3d> StrokeWaypoints(CutStroke stroke, const CutMotionOptions& options,
+                                             int* cut_index);
+
+}  // namespace vb::plan
