@@ -107,7 +107,9 @@ absl::Status Trajectory::Validate() const {
           return absl::InvalidArgumentError(absl::StrCat(point_what, ".q[", j, "]: not finite"));
         }
       }
-      if (!(point.t > last_t)) {
+      // A segment starts where the one before it ended (same time, same configuration).
+      const bool increases = p == 0 ? point.t >= last_t : point.t > last_t;
+      if (!increases) {
         return absl::InvalidArgumentError(absl::StrCat(
             point_what, ".t: ", point.t, " does not increase (previous ", last_t, ")"));
       }

@@ -39,7 +39,9 @@ std::string_view SegmentKindName(SegmentKind kind);          // "transit", "cut"
 struct TrajectorySegment {
   SegmentKind kind = SegmentKind::kTransit;
   CutId cut_id;                                              // meaningful on cut segments only
-  std::vector<TrajectoryPoint> points;                       // t strictly increasing
+  // t strictly increasing; the first point may repeat the previous segment's last time (each
+  // segment holds its own start, so a cut segment can be executed and logged on its own).
+  std::vector<TrajectoryPoint> points;
 };
 
 // Why a cut has no motion (ARCHITECTURE.md: `unplanned[].reason`).
@@ -57,7 +59,7 @@ struct Trajectory {
   std::vector<UnplannedCut> unplanned;
 
   // INVALID_ARGUMENT naming the element: non-finite numbers, a rotation that is not orthonormal,
-  // times not strictly increasing within and across segments, a cut segment without a positive
+  // times not strictly increasing within a segment or decreasing from one segment to the next, a cut segment without a positive
   // cut id, duration_s less than the last time, negative capsule radius.
   absl::Status Validate() const;
 };

@@ -139,7 +139,7 @@ TEST(Trajectory, ValidateNamesTheBadElement) {
       {[](Trajectory& t) { t.segments[1].cut_id = CutId(0); }, "segments[1].cut_id"},
       {[](Trajectory& t) { t.segments[0].points[1].t = 0.0; },
        "segments[0].points[1].t: 0 does not increase"},
-      {[](Trajectory& t) { t.segments[1].points[0].t = 0.8; }, "segments[1].points[0].t"},
+      {[](Trajectory& t) { t.segments[1].points[0].t = 0.7; }, "segments[1].points[0].t"},
       {[](Trajectory& t) { t.segments[1].points[1].q[4] = NAN; },
        "segments[1].points[1].q[4]: not finite"},
       {[](Trajectory& t) { t.duration_s = 1.0; }, "duration_s: 1 is less than the last time 1.3"},
@@ -154,6 +154,13 @@ TEST(Trajectory, ValidateNamesTheBadElement) {
     EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument) << c.message;
     EXPECT_THAT(status.message(), HasSubstr(c.message));
   }
+}
+
+TEST(Trajectory, ASegmentMayStartWhereThePreviousEnded) {
+  Trajectory t = SampleTrajectory();
+  t.segments[1].points[0].t = t.segments[0].points.back().t;
+  t.segments[1].points[0].q = t.segments[0].points.back().q;
+  EXPECT_TRUE(t.Validate().ok()) << t.Validate();
 }
 
 TEST(Trajectory, FromJsonRejectsMalformedInputNamingTheField) {

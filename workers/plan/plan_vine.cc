@@ -50,6 +50,8 @@ absl::Status PlanOptions::Validate() const {
   VB_RETURN_IF_ERROR(prefixed("margins", margins.Validate()));
   VB_RETURN_IF_ERROR(prefixed("path", path.Validate()));
   if (!home.allFinite()) return absl::InvalidArgumentError("options.home: non-finite joint angle");
+  if (!(cut_speed_fraction > 0) || !(cut_speed_fraction <= 1))
+    return absl::InvalidArgumentError("options.cut_speed_fraction must be in (0, 1]");
   if (!(sample_dt_s > 0) || !std::isfinite(sample_dt_s))
     return absl::InvalidArgumentError("options.sample_dt_s must be finite and > 0");
   return absl::OkStatus();
@@ -100,7 +102,7 @@ std::string_view CutMotionReason(CutMotionOutcome outcome) {
     case CutMotionOutcome::kNoCollisionFreeMotion:
       return "no_collision_free_cut_motion";
     case CutMotionOutcome::kDeadline:
-      return "no_path_within_deadline";
+      return "no_cut_motion_within_deadline";
     default:
       return "invalid_cut";
   }
@@ -140,8 +142,11 @@ absl::StatusOr<PlanResult> PlanVine(const VineModel& model, const CutPlan& plan,
 
   // 2. Cut motions.
   t = std::chrono::steady_clock::now();
-  std::vector<CutMotion> motions =
-      PlanCutMotions(robot, model, scene, plan.cuts, options.cut_motion, deadline);
+  const CheckerFactory make_checker = [&](const RobotModel& r, const CollisionScene& s) {
+    return MakeChecker(options.checker, r, s);
+  };
+  std::vector<CutMotion> motions = PlanCutMotions(robot, model, scene, plan.cuts,
+                                                  options.cut_motion, deadline, make_checker);
   stats.cut_motions_s = Seconds(t);
   const Eigen::Isometry3d base_from_platform = robot.platform_from_arm_base.inverse();
   std::vector<int> planned;  // indices into plan.cuts / motions
@@ -197,53 +202,72 @@ absl::StatusOr<PlanResult> PlanVine(const VineModel& model, const CutPlan& plan,
   stats.order_cost_s = order.cost;
   stats.order_exact = order.exact;
   stats.given_order_cost_s = OrderCost(cost, given, options.return_home);
-  stats.nearest_neighbour_cost_s =
-      OrderCost(cost, NearestNeighbourOrder(cost, options.return_home), options.return_home);
+  stats.nearest_neighbour_cost_s = NearestNeighbourOrder(cost, options.return_home).cost;
   stats.ordering_s = Seconds(t);
 
-  // 5-6. Paths between consecutive cuts, timed as they are appended.
+  // 5. Paths between consecutive cuts. A leg is the transit to a cut and the cut itself.
   t = std::chrono::steady_clock::now();
-  double timing_s = 0.0;
-  JointLimits cut_limits = robot.limits;
-  cut_limits.max_velocity *= options.cut_motion.cut_speed_fraction;
-  cut_limits.max_acceleration *= options.cut_motion.cut_speed_fraction;
-  Joints at = options.home;
-  auto plan_path = [&](const Joints& goal, CutId to) -> std::optional<PathResult> {
-    PathResult path = PlanPath(*checker, robot.limits, at, goal, options.path, deadline);
+  struct Leg {
+    std::vector<Joints> transit;
+    int motion = -1;
+  };
+  std::vector<Leg> legs;
+  PathPlanner planner(*checker, robot.limits, options.path);
+  auto plan_path = [&](const Joints& from, const Joints& goal,
+                       CutId to) -> std::optional<std::vector<Joints>> {
+    PathResult path = planner.Plan(from, goal, deadline);
     stats.paths.push_back({to, path.outcome, path.planning_s, path.checks, path.direct});
     if (path.outcome != PathOutcome::kSolved) return std::nullopt;
-    return path;
+    return std::move(path.waypoints);
+  };
+  auto end_of_legs = [&]() -> const Joints& {
+    return legs.empty() ? options.home : motions[legs.back().motion].path.back();
   };
   for (int node : order.order) {
     const int i = planned[node - 1];
-    const Cut& cut = made[plan.cuts[i].id.value];
-    std::optional<PathResult> path = plan_path(motions[i].path.front(), cut.id);
-    if (!path) {
-      trajectory.unplanned.push_back({cut.id, std::string(PathReason(stats.paths.back().outcome))});
-      made.erase(cut.id.value);
+    const CutId id = plan.cuts[i].id;
+    auto transit = plan_path(end_of_legs(), motions[i].path.front(), id);
+    if (!transit) {
+      trajectory.unplanned.push_back({id, std::string(PathReason(stats.paths.back().outcome))});
       continue;
     }
-    const auto timing_start = std::chrono::steady_clock::now();
-    VB_RETURN_IF_ERROR(AppendSegment(SegmentKind::kTransit, CutId{0}, path->waypoints,
-                                     robot.limits, options.sample_dt_s, &trajectory));
-    VB_RETURN_IF_ERROR(AppendSegment(SegmentKind::kCut, cut.id, motions[i].path, cut_limits,
+    legs.push_back({std::move(*transit), i});
+  }
+  // Home again; if no path leads home from the last cut, that cut is given up and the arm goes
+  // home from the one before it (the arm never ends a vine stranded among the canes).
+  std::vector<Joints> home_path;
+  while (options.return_home && !legs.empty()) {
+    auto path = plan_path(end_of_legs(), options.home, CutId{0});
+    if (path) {
+      home_path = std::move(*path);
+      break;
+    }
+    const CutId id = plan.cuts[legs.back().motion].id;
+    trajectory.unplanned.push_back({id, "no_path_home_within_deadline"});
+    stats.notes.push_back(absl::StrCat("cut ", id.value,
+                                       ": dropped, no path home from it within the deadline"));
+    legs.pop_back();
+  }
+  stats.paths_s = Seconds(t);
+
+  // 6. Timing: home -> (transit, cut)* -> home, each segment at rest at its ends.
+  t = std::chrono::steady_clock::now();
+  JointLimits cut_limits = robot.limits;
+  cut_limits.max_velocity *= options.cut_speed_fraction;
+  cut_limits.max_acceleration *= options.cut_speed_fraction;
+  for (const Leg& leg : legs) {
+    const Cut& cut = made[plan.cuts[leg.motion].id.value];
+    VB_RETURN_IF_ERROR(AppendSegment(SegmentKind::kTransit, CutId{0}, leg.transit, robot.limits,
                                      options.sample_dt_s, &trajectory));
-    timing_s += Seconds(timing_start);
-    at = motions[i].path.back();
+    VB_RETURN_IF_ERROR(AppendSegment(SegmentKind::kCut, cut.id, motions[leg.motion].path,
+                                     cut_limits, options.sample_dt_s, &trajectory));
     result.cuts.push_back(cut);
   }
-  if (options.return_home && !result.cuts.empty()) {
-    std::optional<PathResult> path = plan_path(options.home, CutId{0});
-    if (path) {
-      VB_RETURN_IF_ERROR(AppendSegment(SegmentKind::kTransit, CutId{0}, path->waypoints,
-                                       robot.limits, options.sample_dt_s, &trajectory));
-    } else {
-      stats.notes.push_back(
-          "no path back home within the deadline: the trajectory ends at the last cut");
-    }
+  if (!home_path.empty()) {
+    VB_RETURN_IF_ERROR(AppendSegment(SegmentKind::kTransit, CutId{0}, home_path, robot.limits,
+                                     options.sample_dt_s, &trajectory));
   }
-  stats.paths_s = Seconds(t) - timing_s;
-  stats.timing_s = timing_s;
+  stats.timing_s = Seconds(t);
   stats.planned = static_cast<int>(result.cuts.size());
   for (const PathRecord& p : stats.paths) stats.checks += p.checks;
   stats.total_s = Seconds(start);
@@ -293,6 +317,16 @@ int64_t CountTrajectoryCollisions(const Trajectory& trajectory, std::span<const 
     }
   }
   return collisions;
+}
+
+}  // namespace vb::plan
+
+namespace vb::plan {
+
+Joints DefaultHome() {
+  Joints q;
+  q << -0.916958, 1.82058, 1.18997, -1.68409, -1.92803, -1.51915;  // provisional
+  return q;
 }
 
 }  // namespace vb::plan

@@ -47,6 +47,9 @@ struct PlanOptions {
   // Where the arm starts and ends: folded clear of the cameras' view (DefaultHome()).
   Joints home = Joints::Zero();
   bool return_home = true;
+  // Cut strokes move at this fraction of the joint velocity and acceleration limits: the tool
+  // must not be driven through wood at transit speed (an estimate, not a measured feed rate).
+  double cut_speed_fraction = 0.25;
   double sample_dt_s = 0.05;   // trajectory samples at most this far apart (waypoints always kept)
   // INVALID_ARGUMENT naming the field ("options.path.time_limit_s: ...").
   absl::Status Validate() const;

@@ -1,0 +1,176 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "workers/plan/plan_vine.h"
+
+#include <cmath>
+#include <set>
+
+#include "gtest/gtest.h"
+#include "sim/vine_generator.h"
+#include "workers/decide/decide.h"
+#include "workers/plan/tool.h"
+
+namespace vb::plan {
+namespace {
+
+struct Stop {
+  VineModel model;
+  CutPlan plan;
+};
+
+// A simulated vine (tuning seeds) and its cut plan under the default policy.
+Stop SimStop(uint64_t seed) {
+  auto scene = sim::GenerateScene(seed, 1);
+  EXPECT_TRUE(scene.ok()) << scene.status();
+  auto decision = decide::Decide(scene->vine, PruningPolicy{});
+  EXPECT_TRUE(decision.ok()) << decision.status();
+  return {scene->vine, decision->plan};
+}
+
+PlanOptions Options() {
+  PlanOptions options;
+  options.home = DefaultHome();
+  return options;
+}
+
+Joints At(const TrajectoryPoint& p) { return Eigen::Map<const Joints>(p.q.data()); }
+
+TEST(PlanVine, PlansSimulatedVinesWithoutTouchingThem) {
+  const RobotModel robot = DefaultUr5(MillEndTool());
+  const PlatformGeometry platform = DefaultPlatform();
+  int planned = 0;
+  for (uint64_t seed : {1100, 1101, 1102}) {
+    const Stop stop = SimStop(seed);
+    auto result = PlanVine(stop.model, stop.plan, robot, platform, Options());
+    ASSERT_TRUE(result.ok()) << result.status();
+    const Trajectory& t = result->trajectory;
+    EXPECT_TRUE(t.Validate().ok()) << t.Validate();
+    // Every cut ends planned or unplanned with a reason, never both, never lost.
+    std::set<int64_t> accounted;
+    for (const Cut& c : result->cuts) EXPECT_TRUE(accounted.insert(c.id.value).second);
+    for (const UnplannedCut& u : t.unplanned) {
+      EXPECT_TRUE(accounted.insert(u.cut_id.value).second);
+      EXPECT_FALSE(u.reason.empty());
+    }
+    EXPECT_EQ(accounted.size(), stop.plan.cuts.size());
+    planned += static_cast<int>(result->cuts.size());
+    if (result->cuts.empty()) continue;
+    // One cut segment per planned cut; the arm leaves home and comes back.
+    int cut_segments = 0;
+    for (const TrajectorySegment& s : t.segments) cut_segments += s.kind == SegmentKind::kCut;
+    EXPECT_EQ(cut_segments, static_cast<int>(result->cuts.size()));
+    EXPECT_TRUE(At(t.segments.front().points.front()).isApprox(DefaultHome(), 1e-9));
+    EXPECT_TRUE(At(t.segments.back().points.back()).isApprox(DefaultHome(), 1e-9));
+    EXPECT_GT(t.duration_s, 0.0);
+    // Re-checked at 2 mm of travel without the margins it was planned with: no contact.
+    auto scene = CollisionScene::Build(stop.model, platform, robot);
+    ASSERT_TRUE(scene.ok());
+    std::vector<int> bad;
+    EXPECT_EQ(CountTrajectoryCollisions(t, result->cuts, robot, *scene, CheckerKind::kPrimitives,
+                                        0.002, Options().cut_motion.cut_cane_free_radius_m, &bad),
+              0)
+        << "seed " << seed;
+  }
+  EXPECT_GT(planned, 0);
+}
+
+TEST(PlanVine, TimingStaysWithinTheJointLimits) {
+  const RobotModel robot = DefaultUr5(MillEndTool());
+  const Stop stop = SimStop(1103);
+  auto result = PlanVine(stop.model, stop.plan, robot, DefaultPlatform(), Options());
+  ASSERT_TRUE(result.ok()) << result.status();
+  for (const TrajectorySegment& s : result->trajectory.segments) {
+    for (size_t p = 1; p < s.points.size(); ++p) {
+      const double dt = s.points[p].t - s.points[p - 1].t;
+      ASSERT_GT(dt, 0.0);
+      const Joints v = (At(s.points[p]) - At(s.points[p - 1])) / dt;
+      for (int j = 0; j < 6; ++j) EXPECT_LE(std::abs(v[j]), robot.limits.max_velocity[j] * 1.001);
+    }
+  }
+}
+
+TEST(PlanVine, NoCutsGiveAnEmptyTrajectory) {
+  Stop stop = SimStop(1104);
+  stop.plan.cuts.clear();
+  auto result = PlanVine(stop.model, stop.plan, DefaultUr5(MillEndTool()), DefaultPlatform(),
+                         Options());
+  ASSERT_TRUE(result.ok()) << result.status();
+  EXPECT_TRUE(result->trajectory.segments.empty());
+  EXPECT_TRUE(result->trajectory.unplanned.empty());
+  EXPECT_EQ(result->trajectory.duration_s, 0.0);
+}
+
+TEST(PlanVine, AFarCutIsUnreachable) {
+  Stop stop = SimStop(1105);
+  ASSERT_FALSE(stop.plan.cuts.empty());
+  // A cane 3 m along the row, beyond any reach of the arm, with a cut on it.
+  Cane far;
+  far.id = CaneId{999};
+  far.parent_id = stop.model.canes.front().id;
+  far.polyline.points = {Eigen::Vector3d(3.0, 0.8, 1.0), Eigen::Vector3d(3.3, 0.8, 1.0)};
+  far.polyline.radii = {0.005, 0.004};
+  stop.model.canes.push_back(far);
+  Cut cut = stop.plan.cuts.front();
+  cut.id = CutId{999};
+  cut.cane_id = far.id;
+  cut.point = Eigen::Vector3d(3.1, 0.8, 1.0);
+  cut.direction = Eigen::Vector3d::UnitX();
+  stop.plan.cuts.push_back(cut);
+  auto result = PlanVine(stop.model, stop.plan, DefaultUr5(MillEndTool()), DefaultPlatform(),
+                         Options());
+  ASSERT_TRUE(result.ok()) << result.status();
+  bool found = false;
+  for (const UnplannedCut& u : result->trajectory.unplanned) {
+    if (u.cut_id.value == 999) {
+      found = true;
+      EXPECT_EQ(u.reason, "unreachable");
+    }
+  }
+  EXPECT_TRUE(found);
+}
+
+TEST(PlanVine, RejectsBadInput) {
+  const RobotModel robot = DefaultUr5(MillEndTool());
+  Stop stop = SimStop(1106);
+  Stop nan = stop;
+  nan.model.canes[1].polyline.points[0].x() = std::nan("");
+  auto result = PlanVine(nan.model, nan.plan, robot, DefaultPlatform(), Options());
+  EXPECT_EQ(result.status().code(), absl::StatusCode::kInvalidArgument);
+
+  Stop unknown = stop;
+  ASSERT_FALSE(unknown.plan.cuts.empty());
+  unknown.plan.cuts[0].cane_id = CaneId{12345};
+  result = PlanVine(unknown.model, unknown.plan, robot, DefaultPlatform(), Options());
+  EXPECT_EQ(result.status().code(), absl::StatusCode::kInvalidArgument);
+
+  PlanOptions outside = Options();
+  outside.home[2] = 10.0;
+  result = PlanVine(stop.model, stop.plan, robot, DefaultPlatform(), outside);
+  EXPECT_EQ(result.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(result.status().message().find("options.home"), std::string::npos);
+}
+
+TEST(PlanVine, HomeInCollisionFails) {
+  const RobotModel robot = DefaultUr5(MillEndTool());
+  PlatformGeometry platform = DefaultPlatform();
+  // A fixed sphere around the flange at home.
+  const Eigen::Vector3d flange = robot.platform_from_arm_base * ForwardKinematics(DefaultHome()).translation();
+  platform.fixed_spheres.push_back({flange, 0.05});
+  const Stop stop = SimStop(1107);
+  auto result = PlanVine(stop.model, stop.plan, robot, platform, Options());
+  EXPECT_EQ(result.status().code(), absl::StatusCode::kFailedPrecondition);
+}
+
+TEST(PlanVine, AnExpiredDeadlineNeverHangs) {
+  const Stop stop = SimStop(1108);
+  auto result = PlanVine(stop.model, stop.plan, DefaultUr5(MillEndTool()), DefaultPlatform(),
+                         Options(), Deadline::In(0.0));
+  if (result.ok()) {
+    EXPECT_EQ(result->cuts.size(), 0u);
+    EXPECT_EQ(result->trajectory.unplanned.size(), stop.plan.cuts.size());
+  } else {
+    EXPECT_EQ(result.status().code(), absl::StatusCode::kDeadlineExceeded);
+  }
+}
+
+}  // namespace
+}  // namespace vb::plan
