@@ -126,6 +126,13 @@ TestWorld MakeWorld(const RobotModel& robot, const std::vector<Obstacle>& extra 
   return w;
 }
 
+Obstacle Ball(const Eigen::Vector3d& center_in_platform, double radius) {
+  Obstacle o;
+  o.kind = ObstacleKind::kHead;
+  o.capsule = {center_in_platform, center_in_platform, radius};
+  return o;
+}
+
 Eigen::Isometry3d TcpInBase(const RobotModel& robot, const Joints& q) {
   return ForwardKinematics(q) * robot.tool.flange_from_tcp;
 }
@@ -153,6 +160,54 @@ TEST(StrokeWaypoints, SecateurApproachesClosesAndRetracts) {
   EXPECT_NEAR(stroke.front().z(), -0.06, 1e-15);
   EXPECT_NEAR(stroke[12].norm(), 0.0, 1e-15);
   EXPECT_EQ(stroke.front(), stroke.back());
+}
+
+TEST(SampleCutPoses, FramesCrossTheCaneAndTiltAboutTheSweepAxis) {
+  CutMotionOptions options;
+  options.max_tilt_rad = 0.4;
+  options.tilt_steps = 2;
+  const Eigen::Vector3d p(0.4, 0.1, 0.3), d = Eigen::Vector3d(0.2, -0.1, 1).normalized();
+  const auto poses = SampleCutPoses(p, d, options);
+  ASSERT_EQ(poses.size(), 16u * 2u * 5u);
+  double max_tilt = 0;
+  for (const Eigen::Isometry3d& pose : poses) {
+    const Eigen::Matrix3d r = pose.linear();
+    EXPECT_TRUE((r.transpose() * r).isIdentity(1e-12));
+    EXPECT_NEAR(r.determinant(), 1.0, 1e-12);
+    EXPECT_EQ(pose.translation(), p);
+    EXPECT_NEAR(r.col(0).dot(d), 0.0, 1e-12);  // the sweep is always across the cane
+    max_tilt = std::max(max_tilt, std::asin(std::min(1.0, std::abs(r.col(2).dot(d)))));
+  }
+  EXPECT_NEAR(max_tilt, 0.4, 1e-9);
+  // The first samples are perpendicular, theta = 0 pointing from the base toward the cane.
+  EXPECT_NEAR(poses[0].linear().col(2).dot(d), 0.0, 1e-12);
+  EXPECT_GT(poses[0].linear().col(2).dot(p), 0.0);
+}
+
+TEST(CutMotion, TiltedCutStillSweepsAcrossTheCaneThroughTheCut) {
+  const RobotModel robot = TestRobot(MillEndTool());
+  // A wide ball 12 mm below the cut: a perpendicular (horizontal) tool's body, 33 mm in radius,
+  // dips into it in every orientation; a tool tilted up clears it.
+  const TestWorld w = MakeWorld(robot, {Ball({0.05, 0.8, 0.95 - 0.012 - 0.3}, 0.3)});
+  CutMotionOptions options;
+  options.max_slide_m = 0;
+  options.max_tilt_rad = 0.6;
+  options.tilt_steps = 2;
+  const auto motions = PlanCutMotions(robot, w.model, w.scene, std::span(&w.cut, 1), options,
+                                      Deadline::Infinite(), MakeBruteForce);
+  const CutMotion& m = motions[0];
+  ASSERT_EQ(m.outcome, CutMotionOutcome::kPlanned) << m.message;
+  const Eigen::Isometry3d base_from_platform = robot.platform_from_arm_base.inverse();
+  const Eigen::Isometry3d at_cut = TcpInBase(robot, m.path[m.cut_index]);
+  const Eigen::Vector3d cane_in_base = base_from_platform.linear() * w.cut.direction;
+  EXPECT_LT((at_cut.translation() - base_from_platform * w.cut.point).norm(), 1e-9);
+  EXPECT_NEAR(at_cut.linear().col(0).dot(cane_in_base), 0.0, 1e-9);
+  EXPECT_GT(std::abs(at_cut.linear().col(2).dot(cane_in_base)), 0.1);  // it did tilt
+  options.tilt_steps = 0;
+  EXPECT_EQ(PlanCutMotions(robot, w.model, w.scene, std::span(&w.cut, 1), options,
+                           Deadline::Infinite(), MakeBruteForce)[0]
+                .outcome,
+            CutMotionOutcome::kNoCollisionFreeMotion);
 }
 
 TEST(CutMotion, MillEndSweepsThroughTheCutPerpendicularToTheCane) {
@@ -245,13 +300,6 @@ TEST(CutMotion, CutOutOfReachIsUnreachable) {
                                       CutMotionOptions(), Deadline::Infinite(), MakeBruteForce);
   EXPECT_EQ(motions[0].outcome, CutMotionOutcome::kUnreachable) << motions[0].message;
   EXPECT_TRUE(motions[0].path.empty());
-}
-
-Obstacle Ball(const Eigen::Vector3d& center_in_platform, double radius) {
-  Obstacle o;
-  o.kind = ObstacleKind::kHead;
-  o.capsule = {center_in_platform, center_in_platform, radius};
-  return o;
 }
 
 TEST(CutMotion, CutInsideAnObstacleHasNoCollisionFreeMotion) {
