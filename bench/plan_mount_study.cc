@@ -216,6 +216,7 @@ int main(int argc, char** argv) {
   int vines = 100;
   bool ik_only = false, grid = false, verbose = false;
   vb::plan::CutMotionOptions options;
+  std::vector<vb::plan::Mount> custom;
   std::string tool_name = "mill_end", only;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--vines") && i + 1 < argc) {
@@ -234,6 +235,14 @@ int main(int argc, char** argv) {
       options.max_slide_m = std::atof(argv[++i]);
     } else if (!std::strcmp(argv[i], "--mount") && i + 1 < argc) {
       only = argv[++i];
+    } else if (!std::strcmp(argv[i], "--floor") && i + 3 < argc) {
+      // A floor mount at (0, y, z) tilted toward the vine by tilt_deg about x.
+      const double y = std::atof(argv[i + 1]), z = std::atof(argv[i + 2]),
+                   tilt = std::atof(argv[i + 3]);
+      custom.push_back(vb::plan::MakeMount(
+          std::string("floor_y") + argv[i + 1] + "_z" + argv[i + 2] + "_tilt" + argv[i + 3],
+          {0, y, z}, vb::plan::Rx(-tilt)));
+      i += 3;
     } else if (!std::strcmp(argv[i], "--grid")) {
       grid = true;
     } else if (!std::strcmp(argv[i], "--tool") && i + 1 < argc) {
@@ -242,7 +251,8 @@ int main(int argc, char** argv) {
       std::fprintf(
           stderr,
           "usage: %s [--vines N] [--ik_only] [--grid] [--mount NAME] [--tool mill_end|secateur] "
-          "[--max_tilt_deg D --tilt_steps N] [--sweep_m S] [--max_slide_m M] [--verbose]\n",
+          "[--floor Y Z TILT_DEG]... [--max_tilt_deg D --tilt_steps N] [--sweep_m S] "
+          "[--max_slide_m M] [--verbose]\n",
           argv[0]);
       return 2;
     }
@@ -252,7 +262,8 @@ int main(int argc, char** argv) {
   auto rig = vb::sim::MakeRig();
   if (!rig.ok()) return 1;
   const auto stops = vb::plan::LoadStops(vines);
-  const auto mounts = grid ? vb::plan::GridMounts() : vb::plan::NamedMounts();
+  const auto mounts =
+      !custom.empty() ? custom : (grid ? vb::plan::GridMounts() : vb::plan::NamedMounts());
   if (auto status = options.Validate(); !status.ok()) {
     std::fprintf(stderr, "%s\n", std::string(status.message()).c_str());
     return 2;

@@ -121,7 +121,7 @@ namespace {
 // One reachable, collision-free configuration at the cut pose: where a stroke may start.
 struct Candidate {
   Joints q;
-  double clearance_m = 0;
+  double clearance_m = 0;  // Clearance(q), computed once its stroke is known to be free
   Eigen::Isometry3d base_from_tcp;
 };
 
@@ -184,18 +184,17 @@ StrokeResult FollowStroke(const Candidate& start, const std::vector<Eigen::Vecto
   return StrokeResult::kFree;
 }
 
-// Min clearance over `path` (whose configurations are free) if every motion between consecutive
-// configurations is free and the clearance stays above `must_beat`; nullopt otherwise (it cannot
-// win).
+// Min clearance over `path` (whose configurations are free) if it stays above `must_beat` and
+// every motion between consecutive configurations is free; nullopt otherwise (it cannot win).
 std::optional<double> EvaluatePath(CollisionChecker& checker, const std::vector<Joints>& path,
                                    double must_beat, double max_step_m) {
-  for (size_t i = 1; i < path.size(); ++i) {
-    if (!checker.IsMotionFree(path[i - 1], path[i], max_step_m)) return std::nullopt;
-  }
   double clearance = std::numeric_limits<double>::infinity();
   for (const Joints& q : path) {
     clearance = std::min(clearance, checker.Clearance(q));
     if (!(clearance > must_beat)) return std::nullopt;
+  }
+  for (size_t i = 1; i < path.size(); ++i) {
+    if (!checker.IsMotionFree(path[i - 1], path[i], max_step_m)) return std::nullopt;
   }
   return clearance;
 }
@@ -261,16 +260,15 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
       for (int i = 0; i < ik.count; ++i) {
         if (!checker->IsFree(ik.q[i])) continue;
         ++free_at_cut;
-        candidates.push_back({ik.q[i], checker->Clearance(ik.q[i]), pose});
+        candidates.push_back({ik.q[i], 0.0, pose});
       }
     }
-    // A path's clearance is at most its cut configuration's: best-first with a bound.
-    std::sort(candidates.begin(), candidates.end(),
-              [](const Candidate& a, const Candidate& b) { return a.clearance_m > b.clearance_m; });
+    // Boolean checks first, exact clearance only for strokes that are free: in clutter most
+    // strokes collide, and Clearance costs several IsFree. A path's clearance is at most its cut
+    // configuration's, which bounds the search once one path is found.
     double best = -std::numeric_limits<double>::infinity();
     std::vector<Joints> path, best_path;
-    for (const Candidate& candidate : candidates) {
-      if (candidate.clearance_m <= best) break;
+    for (Candidate& candidate : candidates) {
       if (deadline.Expired()) return Fail(motion, CutMotionOutcome::kDeadline, what + ": deadline");
       const StrokeResult stroke =
           FollowStroke(candidate, waypoints, cut_index, tcp_from_flange, robot.limits,
@@ -278,6 +276,8 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
       if (stroke == StrokeResult::kNoIk) continue;
       ++strokes_followed;
       if (stroke == StrokeResult::kCollides) continue;
+      candidate.clearance_m = checker->Clearance(candidate.q);
+      if (candidate.clearance_m <= best) continue;
       const std::optional<double> clearance =
           EvaluatePath(*checker, path, best, options.max_step_m);
       if (!clearance.has_value()) continue;
