@@ -198,6 +198,20 @@ TEST(PrimitiveChecker, BaseInsideAnObstacleIsNeverFree) {
   EXPECT_LT(checker.Clearance(Raised()), 0.0);
 }
 
+TEST(PrimitiveChecker, NonFiniteConfigurationIsNeverFree) {
+  const RobotModel robot = DefaultUr5(MillEnd());
+  PrimitiveChecker checker(robot, EmptyScene());
+  Joints q = Raised();
+  q[3] = std::nan("");
+  EXPECT_FALSE(checker.IsFree(q));
+  EXPECT_LT(checker.Clearance(q), 0.0);
+  // Angles beyond a turn wrap around exactly.
+  Joints wrapped = Raised();
+  wrapped[0] += 4 * M_PI;
+  wrapped[5] -= 6 * M_PI;
+  EXPECT_NEAR(checker.Clearance(wrapped), checker.Clearance(Raised()), 1e-12);
+}
+
 TEST(MotionSteps, BoundsTheTravelOfEveryPoint) {
   Joints a = Joints::Zero(), b = Joints::Zero();
   EXPECT_EQ(MotionSteps(a, b, 0.01), 1);
@@ -276,6 +290,9 @@ TEST(CheckerAgreement, PrimitivesAndFclAgreeOnRandomConfigurations) {
   EXPECT_GT(free, total / 20);
   EXPECT_LT(free, total - total / 20);
   RecordProperty("free_fraction", std::to_string(double(free) / total));
+  RecordProperty("configurations", total);
+  RecordProperty("disagree_fcl_primitives", disagree_primitives);
+  RecordProperty("disagree_fcl_mesh", disagree_mesh);
 }
 
 }  // namespace

@@ -5,12 +5,13 @@
 // After Botterill et al. 2017 section 3.4 (primitives culled by distance, early exit) and VAMP
 // (Thomason, Kingston, Kavraki, ICRA 2024: SIMD over primitives, many configurations at once):
 //  - obstacles are cut into pieces of at most kMaxPieceM (the union is unchanged), ordered by a
-//    recursive median split and stored as float SoA blocks of 8 (a leaf) under a bounding sphere;
-//    8 consecutive leaves form a node with its own bounding sphere. Each arm capsule is tested
-//    against the node spheres, then the leaf spheres of hit nodes, then the 8 obstacles of hit
-//    leaves, 8 lanes at a time (GCC/Clang vector extensions: SSE2 on x86-64, NEON on arm64);
-//  - the first hit ends the check; the base body, which never moves, is checked once at build;
-//  - forward kinematics is written out for the DH chain (no 4x4 products).
+//    recursive median split and stored as float SoA leaves of 8 capsules; 8 consecutive leaves
+//    form a node. Each arm capsule's bounding box is tested against the node boxes (8 lanes),
+//    then the leaf boxes of hit nodes, then the capsules of hit leaves with an exact
+//    segment-segment test (GCC/Clang vector extensions: SSE2 on x86-64, NEON on arm64);
+//  - planes first, then obstacles (distal links first), then self-collision pairs, 4 lanes at a
+//    time; the first hit ends the check; the base, which never moves, is checked once at build;
+//  - forward kinematics is written out for the DH chain with an inlined sincos.
 // Float is used for IsFree (obstacle coordinates are < 10 m from the base, so rounding is
 // ~1e-6 m); Clearance is exact in double with branch-and-bound over the same leaves.
 // Thread-compatible: one checker per thread (it counts checks).
