@@ -21,6 +21,7 @@
 #include "sim/vine_generator.h"
 #include "workers/decide/decide.h"
 #include "workers/plan/plan_vine.h"
+#include "workers/plan/trajectory_check.h"
 #include "workers/plan/ur5_kinematics.h"
 
 namespace vb::app {
@@ -31,7 +32,8 @@ using plan::Joints;
 
 struct CheckerRecord {
   std::vector<double> path_s, vine_s, checks_per_path, check_ns;
-  int reachable = 0, planned = 0;
+  int reachable = 0, planned = 0, passes = 0;
+  std::map<std::string, int> unplanned;  // reason -> cuts
 };
 
 Joints RandomJoints(const plan::JointLimits& limits, std::mt19937_64& rng) {
@@ -74,7 +76,9 @@ nlohmann::json Summary(const CheckerRecord& r) {
           {"checks_per_path", Median(r.checks_per_path)},
           {"check_ns", Median(r.check_ns)},
           {"success_rate", r.reachable > 0 ? double(r.planned) / r.reachable : 0.0},
-          {"paths", r.path_s.size()}};
+          {"paths", r.path_s.size()},
+          {"max_passes_used", r.passes},
+          {"unplanned_reasons", r.unplanned}};
 }
 
 }  // namespace
@@ -129,6 +133,8 @@ absl::Status RunBenchPlan(Flags& flags) {
       }
       r.reachable += s.cuts - s.unreachable;
       r.planned += s.planned;
+      r.passes = std::max(r.passes, s.passes);
+      for (const UnplannedCut& u : result->trajectory.unplanned) ++r.unplanned[u.reason];
       auto scene_or = plan::CollisionScene::Build(scene.vine, setup.platform, setup.robot);
       if (scene_or.ok()) {
         auto checker = plan::MakeChecker(kind, setup.robot, *scene_or);
@@ -142,8 +148,8 @@ absl::Status RunBenchPlan(Flags& flags) {
       if (verify && scene_or.ok()) {
         // Margins removed (the scene as built has none), 1 mm of travel between checks.
         const int64_t collisions = plan::CountTrajectoryCollisions(
-            result->trajectory, result->cuts, setup.robot, *scene_or, CheckerKind::kFclMesh, 0.001,
-            setup.options.cut_motion.cut_cane_free_radius_m);
+            result->trajectory, result->cuts, scene.vine, setup.platform, setup.robot,
+            CheckerKind::kFclMesh, 0.001, setup.options.cut_motion.cut_cane_free_radius_m);
         ++verified;
         if (collisions == 0) ++verified_free;
         else std::cerr << "seed " << seed << ": " << collisions << " colliding configurations\n";

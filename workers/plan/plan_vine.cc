@@ -10,6 +10,7 @@
 #include "absl/strings/str_cat.h"
 #include "core/status_macros.h"
 #include "workers/plan/cut_order.h"
+#include "workers/plan/fallen_wood.h"
 #include "workers/plan/time_parameterization.h"
 
 namespace vb::plan {
@@ -110,6 +111,154 @@ std::string_view CutMotionReason(CutMotionOutcome outcome) {
 
 }  // namespace
 
+namespace {
+
+// A planned cut: the transit that reaches it and its cut motion.
+struct Leg {
+  std::vector<Joints> transit;
+  CutMotion motion;
+  Cut cut;  // as made (a slid cut's point is where the tool cuts)
+};
+
+// What the passes share.
+struct Planning {
+  const CutPlan& plan;
+  const RobotModel& robot;
+  const PlatformGeometry& platform;
+  const PlanOptions& options;
+  const Deadline& deadline;
+  PlanResult& result;
+  std::vector<Leg> legs;
+  // The last pass's inflated scene, its checker and its path planner (for the way home).
+  std::unique_ptr<CollisionChecker> checker;
+  std::unique_ptr<PathPlanner> planner;
+
+  const Joints& At() const { return legs.empty() ? options.home : legs.back().motion.path.back(); }
+
+  std::optional<std::vector<Joints>> Path(const Joints& goal, CutId to) {
+    PathResult path = planner->Plan(At(), goal, deadline);
+    result.stats.paths.push_back({to, path.outcome, path.planning_s, path.checks, path.direct});
+    if (path.outcome != PathOutcome::kSolved) return std::nullopt;
+    return std::move(path.waypoints);
+  }
+
+  void Unplanned(CutId id, std::string_view reason) {
+    result.trajectory.unplanned.push_back({id, std::string(reason)});
+  }
+};
+
+// One pass on the vine as `model` leaves it: cut motions for `todo` (indices into plan.cuts),
+// margins, order, paths. Appends legs; returns the cuts to try again on the vine after them.
+absl::StatusOr<std::vector<int>> PlanPass(const VineModel& model, const std::vector<int>& todo,
+                                          bool last_pass, Planning& p) {
+  PlanStats& stats = p.result.stats;
+  const PlanOptions& options = p.options;
+  auto t = std::chrono::steady_clock::now();
+  VB_ASSIGN_OR_RETURN(CollisionScene scene,
+                      CollisionScene::Build(model, p.platform, p.robot, options.scene));
+  stats.scene_s += Seconds(t);
+
+  // Cut motions.
+  t = std::chrono::steady_clock::now();
+  std::vector<Cut> cuts;
+  std::vector<int> todo_here;
+  for (int i : todo) {
+    if (!model.IndexOf(p.plan.cuts[i].cane_id)) {
+      p.Unplanned(p.plan.cuts[i].id, "cane_fell_with_an_earlier_cut");
+      continue;
+    }
+    cuts.push_back(p.plan.cuts[i]);
+    todo_here.push_back(i);
+  }
+  const CheckerFactory make_checker = [&](const RobotModel& r, const CollisionScene& s) {
+    return MakeChecker(options.checker, r, s);
+  };
+  std::vector<CutMotion> motions = PlanCutMotions(p.robot, model, scene, cuts, options.cut_motion,
+                                                  p.deadline, make_checker);
+  stats.cut_motions_s += Seconds(t);
+  std::vector<int> planned, retry;  // indices into cuts / motions; into plan.cuts
+  for (size_t k = 0; k < motions.size(); ++k) {
+    const CutMotionOutcome outcome = motions[k].outcome;
+    if (outcome == CutMotionOutcome::kPlanned) {
+      planned.push_back(static_cast<int>(k));
+    } else if (outcome == CutMotionOutcome::kNoCollisionFreeMotion && !last_pass) {
+      retry.push_back(todo_here[k]);
+    } else {
+      if (outcome == CutMotionOutcome::kUnreachable) ++stats.unreachable;
+      p.Unplanned(cuts[k].id, CutMotionReason(outcome));
+    }
+  }
+  if (planned.empty()) {
+    for (int i : retry) p.Unplanned(p.plan.cuts[i].id, "no_collision_free_cut_motion");
+    return std::vector<int>{};
+  }
+  ++stats.passes;
+
+  // Margins around where the arm is, home, and every chosen cut motion of this pass.
+  t = std::chrono::steady_clock::now();
+  const Eigen::Isometry3d base_from_platform = p.robot.platform_from_arm_base.inverse();
+  std::vector<ProtectedMotion> protect;
+  protect.push_back({{options.home, p.At()}, CaneId{0}, Eigen::Vector3d::Zero(), 0.0});
+  for (int k : planned) {
+    protect.push_back({motions[k].path, cuts[k].cane_id,
+                       base_from_platform * motions[k].cut_point_in_platform,
+                       options.cut_motion.cut_cane_free_radius_m});
+  }
+  CollisionScene inflated = scene;
+  const MarginSummary margins = InflateMargins(p.robot, protect, options.margins, &inflated);
+  if (stats.passes == 1) stats.margins = margins;
+  p.planner.reset();
+  p.checker = MakeChecker(options.checker, p.robot, inflated);
+  p.planner = std::make_unique<PathPlanner>(*p.checker, p.robot.limits, options.path);
+  stats.margins_s += Seconds(t);
+
+  // Order: node 0 is where the arm is, node j the j-th planned cut (entered at its motion's first
+  // configuration, left at its last).
+  t = std::chrono::steady_clock::now();
+  const int n = static_cast<int>(planned.size());
+  const Joints from = p.At();
+  auto exit_of = [&](int node) -> const Joints& {
+    return node == 0 ? from : motions[planned[node - 1]].path.back();
+  };
+  auto entry_of = [&](int node) -> const Joints& {
+    return node == 0 ? from : motions[planned[node - 1]].path.front();
+  };
+  Eigen::MatrixXd cost = Eigen::MatrixXd::Zero(n + 1, n + 1);
+  for (int i = 0; i <= n; ++i)
+    for (int j = 0; j <= n; ++j)
+      if (i != j) cost(i, j) = MoveTimeS(exit_of(i), entry_of(j), p.robot.limits);
+  const bool home_after = options.return_home && (retry.empty() || last_pass);
+  const OrderResult order = OrderCuts(cost, home_after);
+  std::vector<int> given(n);
+  for (int j = 0; j < n; ++j) given[j] = j + 1;
+  stats.order_cost_s += order.cost;
+  stats.order_exact = stats.order_exact && order.exact;
+  stats.given_order_cost_s += OrderCost(cost, given, home_after);
+  stats.nearest_neighbour_cost_s += NearestNeighbourOrder(cost, home_after).cost;
+  stats.ordering_s += Seconds(t);
+
+  // Paths: a cut whose transit fails is given up, and the next one is joined to the last reached.
+  t = std::chrono::steady_clock::now();
+  for (int node : order.order) {
+    const int k = planned[node - 1];
+    auto transit = p.Path(motions[k].path.front(), cuts[k].id);
+    if (!transit) {
+      p.Unplanned(cuts[k].id, PathReason(stats.paths.back().outcome));
+      continue;
+    }
+    Cut made = cuts[k];
+    made.point = motions[k].cut_point_in_platform;
+    if (motions[k].slid_m > 0)
+      stats.notes.push_back(absl::StrCat("cut ", made.id.value, ": slid ", motions[k].slid_m,
+                                         " m outward along cane ", made.cane_id.value));
+    p.legs.push_back({std::move(*transit), std::move(motions[k]), made});
+  }
+  stats.paths_s += Seconds(t);
+  return retry;
+}
+
+}  // namespace
+
 absl::StatusOr<PlanResult> PlanVine(const VineModel& model, const CutPlan& plan,
                                     const RobotModel& robot, const PlatformGeometry& platform,
                                     const PlanOptions& options, const Deadline& deadline) {
@@ -120,148 +269,68 @@ absl::StatusOr<PlanResult> PlanVine(const VineModel& model, const CutPlan& plan,
   VB_RETURN_IF_ERROR(plan.ValidateAgainst(model));
   if (!robot.limits.Contains(options.home))
     return absl::InvalidArgumentError("options.home: outside the joint limits");
+  if (options.max_passes < 1) return absl::InvalidArgumentError("options.max_passes must be >= 1");
 
   PlanResult result;
+  result.trajectory.platform_from_arm_base = robot.platform_from_arm_base;
+  result.trajectory.tool = robot.tool;
   PlanStats& stats = result.stats;
-  Trajectory& trajectory = result.trajectory;
-  trajectory.platform_from_arm_base = robot.platform_from_arm_base;
-  trajectory.tool = robot.tool;
   stats.cuts = static_cast<int>(plan.cuts.size());
-
-  auto t = std::chrono::steady_clock::now();
-  VB_ASSIGN_OR_RETURN(CollisionScene scene,
-                      CollisionScene::Build(model, platform, robot, options.scene));
   {
+    auto t = std::chrono::steady_clock::now();
+    VB_ASSIGN_OR_RETURN(const CollisionScene scene,
+                        CollisionScene::Build(model, platform, robot, options.scene));
     auto checker = MakeChecker(options.checker, robot, scene);
     if (!checker->IsFree(options.home))
       return absl::FailedPreconditionError("options.home: the home configuration is in collision");
     stats.checks += checker->checks();
+    stats.scene_s += Seconds(t);
   }
-  stats.scene_s = Seconds(t);
   VB_RETURN_IF_ERROR(deadline.Check("plan"));
 
-  // 2. Cut motions.
-  t = std::chrono::steady_clock::now();
-  const CheckerFactory make_checker = [&](const RobotModel& r, const CollisionScene& s) {
-    return MakeChecker(options.checker, r, s);
-  };
-  std::vector<CutMotion> motions = PlanCutMotions(robot, model, scene, plan.cuts,
-                                                  options.cut_motion, deadline, make_checker);
-  stats.cut_motions_s = Seconds(t);
-  const Eigen::Isometry3d base_from_platform = robot.platform_from_arm_base.inverse();
-  std::vector<int> planned;  // indices into plan.cuts / motions
-  std::unordered_map<int64_t, Cut> made;
-  for (size_t i = 0; i < motions.size(); ++i) {
-    const CutMotion& m = motions[i];
-    const Cut& cut = plan.cuts[i];
-    if (m.outcome != CutMotionOutcome::kPlanned) {
-      if (m.outcome == CutMotionOutcome::kUnreachable) ++stats.unreachable;
-      trajectory.unplanned.push_back({cut.id, std::string(CutMotionReason(m.outcome))});
-      continue;
+  Planning p{plan, robot, platform, options, deadline, result, {}, nullptr, nullptr};
+  std::vector<int> todo(plan.cuts.size());
+  for (size_t i = 0; i < todo.size(); ++i) todo[i] = static_cast<int>(i);
+  VineModel now = model;
+  for (int pass = 0; pass < options.max_passes && !todo.empty(); ++pass) {
+    VB_ASSIGN_OR_RETURN(todo, PlanPass(now, todo, pass + 1 == options.max_passes, p));
+    if (!todo.empty()) {
+      std::vector<Cut> made;
+      for (const Leg& leg : p.legs) made.push_back(leg.cut);
+      now = WithoutFallenWood(model, made);
     }
-    Cut as_made = cut;
-    as_made.point = m.cut_point_in_platform;
-    if (m.slid_m > 0)
-      stats.notes.push_back(absl::StrCat("cut ", cut.id.value, ": slid ", m.slid_m,
-                                         " m outward along cane ", cut.cane_id.value));
-    made[cut.id.value] = as_made;
-    planned.push_back(static_cast<int>(i));
   }
 
-  // 3. Adaptive margins around the home configuration and every chosen cut motion.
-  t = std::chrono::steady_clock::now();
-  std::vector<ProtectedMotion> protected_motions;
-  protected_motions.push_back({{options.home}, CaneId{0}, Eigen::Vector3d::Zero(), 0.0});
-  for (int i : planned) {
-    const Cut& cut = made[plan.cuts[i].id.value];
-    protected_motions.push_back({motions[i].path, cut.cane_id, base_from_platform * cut.point,
-                                 options.cut_motion.cut_cane_free_radius_m});
-  }
-  CollisionScene inflated = scene;
-  stats.margins = InflateMargins(robot, protected_motions, options.margins, &inflated);
-  auto checker = MakeChecker(options.checker, robot, inflated);
-  stats.margins_s = Seconds(t);
-
-  // 4. Order: node 0 is home, node k the k-th planned cut (entered at its path's first
-  // configuration, left at its last).
-  t = std::chrono::steady_clock::now();
-  const int n = static_cast<int>(planned.size());
-  Eigen::MatrixXd cost = Eigen::MatrixXd::Zero(n + 1, n + 1);
-  auto exit_of = [&](int node) -> const Joints& {
-    return node == 0 ? options.home : motions[planned[node - 1]].path.back();
-  };
-  auto entry_of = [&](int node) -> const Joints& {
-    return node == 0 ? options.home : motions[planned[node - 1]].path.front();
-  };
-  for (int i = 0; i <= n; ++i)
-    for (int j = 0; j <= n; ++j)
-      if (i != j) cost(i, j) = MoveTimeS(exit_of(i), entry_of(j), robot.limits);
-  const OrderResult order = OrderCuts(cost, options.return_home);
-  std::vector<int> given(n);
-  for (int k = 0; k < n; ++k) given[k] = k + 1;
-  stats.order_cost_s = order.cost;
-  stats.order_exact = order.exact;
-  stats.given_order_cost_s = OrderCost(cost, given, options.return_home);
-  stats.nearest_neighbour_cost_s = NearestNeighbourOrder(cost, options.return_home).cost;
-  stats.ordering_s = Seconds(t);
-
-  // 5. Paths between consecutive cuts. A leg is the transit to a cut and the cut itself.
-  t = std::chrono::steady_clock::now();
-  struct Leg {
-    std::vector<Joints> transit;
-    int motion = -1;
-  };
-  std::vector<Leg> legs;
-  PathPlanner planner(*checker, robot.limits, options.path);
-  auto plan_path = [&](const Joints& from, const Joints& goal,
-                       CutId to) -> std::optional<std::vector<Joints>> {
-    PathResult path = planner.Plan(from, goal, deadline);
-    stats.paths.push_back({to, path.outcome, path.planning_s, path.checks, path.direct});
-    if (path.outcome != PathOutcome::kSolved) return std::nullopt;
-    return std::move(path.waypoints);
-  };
-  auto end_of_legs = [&]() -> const Joints& {
-    return legs.empty() ? options.home : motions[legs.back().motion].path.back();
-  };
-  for (int node : order.order) {
-    const int i = planned[node - 1];
-    const CutId id = plan.cuts[i].id;
-    auto transit = plan_path(end_of_legs(), motions[i].path.front(), id);
-    if (!transit) {
-      trajectory.unplanned.push_back({id, std::string(PathReason(stats.paths.back().outcome))});
-      continue;
-    }
-    legs.push_back({std::move(*transit), i});
-  }
   // Home again; if no path leads home from the last cut, that cut is given up and the arm goes
   // home from the one before it (the arm never ends a vine stranded among the canes).
+  auto t = std::chrono::steady_clock::now();
   std::vector<Joints> home_path;
-  while (options.return_home && !legs.empty()) {
-    auto path = plan_path(end_of_legs(), options.home, CutId{0});
+  while (options.return_home && !p.legs.empty()) {
+    auto path = p.Path(options.home, CutId{0});
     if (path) {
       home_path = std::move(*path);
       break;
     }
-    const CutId id = plan.cuts[legs.back().motion].id;
-    trajectory.unplanned.push_back({id, "no_path_home_within_deadline"});
-    stats.notes.push_back(absl::StrCat("cut ", id.value,
-                                       ": dropped, no path home from it within the deadline"));
-    legs.pop_back();
+    const CutId id = p.legs.back().cut.id;
+    p.Unplanned(id, "no_path_home_within_deadline");
+    stats.notes.push_back(
+        absl::StrCat("cut ", id.value, ": dropped, no path home from it within the deadline"));
+    p.legs.pop_back();
   }
-  stats.paths_s = Seconds(t);
+  stats.paths_s += Seconds(t);
 
-  // 6. Timing: home -> (transit, cut)* -> home, each segment at rest at its ends.
+  // Timing: home -> (transit, cut)* -> home, each segment at rest at its ends.
   t = std::chrono::steady_clock::now();
+  Trajectory& trajectory = result.trajectory;
   JointLimits cut_limits = robot.limits;
   cut_limits.max_velocity *= options.cut_speed_fraction;
   cut_limits.max_acceleration *= options.cut_speed_fraction;
-  for (const Leg& leg : legs) {
-    const Cut& cut = made[plan.cuts[leg.motion].id.value];
+  for (const Leg& leg : p.legs) {
     VB_RETURN_IF_ERROR(AppendSegment(SegmentKind::kTransit, CutId{0}, leg.transit, robot.limits,
                                      options.sample_dt_s, &trajectory));
-    VB_RETURN_IF_ERROR(AppendSegment(SegmentKind::kCut, cut.id, motions[leg.motion].path,
-                                     cut_limits, options.sample_dt_s, &trajectory));
-    result.cuts.push_back(cut);
+    VB_RETURN_IF_ERROR(AppendSegment(SegmentKind::kCut, leg.cut.id, leg.motion.path, cut_limits,
+                                     options.sample_dt_s, &trajectory));
+    result.cuts.push_back(leg.cut);
   }
   if (!home_path.empty()) {
     VB_RETURN_IF_ERROR(AppendSegment(SegmentKind::kTransit, CutId{0}, home_path, robot.limits,
@@ -269,54 +338,13 @@ absl::StatusOr<PlanResult> PlanVine(const VineModel& model, const CutPlan& plan,
   }
   stats.timing_s = Seconds(t);
   stats.planned = static_cast<int>(result.cuts.size());
-  for (const PathRecord& p : stats.paths) stats.checks += p.checks;
+  for (const PathRecord& path : stats.paths) stats.checks += path.checks;
   stats.total_s = Seconds(start);
   std::sort(trajectory.unplanned.begin(), trajectory.unplanned.end(),
-            [](const UnplannedCut& a, const UnplannedCut& b) { return a.cut_id.value < b.cut_id.value; });
+            [](const UnplannedCut& a, const UnplannedCut& b) {
+              return a.cut_id.value < b.cut_id.value;
+            });
   return result;
-}
-
-int64_t CountTrajectoryCollisions(const Trajectory& trajectory, std::span<const Cut> cuts,
-                                  const RobotModel& robot, const CollisionScene& scene,
-                                  CheckerKind kind, double max_step_m, double cut_radius_m,
-                                  std::vector<int>* bad_segments) {
-  const Eigen::Isometry3d base_from_platform = robot.platform_from_arm_base.inverse();
-  auto transit_checker = MakeChecker(kind, robot, scene);
-  int64_t collisions = 0;
-  if (bad_segments != nullptr) bad_segments->assign(trajectory.segments.size(), 0);
-  for (size_t s = 0; s < trajectory.segments.size(); ++s) {
-    const TrajectorySegment& segment = trajectory.segments[s];
-    std::unique_ptr<CollisionChecker> cut_checker;
-    CollisionChecker* checker = transit_checker.get();
-    if (segment.kind == SegmentKind::kCut) {
-      auto cut = std::find_if(cuts.begin(), cuts.end(),
-                              [&](const Cut& c) { return c.id.value == segment.cut_id.value; });
-      if (cut != cuts.end()) {
-        cut_checker = MakeChecker(
-            kind, robot,
-            scene.WithoutCaneNear(cut->cane_id, base_from_platform * cut->point, cut_radius_m));
-        checker = cut_checker.get();
-      }
-    }
-    std::vector<Joints> configurations;
-    for (size_t p = 0; p < segment.points.size(); ++p) {
-      const Joints b = Eigen::Map<const Joints>(segment.points[p].q.data());
-      if (p == 0) {
-        configurations.push_back(b);
-        continue;
-      }
-      const Joints a = Eigen::Map<const Joints>(segment.points[p - 1].q.data());
-      const int steps = MotionSteps(a, b, max_step_m);
-      for (int k = 1; k <= steps; ++k) configurations.push_back(a + (b - a) * (double(k) / steps));
-    }
-    for (size_t c = 0; c < configurations.size(); ++c) {
-      if (!checker->IsFree(configurations[c])) {
-        ++collisions;
-        if (bad_segments != nullptr) ++(*bad_segments)[s];
-      }
-    }
-  }
-  return collisions;
 }
 
 }  // namespace vb::plan
@@ -325,7 +353,7 @@ namespace vb::plan {
 
 Joints DefaultHome() {
   Joints q;
-  q << -0.916958, 1.82058, 1.18997, -1.68409, -1.92803, -1.51915;  // provisional
+  q << -0.0900, 0.3588, 0.6480, -0.2072, 0.3916, 0.7171;
   return q;
 }
 

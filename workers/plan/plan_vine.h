@@ -6,10 +6,13 @@
 //      (cut_motion.h);
 //   3. adaptive safety margins around the chosen cut motions (safety_margins.h);
 //   4. the order of the cuts: exact Held-Karp on estimated move times (cut_order.h);
-//   5. RRT-Connect paths between consecutive cut motions in the inflated scene, shortcut and
-//      smoothed (path_planner.h); a cut whose path fails is dropped and the next one is
-//      joined to the last cut reached;
-//   6. time parameterisation within the joint velocity and acceleration limits
+//   5. RRT-Connect paths between consecutive cut motions in the inflated scene, shortcut
+//      (path_planner.h); a cut whose path fails is dropped and the next one is joined to the last
+//      cut reached;
+//   6. passes: cuts with no collision-free cut motion are tried again on the vine as the cuts
+//      made so far leave it (their wood has fallen, fallen_wood.h), after those cuts, up to
+//      max_passes times -- near the head the canes that block a cut are mostly canes that go;
+//   7. time parameterisation within the joint velocity and acceleration limits
 //      (time_parameterization.h), home -> cuts -> home.
 // Every cut ends planned or with its reason in Trajectory::unplanned. Thread-safe (pure function).
 #pragma once
@@ -47,6 +50,7 @@ struct PlanOptions {
   // Where the arm starts and ends: folded clear of the cameras' view (DefaultHome()).
   Joints home = Joints::Zero();
   bool return_home = true;
+  int max_passes = 3;          // 1: every cut motion is planned on the uncut vine
   // Cut strokes move at this fraction of the joint velocity and acceleration limits: the tool
   // must not be driven through wood at transit speed (an estimate, not a measured feed rate).
   double cut_speed_fraction = 0.25;
@@ -71,6 +75,7 @@ struct PlanStats {
   double scene_s = 0.0, cut_motions_s = 0.0, margins_s = 0.0, ordering_s = 0.0, paths_s = 0.0,
          timing_s = 0.0, total_s = 0.0;
   int cuts = 0, planned = 0, unreachable = 0;
+  int passes = 0;                         // passes that planned at least one cut
   int64_t checks = 0;                     // configuration checks in the whole plan
   std::vector<PathRecord> paths;
   MarginSummary margins;
@@ -98,14 +103,5 @@ absl::StatusOr<PlanResult> PlanVine(const VineModel& model, const CutPlan& plan,
                                     const RobotModel& robot, const PlatformGeometry& platform,
                                     const PlanOptions& options = {},
                                     const Deadline& deadline = Deadline::Infinite());
-
-// Re-checks every segment of `trajectory` densely (no point of the arm moves more than
-// `max_step_m` between checks) with `checker` on `scene` (transits) or on the scene without the cut
-// cane near its cut (cut segments, as planned; `cuts` are PlanResult::cuts). Returns the number of colliding configurations
-// (0 means collision-free) and counts them per segment in `bad_segments` (optional).
-int64_t CountTrajectoryCollisions(const Trajectory& trajectory, std::span<const Cut> cuts,
-                                  const RobotModel& robot, const CollisionScene& scene,
-                                  CheckerKind checker, double max_step_m, double cut_radius_m,
-                                  std::vector<int>* bad_segments = nullptr);
 
 }  // namespace vb::plan

@@ -48,8 +48,11 @@ absl::Status ValidatePose(const Eigen::Isometry3d& pose, const std::string& what
 }  // namespace
 
 Eigen::Isometry3d DefaultPlatformFromArmBase() {
+  // The mount study's best (docs/plan.md "Mount study"): on the floor, 0.45 m in front of the
+  // cameras and below their view, tilted 50 degrees toward the vine about the platform x axis.
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  pose.translation() = Eigen::Vector3d(0.0, 0.35, 0.55);
+  pose.translation() = Eigen::Vector3d(0.0, 0.45, 0.45);
+  pose.linear() = Eigen::AngleAxisd(-50.0 * M_PI / 180.0, Eigen::Vector3d::UnitX()).toRotationMatrix();
   return pose;
 }
 

@@ -47,8 +47,9 @@ struct RobotModel {
 // docs/plan.md with the reachability study that chose it).
 RobotModel DefaultUr5(const ToolGeometry& tool);
 
-// The provisional default mount: arm base at (0, 0.35, 0.55) m in the platform frame, its z axis
-// up (identity rotation). The one place the default mount is defined; the mount study replaces it.
+// The default mount, chosen by the mount study (docs/plan.md): arm base at (0, 0.45, 0.45) m in the
+// platform frame, its z axis tilted 50 degrees from vertical toward the vine (rotation -50 degrees
+// about platform x). The one place the default mount is defined.
 Eigen::Isometry3d DefaultPlatformFromArmBase();
 
 // The platform's fixed geometry in the platform frame: the arm may touch none of it.
