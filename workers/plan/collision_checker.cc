@@ -12,18 +12,46 @@ void CollisionChecker::AreFree(std::span<const Joints> qs, std::span<bool> out) 
   for (size_t i = 0; i < qs.size() && i < out.size(); ++i) out[i] = IsFree(qs[i]);
 }
 
+JointLevers JointLeverArms(const RobotModel& robot) {
+  const DhParameters& dh = Ur5Dh();
+  JointLevers lever{};
+  for (const LinkBody& body : robot.BodiesWithTool()) {
+    for (const Capsule& c : body.capsules) {
+      for (const Eigen::Vector3d& e : {c.a, c.b}) {
+        // The cylinder about z_j holding the endpoint for every q_{j+1..k}; see the header.
+        double rho = std::hypot(e.x(), e.y()), lo = e.z(), hi = e.z();
+        for (int j = body.frame; j >= 1; --j) {
+          const double ca = std::cos(dh.alpha[j - 1]), sa = std::sin(dh.alpha[j - 1]);
+          const double a = std::abs(dh.a[j - 1]), z = std::max(std::abs(lo), std::abs(hi));
+          const double lo_c = std::min(lo * ca, hi * ca), hi_c = std::max(lo * ca, hi * ca);
+          lo = dh.d[j - 1] + lo_c - rho * std::abs(sa);
+          hi = dh.d[j - 1] + hi_c + rho * std::abs(sa);
+          rho = std::sqrt((rho + a) * (rho + a) + 2 * rho * z * std::abs(sa * ca) +
+                          z * z * sa * sa);
+          lever[j - 1] = std::max(lever[j - 1], rho + c.radius);
+        }
+      }
+    }
+  }
+  return lever;
+}
+
 int MotionSteps(const Joints& a, const Joints& b, double max_step_m, double reach_m) {
+  return MotionSteps(a, b, max_step_m, UniformLevers(std::max(reach_m, 0.0)));
+}
+
+int MotionSteps(const Joints& a, const Joints& b, double max_step_m, const JointLevers& lever_m) {
   constexpr int kMaxSteps = 1 << 20;
-  // A point at distance r from a joint axis moves at most r |dq| when that joint turns by dq; the
-  // motions of all joints add up along the chain, so sum_i |dq_i| * reach bounds every point.
-  const double travel = (b - a).cwiseAbs().sum() * std::max(reach_m, 0.0);
+  // See JointLeverArms: sum_i |dq_i| lever_i bounds the travel of every point of the arm.
+  double travel = 0;
+  for (int i = 0; i < 6; ++i) travel += std::abs(b[i] - a[i]) * std::max(lever_m[i], 0.0);
   if (!std::isfinite(travel) || !(max_step_m > 0)) return kMaxSteps;
   const double steps = std::ceil(travel / max_step_m);
   return static_cast<int>(std::clamp(steps, 1.0, static_cast<double>(kMaxSteps)));
 }
 
 bool CollisionChecker::IsMotionFree(const Joints& a, const Joints& b, double max_step_m) {
-  const int n = MotionSteps(a, b, max_step_m);
+  const int n = MotionSteps(a, b, max_step_m, lever_m_);
   // Ends first, then the interior in van der Corput order (coarse to fine) so that a colliding
   // motion usually fails after few checks; chunks let batched checkers work on many at once.
   std::array<bool, 2> ends_free{};

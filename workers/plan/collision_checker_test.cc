@@ -8,6 +8,7 @@
 #include "sim/vine_generator.h"
 #include "workers/plan/fcl_checker.h"
 #include "workers/plan/primitive_checker.h"
+#include "workers/plan/tool.h"
 
 namespace vb::plan {
 namespace {
@@ -225,6 +226,72 @@ TEST(MotionSteps, BoundsTheTravelOfEveryPoint) {
   EXPECT_GT(MotionSteps(a, b, 0.01), 1000);
 }
 
+// The largest travel of any capsule point between two configurations: an endpoint's displacement
+// plus the radius times the chord of the body's rotation (|(R' - R) u| = 2 sin(angle / 2)).
+double MaxCapsuleTravel(const std::vector<LinkBody>& bodies, const Joints& q0, const Joints& q1) {
+  const auto f0 = LinkFrames(q0), f1 = LinkFrames(q1);
+  double worst = 0;
+  for (const LinkBody& body : bodies) {
+    const Eigen::Matrix3d r = f0[body.frame].linear().transpose() * f1[body.frame].linear();
+    const double angle = Eigen::AngleAxisd(r).angle();
+    for (const Capsule& c : body.capsules) {
+      for (const Eigen::Vector3d& e : {c.a, c.b}) {
+        worst = std::max(worst, (f1[body.frame] * e - f0[body.frame] * e).norm() +
+                                    c.radius * 2 * std::sin(angle / 2));
+      }
+    }
+  }
+  return worst;
+}
+
+TEST(JointLeverArms, BoundTheTravelOfEveryCapsulePointPerStep) {
+  for (const ToolGeometry& tool : {MillEnd(), MillEndTool(), SecateurTool()}) {
+    const RobotModel robot = DefaultUr5(tool);
+    const std::vector<LinkBody> bodies = robot.BodiesWithTool();
+    const JointLevers lever = JointLeverArms(robot);
+    std::mt19937 rng(1120);
+    double tightest = 0;
+    for (int trial = 0; trial < 1200; ++trial) {
+      const Joints a = RandomJoints(rng, robot.limits);
+      Joints b = RandomJoints(rng, robot.limits);
+      // Short motions too, and motions of one joint (where one lever alone is tested).
+      if (trial % 3 == 1) b = a + (b - a) * 0.05;
+      if (trial % 3 == 2) {
+        const int i = trial % 6;
+        b = a;
+        b[i] = a[i] + std::uniform_real_distribution<double>(-0.5, 0.5)(rng);
+      }
+      constexpr double kStep = 0.01;
+      const int n = MotionSteps(a, b, kStep, lever);
+      for (int k = 0; k < n; ++k) {
+        const double travel =
+            MaxCapsuleTravel(bodies, a + (b - a) * (double(k) / n), a + (b - a) * (double(k + 1) / n));
+        ASSERT_LE(travel, kStep * (1 + 1e-9)) << tool.name << " trial " << trial << " step " << k;
+        tightest = std::max(tightest, travel / kStep);
+      }
+    }
+    // The bound is useful, not only safe: single-joint steps come close to it.
+    EXPECT_GT(tightest, 0.8) << tool.name;
+  }
+}
+
+TEST(JointLeverArms, WristJointsMoveLessThanTheShoulder) {
+  const RobotModel robot = DefaultUr5(MillEnd());
+  const JointLevers lever = JointLeverArms(robot);
+  for (int i = 0; i < 6; ++i) {
+    EXPECT_GT(lever[i], 0.0) << i;
+    RecordProperty("lever_m_" + std::to_string(i + 1), std::to_string(lever[i]));
+  }
+  // Joint 6 turns the tool about its own axis: only the radii move.
+  EXPECT_NEAR(lever[5], 0.035, 1e-9);  // the tool body's radius (wrist 3's housing is frame 5)
+  EXPECT_LT(lever[4], 0.35);           // wrist 2 and the tool from the joint 5 axis
+  EXPECT_LT(lever[3], 0.5);
+  EXPECT_GE(lever[0], lever[1]);
+  Joints a = Joints::Zero(), b = Joints::Zero();
+  b[3] = b[4] = b[5] = 1.0;
+  EXPECT_LT(3 * MotionSteps(a, b, 0.01, lever), MotionSteps(a, b, 0.01));
+}
+
 TEST(CollisionChecker, MotionThroughAnObstacleIsNotFree) {
   const RobotModel robot = DefaultUr5(MillEnd());
   Joints a = Raised(), b = Raised();
@@ -248,7 +315,65 @@ TEST(CollisionChecker, MotionThroughAnObstacleIsNotFree) {
   Joints c = a;
   c[0] = -0.3;
   EXPECT_TRUE(checker.IsMotionFree(a, c, 0.005));
-  EXPECT_EQ(checker.checks(), MotionSteps(a, c, 0.005) + 1);
+  EXPECT_EQ(checker.checks(), MotionSteps(a, c, 0.005, checker.lever_m()) + 1);
+}
+
+// Batched checks compute forward kinematics in float lanes: they may differ from IsFree only
+// within float rounding of contact.
+TEST(PrimitiveChecker, AreFreeAgreesWithIsFree) {
+  const RobotModel robot = DefaultUr5(MillEnd());
+  std::mt19937 rng(1130);
+  int total = 0, free = 0, disagree = 0;
+  for (uint64_t seed : {1130, 1131}) {
+    PrimitiveChecker checker(robot, VineScene(seed, seed == 1131 ? 0.02 : 0.0));
+    std::vector<Joints> qs;
+    for (int k = 0; k < 2003; ++k) qs.push_back(RandomJoints(rng, robot.limits));
+    std::unique_ptr<bool[]> flags(new bool[qs.size()]);
+    checker.AreFree(qs, std::span<bool>(flags.get(), qs.size()));
+    EXPECT_EQ(checker.checks(), static_cast<int64_t>(qs.size()));
+    for (size_t k = 0; k < qs.size(); ++k) {
+      const bool expected = checker.IsFree(qs[k]);
+      ++total;
+      free += expected;
+      if (flags[k] != expected) {
+        ++disagree;
+        EXPECT_LT(std::abs(checker.Clearance(qs[k])), 1e-5) << "seed " << seed << " k " << k;
+      }
+    }
+  }
+  EXPECT_LE(disagree, total / 1000);
+  EXPECT_GT(free, total / 20);
+  EXPECT_LT(free, total - total / 20);
+}
+
+// The batched IsMotionFree against IsFree at every sample MotionSteps gives, on short motions
+// around random configurations (both outcomes occur).
+TEST(PrimitiveChecker, BatchedMotionAgreesWithSampledChecks) {
+  const RobotModel robot = DefaultUr5(MillEnd());
+  std::mt19937 rng(1132);
+  int motions = 0, free = 0;
+  for (uint64_t seed : {1132, 1133}) {
+    PrimitiveChecker checker(robot, VineScene(seed));
+    for (int trial = 0; trial < 300; ++trial) {
+      const Joints a = RandomJoints(rng, robot.limits);
+      const Joints b = a + (RandomJoints(rng, robot.limits) - a) * 0.1;
+      const bool batched = checker.IsMotionFree(a, b, 0.01);
+      const int n = MotionSteps(a, b, 0.01, checker.lever_m());
+      bool expected = true, near_contact = false;
+      for (int k = 0; k <= n; ++k) {
+        const Joints q = a + (b - a) * (double(k) / n);
+        expected = expected && checker.IsFree(q);
+        near_contact = near_contact || std::abs(checker.Clearance(q)) < 1e-5;
+      }
+      ++motions;
+      free += expected;
+      if (batched != expected) {
+        EXPECT_TRUE(near_contact) << "seed " << seed << " trial " << trial;
+      }
+    }
+  }
+  EXPECT_GT(free, motions / 10);
+  EXPECT_LT(free, motions - motions / 10);
 }
 
 // The acceptance test of issue 5: the primitive checker and both FCL baselines agree on >= 99.9%

@@ -147,6 +147,7 @@ bool CollideCallback(fcl::CollisionObjectd* o1, fcl::CollisionObjectd* o2, void*
 class FclChecker : public CollisionChecker {
  public:
   FclChecker(const RobotModel& robot, const CollisionScene& scene, FclMode mode) : mode_(mode) {
+    lever_m_ = JointLeverArms(robot);
     const std::vector<LinkBody> bodies = robot.BodiesWithTool();
     for (int b = 0; b < static_cast<int>(bodies.size()); ++b) {
       if (mode == FclMode::kMesh) {

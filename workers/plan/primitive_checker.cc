@@ -50,10 +50,15 @@ struct BoxSet {
   F4 lox[kHalves], loy[kHalves], loz[kHalves], hix[kHalves], hiy[kHalves], hiz[kHalves];
 };
 
+// An axis-aligned box splatted over the lanes (a query against a BoxSet).
+struct QueryBox {
+  F4 lox, loy, loz, hix, hiy, hiz;
+};
+
 // One arm capsule in the base frame, prepared for the lanes.
 struct ArmSeg {
   F4 p0x, p0y, p0z, d1x, d1y, d1z, a, inv_a, r;
-  F4 lox, loy, loz, hix, hiy, hiz;  // its bounding box
+  QueryBox box;  // its bounding box
 };
 
 ArmSeg PrepareSeg(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double r) {
@@ -63,12 +68,12 @@ ArmSeg PrepareSeg(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double r) 
   return ArmSeg{Splat(a.x()), Splat(a.y()), Splat(a.z()),
                 Splat(d.x()), Splat(d.y()), Splat(d.z()),
                 Splat(len2),  Splat(len2 > 0 ? 1.0 / len2 : 0.0), Splat(r),
-                Splat(lo.x()), Splat(lo.y()), Splat(lo.z()),
-                Splat(hi.x()), Splat(hi.y()), Splat(hi.z())};
+                QueryBox{Splat(lo.x()), Splat(lo.y()), Splat(lo.z()),
+                         Splat(hi.x()), Splat(hi.y()), Splat(hi.z())}};
 }
 
-// Lanes of `set` whose box overlaps the arm segment's box.
-inline unsigned SegVsBoxes(const ArmSeg& s, const BoxSet& set) {
+// Lanes of `set` whose box overlaps the query box.
+inline unsigned SegVsBoxes(const QueryBox& s, const BoxSet& set) {
   unsigned bits = 0;
   for (int h = 0; h < kHalves; ++h) {
     const I4 overlap = (set.lox[h] <= s.hix) & (set.hix[h] >= s.lox) & (set.loy[h] <= s.hiy) &
@@ -114,29 +119,40 @@ inline unsigned SegVsSet(const ArmSeg& s, const CapsuleSet& l) {
   return bits;
 }
 
-// sin and cos of x (|x| < 1e9) to ~2e-14: quarter-turn reduction (Cody-Waite split of pi/2) and
-// Taylor polynomials on [-pi/4, pi/4]. Inlined, it costs a fraction of libm's sincos, which was
-// ~15% of a check.
-inline void SinCos(double x, double* sin_x, double* cos_x) {
-  constexpr double kTwoOverPi = 0.63661977236758134308;
-  constexpr double kPio2Hi = 1.57079632673412561417e+00;  // first 33 bits of pi/2
-  constexpr double kPio2Lo = 6.07710050650619224932e-11;  // pi/2 - kPio2Hi
-  const int64_t k = static_cast<int64_t>(x * kTwoOverPi + (x >= 0 ? 0.5 : -0.5));
-  const double kd = static_cast<double>(k);
-  const double r = (x - kd * kPio2Hi) - kd * kPio2Lo;
-  const double r2 = r * r;
-  const double s =
-      r + r * r2 * (-1.0 / 6 + r2 * (1.0 / 120 + r2 * (-1.0 / 5040 + r2 * (1.0 / 362880 +
-      r2 * (-1.0 / 39916800 + r2 * (1.0 / 6227020800.0))))));
-  const double c =
-      1.0 - 0.5 * r2 + r2 * r2 * (1.0 / 24 + r2 * (-1.0 / 720 + r2 * (1.0 / 40320 + r2 * (
-      -1.0 / 3628800 + r2 * (1.0 / 479001600.0 + r2 * (-1.0 / 87178291200.0))))));
-  switch (k & 3) {
-    case 0: *sin_x = s; *cos_x = c; break;
-    case 1: *sin_x = c; *cos_x = -s; break;
-    case 2: *sin_x = -s; *cos_x = -c; break;
-    default: *sin_x = -c; *cos_x = s; break;
-  }
+// sin and cos of four floats (Cephes' sinf/cosf: reduction by pi/2 in three parts, minimax
+// polynomials on [-pi/4, pi/4]); absolute error ~1e-7 for |x| < 100, far below the float
+// rounding of the positions. Joint values are within +-2 pi.
+inline void SinCos4(F4 x, F4* s, F4* c) {
+  const F4 jf = __builtin_convertvector(
+      __builtin_convertvector(x * Splat(0.63661977236758134f) +
+                                  (x >= Splat(0.f) ? Splat(0.5f) : Splat(-0.5f)), I4), F4);
+  const I4 quadrant = __builtin_convertvector(jf, I4) & I4{3, 3, 3, 3};
+  const F4 y = ((x - jf * Splat(1.5703125f)) - jf * Splat(4.837512969970703125e-4f)) -
+               jf * Splat(7.54978995489188216e-8f);
+  const F4 z = y * y;
+  const F4 sy = y + y * z * (Splat(-1.6666654611e-1f) +
+                             z * (Splat(8.3321608736e-3f) + z * Splat(-1.9515295891e-4f)));
+  const F4 cy = Splat(1.f) - Splat(0.5f) * z +
+                z * z * (Splat(4.166664568298827e-2f) +
+                         z * (Splat(-1.388731625493765e-3f) + z * Splat(2.443315711809948e-5f)));
+  const I4 swap = (quadrant & I4{1, 1, 1, 1}) != I4{0, 0, 0, 0};
+  const I4 neg_s = (quadrant == I4{2, 2, 2, 2}) | (quadrant == I4{3, 3, 3, 3});
+  const I4 neg_c = (quadrant == I4{1, 1, 1, 1}) | (quadrant == I4{2, 2, 2, 2});
+  const F4 ss = swap ? cy : sy, cc = swap ? sy : cy;
+  *s = neg_s ? -ss : ss;
+  *c = neg_c ? -cc : cc;
+}
+
+// A link frame per lane (columns and origin).
+struct Frame4 {
+  F4 x[3], y[3], z[3], p[3];
+};
+
+// Lanes where the lane boxes (lo, hi per axis) overlap box b (scalars).
+inline unsigned LanesOverlap(const F4 lo[3], const F4 hi[3], const float blo[3],
+                             const float bhi[3]) {
+  return Bits((lo[0] <= Splat(bhi[0])) & (hi[0] >= Splat(blo[0])) & (lo[1] <= Splat(bhi[1])) &
+              (hi[1] >= Splat(blo[1])) & (lo[2] <= Splat(bhi[2])) & (hi[2] >= Splat(blo[2])));
 }
 
 struct Piece {
@@ -307,8 +323,7 @@ struct PrimitiveChecker::Impl {
                  Eigen::Vector3d::Zero()};
     // Standard DH, Rz(q) Tz(d) Tx(a) Rx(alpha), applied to the columns of the previous frame.
     for (int i = 0; i < 6; ++i) {
-      double ct, st;
-      SinCos(q[i], &st, &ct);
+      const double ct = std::cos(q[i]), st = std::sin(q[i]);
       const Frame& in = f[i];
       Frame& out = f[i + 1];
       out.x = ct * in.x + st * in.y;
@@ -334,15 +349,15 @@ struct PrimitiveChecker::Impl {
   bool SegHitsObstacles(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double r) const {
     const ArmSeg s = PrepareSeg(a, b, r);
     for (size_t g = 0; g < top.size(); ++g) {
-      unsigned nodes = SegVsBoxes(s, top[g]);
+      unsigned nodes = SegVsBoxes(s.box, top[g]);
       while (nodes) {
         const int n = static_cast<int>(g) * kLeaf + __builtin_ctz(nodes);
         nodes &= nodes - 1;
-        unsigned ls = SegVsBoxes(s, node_children[n]);
+          unsigned ls = SegVsBoxes(s.box, node_children[n]);
         while (ls) {
           const int l = n * kLeaf + __builtin_ctz(ls);
           ls &= ls - 1;
-          if (SegVsSet(s, leaves[l])) return true;
+              if (SegVsSet(s, leaves[l])) return true;
         }
       }
     }
@@ -357,7 +372,7 @@ struct PrimitiveChecker::Impl {
   }
 
   bool Free(const Joints& q) {
-    if (base_blocked || !q.allFinite() || (q.array().abs() > 1e6).any()) return false;
+    if (base_blocked) return false;
     Place(q);
     // `all` lists moving capsules first (distal first), then fixed ones; see the constructor.
     for (size_t i = 0; i < moving.size(); ++i) {
@@ -393,6 +408,155 @@ struct PrimitiveChecker::Impl {
     return true;
   }
 
+  // Batched checks (VAMP's idea: configurations in SIMD lanes). Per lane and per capsule of
+  // `all`: start point, axis, bounding box; lanes are configurations.
+  struct PlacedLanes {
+    F4 p[3], d[3], lo[3], hi[3];
+  };
+  std::vector<PlacedLanes> lanes_scratch;
+  std::vector<float> leaf_lo, leaf_hi;  // leaf boxes, 3 floats per leaf
+  std::vector<float> cap_len2, cap_inv_len2;  // per capsule of `all` (rigid: configuration-free)
+
+  void PlaceLanes(const Joints* q, int count) {
+    F4 ct[6], st[6];
+    for (int i = 0; i < 6; ++i) {
+      F4 v;
+      for (int l = 0; l < 4; ++l) v[l] = static_cast<float>(q[std::min(l, count - 1)][i]);
+      SinCos4(v, &st[i], &ct[i]);
+    }
+    std::array<Frame4, 7> f;
+    for (int k = 0; k < 3; ++k) {
+      f[0].x[k] = Splat(k == 0), f[0].y[k] = Splat(k == 1), f[0].z[k] = Splat(k == 2);
+      f[0].p[k] = Splat(0.f);
+    }
+    for (int i = 0; i < 6; ++i) {
+      const Frame4& in = f[i];
+      Frame4& out = f[i + 1];
+      const F4 ca = Splat(static_cast<float>(dh_ca[i])), sa = Splat(static_cast<float>(dh_sa[i]));
+      const F4 a = Splat(static_cast<float>(dh_a[i])), d = Splat(static_cast<float>(dh_d[i]));
+      for (int k = 0; k < 3; ++k) {
+        out.x[k] = ct[i] * in.x[k] + st[i] * in.y[k];
+        const F4 w = ct[i] * in.y[k] - st[i] * in.x[k];
+        out.y[k] = ca * w + sa * in.z[k];
+        out.z[k] = ca * in.z[k] - sa * w;
+        out.p[k] = in.p[k] + a * out.x[k] + d * in.z[k];
+      }
+    }
+    for (size_t c = 0; c < all.size(); ++c) {
+      const Frame4& fr = f[all[c].frame];
+      const F4 ax = Splat(all[c].a.x()), ay = Splat(all[c].a.y()), az = Splat(all[c].a.z());
+      const F4 bx = Splat(all[c].b.x()), by = Splat(all[c].b.y()), bz = Splat(all[c].b.z());
+      const F4 r = Splat(all[c].radius + kCoarseSlackM);
+      PlacedLanes& out = lanes_scratch[c];
+      for (int k = 0; k < 3; ++k) {
+        const F4 pa = fr.p[k] + ax * fr.x[k] + ay * fr.y[k] + az * fr.z[k];
+        const F4 pb = fr.p[k] + bx * fr.x[k] + by * fr.y[k] + bz * fr.z[k];
+        out.p[k] = pa;
+        out.d[k] = pb - pa;
+        out.lo[k] = Min(pa, pb) - r;
+        out.hi[k] = Max(pa, pb) + r;
+      }
+    }
+  }
+
+  ArmSeg LaneSeg(size_t c, int lane) const {
+    const PlacedLanes& pl = lanes_scratch[c];
+    return ArmSeg{Splat(pl.p[0][lane]), Splat(pl.p[1][lane]), Splat(pl.p[2][lane]),
+                  Splat(pl.d[0][lane]), Splat(pl.d[1][lane]), Splat(pl.d[2][lane]),
+                  Splat(cap_len2[c]), Splat(cap_inv_len2[c]), Splat(all[c].radius), QueryBox{}};
+  }
+
+  // Lanes (of `lanes`) where capsule c touches an obstacle piece. The hierarchy is walked once
+  // with the union of the lanes' boxes (lanes should be nearby configurations); leaves are then
+  // tested per lane. With `stop_at_first`, returns after the first colliding lane.
+  unsigned CapsuleLanesHit(size_t c, unsigned lanes, bool stop_at_first) const {
+    const PlacedLanes& pl = lanes_scratch[c];
+    float lo[3], hi[3];
+    for (int k = 0; k < 3; ++k) {
+      lo[k] = std::numeric_limits<float>::infinity(), hi[k] = -lo[k];
+      for (unsigned m = lanes; m; m &= m - 1) {
+        const int l = __builtin_ctz(m);
+        lo[k] = std::min(lo[k], pl.lo[k][l]);
+        hi[k] = std::max(hi[k], pl.hi[k][l]);
+      }
+    }
+    const QueryBox box{Splat(lo[0]), Splat(lo[1]), Splat(lo[2]),
+                       Splat(hi[0]), Splat(hi[1]), Splat(hi[2])};
+    std::array<ArmSeg, 4> segs;
+    unsigned prepared = 0, hit = 0;
+    for (size_t g = 0; g < top.size(); ++g) {
+      unsigned nodes = SegVsBoxes(box, top[g]);
+      while (nodes) {
+        const int n = static_cast<int>(g) * kLeaf + __builtin_ctz(nodes);
+        nodes &= nodes - 1;
+        unsigned ls = SegVsBoxes(box, node_children[n]);
+        while (ls) {
+          const int leaf = n * kLeaf + __builtin_ctz(ls);
+          ls &= ls - 1;
+          unsigned todo = LanesOverlap(pl.lo, pl.hi, &leaf_lo[3 * leaf], &leaf_hi[3 * leaf]) &
+                          lanes & ~hit;
+          while (todo) {
+            const int l = __builtin_ctz(todo);
+            todo &= todo - 1;
+            if (!(prepared >> l & 1u)) segs[l] = LaneSeg(c, l), prepared |= 1u << l;
+            if (SegVsSet(segs[l], leaves[leaf])) {
+              hit |= 1u << l;
+              if (stop_at_first || hit == lanes) return hit;
+            }
+          }
+        }
+      }
+    }
+    return hit;
+  }
+
+  // Lanes (of the first `count` configurations q[0..count), count <= 4) that are not free.
+  // `coherent`: the configurations are close together (consecutive samples of a motion), so the
+  // obstacle hierarchy is walked once for all lanes; otherwise once per lane. `stop_at_first`:
+  // return as soon as one lane is known to collide (the others are then unspecified).
+  unsigned CollidingLanes(const Joints* q, int count, bool coherent, bool stop_at_first) {
+    const unsigned all_lanes = (1u << count) - 1;
+    if (base_blocked) return all_lanes;
+    PlaceLanes(q, count);
+    unsigned hit = 0;
+    for (size_t c = 0; c < moving.size(); ++c) {
+      const PlacedLanes& pl = lanes_scratch[c];
+      const F4 r = Splat(all[c].radius);
+      for (const HalfSpace& h : planes) {
+        const F4 nx = Splat(h.normal.x()), ny = Splat(h.normal.y()), nz = Splat(h.normal.z());
+        const F4 da = nx * pl.p[0] + ny * pl.p[1] + nz * pl.p[2];
+        const F4 db = da + nx * pl.d[0] + ny * pl.d[1] + nz * pl.d[2];
+        hit |= Bits(Max(da, db) + r + Splat(h.margin_m) > Splat(h.offset)) & all_lanes;
+      }
+      if (hit && stop_at_first) return hit;
+    }
+    for (size_t c = 0; c < moving.size(); ++c) {
+      const unsigned open = all_lanes & ~hit;
+      if (!open) return hit;
+      if (coherent) {
+        hit |= CapsuleLanesHit(c, open, stop_at_first);
+      } else {
+        for (unsigned m = open; m; m &= m - 1) {
+          hit |= CapsuleLanesHit(c, m & (~m + 1), stop_at_first);
+          if (hit && stop_at_first) return hit;
+        }
+      }
+      if (hit && stop_at_first) return hit;
+    }
+    // Self-collision pairs, one pair at a time across the lanes.
+    for (const auto& [i, j] : self_pairs) {
+      const PlacedLanes& x = lanes_scratch[i];
+      const PlacedLanes& y = lanes_scratch[j];
+      hit |= Bits(CapsulesTouch(x.p[0], x.p[1], x.p[2], x.d[0], x.d[1], x.d[2],
+                                Splat(cap_len2[i]), Splat(cap_inv_len2[i]), y.p[0], y.p[1],
+                                y.p[2], y.d[0], y.d[1], y.d[2], Splat(cap_len2[j]),
+                                Splat(cap_inv_len2[j]), Splat(all[i].radius + all[j].radius))) &
+             all_lanes;
+      if (hit && stop_at_first) return hit;
+    }
+    return hit;
+  }
+
   double SegClearance(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double r,
                       double best) const {
     for (const HalfSpace& h : planes) {
@@ -411,9 +575,6 @@ struct PrimitiveChecker::Impl {
   }
 
   double Clearance(const Joints& q) {
-    if (!q.allFinite() || (q.array().abs() > 1e6).any()) {
-      return -std::numeric_limits<double>::infinity();
-    }
     Place(q);
     double best = std::numeric_limits<double>::infinity();
     for (size_t i = 0; i < all.size(); ++i) {
@@ -429,6 +590,7 @@ struct PrimitiveChecker::Impl {
 
 PrimitiveChecker::PrimitiveChecker(const RobotModel& robot, const CollisionScene& scene)
     : impl_(std::make_unique<Impl>()) {
+  lever_m_ = JointLeverArms(robot);
   Impl& m = *impl_;
   const DhParameters& dh = Ur5Dh();
   for (int i = 0; i < 6; ++i) {
@@ -455,6 +617,12 @@ PrimitiveChecker::PrimitiveChecker(const RobotModel& robot, const CollisionScene
   m.all = caps;
   m.world_a.resize(caps.size());
   m.world_b.resize(caps.size());
+  m.lanes_scratch.resize(caps.size());
+  for (const ArmCapsule& c : caps) {
+    const double len2 = (c.b - c.a).squaredNorm();
+    m.cap_len2.push_back(static_cast<float>(len2));
+    m.cap_inv_len2.push_back(len2 > 0 ? static_cast<float>(1.0 / len2) : 0.f);
+  }
   for (const auto& [bi, bj] : robot.SelfCollisionPairs()) {
     for (int i : capsules_of[bi]) {
       for (int j : capsules_of[bj]) m.self_pairs.emplace_back(i, j);
@@ -501,6 +669,12 @@ PrimitiveChecker::PrimitiveChecker(const RobotModel& robot, const CollisionScene
   for (int l = 0; l < n_leaves; ++l) {
     leaf_boxes.push_back(BoxOfPieces(m.pieces, l * kLeaf, std::min(n_pieces, (l + 1) * kLeaf)));
   }
+  for (const Box& box : leaf_boxes) {
+    for (int k = 0; k < 3; ++k) {
+      m.leaf_lo.push_back(static_cast<float>(box.min()[k]));
+      m.leaf_hi.push_back(static_cast<float>(box.max()[k]));
+    }
+  }
   const int n_nodes = (n_leaves + kLeaf - 1) / kLeaf;
   for (int n = 0; n < n_nodes; ++n) {
     const int begin = n * kLeaf, end = std::min(n_leaves, begin + kLeaf);
@@ -523,19 +697,59 @@ PrimitiveChecker::PrimitiveChecker(const RobotModel& robot, const CollisionScene
 
 PrimitiveChecker::~PrimitiveChecker() = default;
 
+namespace {
+// Non-finite or absurd joint values are never free (the float lanes would wrap them silently).
+bool Sane(const Joints& q) { return q.allFinite() && !(q.array().abs() > 1e6).any(); }
+}  // namespace
+
 bool PrimitiveChecker::IsFree(const Joints& q) {
   ++checks_;
-  return impl_->Free(q);
+  return Sane(q) && impl_->Free(q);
 }
 
 void PrimitiveChecker::AreFree(std::span<const Joints> qs, std::span<bool> out) {
   const size_t n = std::min(qs.size(), out.size());
   checks_ += static_cast<int64_t>(n);
-  for (size_t i = 0; i < n; ++i) out[i] = impl_->Free(qs[i]);
+  // Arbitrary configurations: forward kinematics in lanes, the hierarchy walked per lane.
+  for (size_t i = 0; i < n; i += 4) {
+    const int count = static_cast<int>(std::min<size_t>(4, n - i));
+    const unsigned hit = impl_->CollidingLanes(&qs[i], count, /*coherent=*/false,
+                                               /*stop_at_first=*/false);
+    for (int l = 0; l < count; ++l) out[i + l] = !(hit >> l & 1u) && Sane(qs[i + l]);
+  }
+}
+
+bool PrimitiveChecker::IsMotionFree(const Joints& a, const Joints& b, double max_step_m) {
+  if (!Sane(a) || !Sane(b)) return false;
+  const int n = MotionSteps(a, b, max_step_m, lever_m_);
+  // The ends first (one batch), then the n - 1 interior samples in blocks of 4 consecutive ones
+  // (nearby configurations share one walk of the obstacle hierarchy), the blocks in van der
+  // Corput order (coarse to fine) so that a colliding motion usually fails early.
+  const Joints ends[2] = {a, b};
+  checks_ += 2;
+  if (impl_->CollidingLanes(ends, 2, /*coherent=*/false, /*stop_at_first=*/true)) return false;
+  const int interior = n - 1;
+  const int blocks = (interior + 3) / 4;
+  int bits = 0;
+  while ((1 << bits) < blocks) ++bits;
+  const Joints step = (b - a) / n;
+  Joints q[4];
+  for (uint32_t i = 0; i < (1u << bits); ++i) {
+    uint32_t block = 0;
+    for (int k = 0; k < bits; ++k) block |= ((i >> k) & 1u) << (bits - 1 - k);
+    if (static_cast<int>(block) >= blocks) continue;
+    const int first = 4 * static_cast<int>(block) + 1;
+    const int count = std::min(4, n - first);
+    for (int l = 0; l < count; ++l) q[l] = a + step * (first + l);
+    checks_ += count;
+    if (impl_->CollidingLanes(q, count, /*coherent=*/true, /*stop_at_first=*/true)) return false;
+  }
+  return true;
 }
 
 double PrimitiveChecker::Clearance(const Joints& q) {
   ++checks_;
+  if (!Sane(q)) return -std::numeric_limits<double>::infinity();
   return impl_->Clearance(q);
 }
 

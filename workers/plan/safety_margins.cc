@@ -67,6 +67,8 @@ bool Ignored(const Obstacle& o, const ProtectedMotion& m) {
 MarginSummary InflateMargins(const RobotModel& robot, std::span<const ProtectedMotion> motions,
                              const MarginOptions& options, CollisionScene* scene) {
   const std::vector<LinkBody> bodies = robot.BodiesWithTool();
+  // The checkers' own interpolation (CollisionChecker::IsMotionFree), so the poses are theirs.
+  const JointLevers lever_m = JointLeverArms(robot);
   std::vector<Pose> poses;
   for (const ProtectedMotion& motion : motions) {
     for (size_t i = 0; i < motion.path.size(); ++i) {
@@ -74,7 +76,7 @@ MarginSummary InflateMargins(const RobotModel& robot, std::span<const ProtectedM
       if (i + 1 == motion.path.size()) break;
       const Joints& a = motion.path[i];
       const Joints& b = motion.path[i + 1];
-      const int steps = MotionSteps(a, b, options.max_step_m);
+      const int steps = MotionSteps(a, b, options.max_step_m, lever_m);
       for (int s = 1; s < steps; ++s)
         poses.push_back(Place(bodies, a + (b - a) * (double(s) / steps), &motion));
     }
