@@ -415,6 +415,9 @@ struct PrimitiveChecker::Impl {
   };
   std::vector<PlacedLanes> lanes_scratch;
   std::vector<float> leaf_lo, leaf_hi;  // leaf boxes, 3 floats per leaf
+  // Leaf bounding capsules: q0 xyz, d xyz, |d|^2, 1/|d|^2 (0 for a sphere), radius + slack.
+  std::vector<std::array<float, 9>> leaf_caps;
+  std::vector<float> cap_half_reach;  // per capsule: half its length plus its radius
   std::vector<float> cap_len2, cap_inv_len2;  // per capsule of `all` (rigid: configuration-free)
 
   void PlaceLanes(const Joints* q, int count) {
@@ -495,6 +498,14 @@ struct PrimitiveChecker::Impl {
           ls &= ls - 1;
           unsigned todo = LanesOverlap(pl.lo, pl.hi, &leaf_lo[3 * leaf], &leaf_hi[3 * leaf]) &
                           lanes & ~hit;
+          if (!todo) continue;
+          // The leaf's bounding capsule against all lanes at once.
+          const std::array<float, 9>& lb = leaf_caps[leaf];
+          todo &= Bits(CapsulesTouch(pl.p[0], pl.p[1], pl.p[2], pl.d[0], pl.d[1], pl.d[2],
+                                     Splat(cap_len2[c]), Splat(cap_inv_len2[c]), Splat(lb[0]),
+                                     Splat(lb[1]), Splat(lb[2]), Splat(lb[3]), Splat(lb[4]),
+                                     Splat(lb[5]), Splat(lb[6]), Splat(lb[7]),
+                                     Splat(lb[8] + all[c].radius)));
           while (todo) {
             const int l = __builtin_ctz(todo);
             todo &= todo - 1;
@@ -547,6 +558,14 @@ struct PrimitiveChecker::Impl {
     for (const auto& [i, j] : self_pairs) {
       const PlacedLanes& x = lanes_scratch[i];
       const PlacedLanes& y = lanes_scratch[j];
+      // Bounding spheres about the midpoints first: most pairs are far apart.
+      F4 gap2 = Splat(0.f);
+      for (int k = 0; k < 3; ++k) {
+        const F4 g = (x.p[k] + Splat(0.5f) * x.d[k]) - (y.p[k] + Splat(0.5f) * y.d[k]);
+        gap2 += g * g;
+      }
+      const F4 reach = Splat(cap_half_reach[i] + cap_half_reach[j]);
+      if (!(Bits(gap2 < reach * reach) & all_lanes & ~hit)) continue;
       hit |= Bits(CapsulesTouch(x.p[0], x.p[1], x.p[2], x.d[0], x.d[1], x.d[2],
                                 Splat(cap_len2[i]), Splat(cap_inv_len2[i]), y.p[0], y.p[1],
                                 y.p[2], y.d[0], y.d[1], y.d[2], Splat(cap_len2[j]),
@@ -622,6 +641,7 @@ PrimitiveChecker::PrimitiveChecker(const RobotModel& robot, const CollisionScene
     const double len2 = (c.b - c.a).squaredNorm();
     m.cap_len2.push_back(static_cast<float>(len2));
     m.cap_inv_len2.push_back(len2 > 0 ? static_cast<float>(1.0 / len2) : 0.f);
+    m.cap_half_reach.push_back(static_cast<float>(0.5 * std::sqrt(len2) + c.radius + kCoarseSlackM));
   }
   for (const auto& [bi, bj] : robot.SelfCollisionPairs()) {
     for (int i : capsules_of[bi]) {
@@ -668,6 +688,15 @@ PrimitiveChecker::PrimitiveChecker(const RobotModel& robot, const CollisionScene
   std::vector<Box> leaf_boxes, node_boxes;
   for (int l = 0; l < n_leaves; ++l) {
     leaf_boxes.push_back(BoxOfPieces(m.pieces, l * kLeaf, std::min(n_pieces, (l + 1) * kLeaf)));
+  }
+  for (const Bound& b : m.leaf_bounds) {
+    const Eigen::Vector3d d = b.b - b.a;
+    const double e = d.squaredNorm();
+    m.leaf_caps.push_back({static_cast<float>(b.a.x()), static_cast<float>(b.a.y()),
+                           static_cast<float>(b.a.z()), static_cast<float>(d.x()),
+                           static_cast<float>(d.y()), static_cast<float>(d.z()),
+                           static_cast<float>(e), e > 0 ? static_cast<float>(1.0 / e) : 0.f,
+                           static_cast<float>(b.radius + kCoarseSlackM)});
   }
   for (const Box& box : leaf_boxes) {
     for (int k = 0; k < 3; ++k) {
