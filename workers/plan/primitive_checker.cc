@@ -307,6 +307,9 @@ struct PrimitiveChecker::Impl {
   std::vector<int> self_lanes;
   std::vector<float> cap_soa;  // scratch, see Free()
   std::vector<HalfSpace> planes;
+  // planes_of[c]: the planes capsule c of `all` can reach in some configuration (per-link reach
+  // culling, Botterill et al. 2017 section 3.4: the others are never tested for it).
+  std::vector<std::vector<HalfSpace>> planes_of;
   bool base_blocked = false;
 
   std::vector<Piece> pieces;        // in leaf order
@@ -364,8 +367,9 @@ struct PrimitiveChecker::Impl {
     return false;
   }
 
-  bool SegHitsPlanes(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double r) const {
-    for (const HalfSpace& h : planes) {
+  bool SegHitsPlanes(size_t c, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                     double r) const {
+    for (const HalfSpace& h : planes_of[c]) {
       if (std::max(h.normal.dot(a), h.normal.dot(b)) + r + h.margin_m > h.offset) return true;
     }
     return false;
@@ -376,7 +380,7 @@ struct PrimitiveChecker::Impl {
     Place(q);
     // `all` lists moving capsules first (distal first), then fixed ones; see the constructor.
     for (size_t i = 0; i < moving.size(); ++i) {
-      if (SegHitsPlanes(world_a[i], world_b[i], all[i].radius)) return false;
+      if (SegHitsPlanes(i, world_a[i], world_b[i], all[i].radius)) return false;
     }
     for (size_t i = 0; i < moving.size(); ++i) {
       if (SegHitsObstacles(world_a[i], world_b[i], all[i].radius)) return false;
@@ -533,7 +537,7 @@ struct PrimitiveChecker::Impl {
     for (size_t c = 0; c < moving.size(); ++c) {
       const PlacedLanes& pl = lanes_scratch[c];
       const F4 r = Splat(all[c].radius);
-      for (const HalfSpace& h : planes) {
+      for (const HalfSpace& h : planes_of[c]) {
         const F4 nx = Splat(h.normal.x()), ny = Splat(h.normal.y()), nz = Splat(h.normal.z());
         const F4 da = nx * pl.p[0] + ny * pl.p[1] + nz * pl.p[2];
         const F4 db = da + nx * pl.d[0] + ny * pl.d[1] + nz * pl.d[2];
@@ -660,6 +664,20 @@ PrimitiveChecker::PrimitiveChecker(const RobotModel& robot, const CollisionScene
     for (size_t k = 0; k < 4; ++k) m.self_lanes.push_back(padded[g + k].second);
   }
   m.planes = scene.planes;
+  // A capsule reaches plane n . x <= offset only if its reach cylinder about the base axis
+  // (ReachOfPoint of both ends, plus the radius) does: max over the cylinder of n . x is
+  // radius |n_xy| + max(n_z lo, n_z hi).
+  for (const ArmCapsule& c : m.all) {
+    const ReachCylinder ra = ReachOfPoint(c.frame, c.a), rb = ReachOfPoint(c.frame, c.b);
+    const double rho = std::max(ra.radius_m, rb.radius_m);
+    const double lo = std::min(ra.lo_z_m, rb.lo_z_m), hi = std::max(ra.hi_z_m, rb.hi_z_m);
+    m.planes_of.emplace_back();
+    for (const HalfSpace& h : m.planes) {
+      const double farthest = rho * std::hypot(h.normal.x(), h.normal.y()) +
+                              std::max(h.normal.z() * lo, h.normal.z() * hi);
+      if (farthest + c.radius + h.margin_m + kCoarseSlackM > h.offset) m.planes_of.back().push_back(h);
+    }
+  }
 
   // Obstacle pieces, split so that none is longer than kMaxPieceM (the union is unchanged).
   for (const Obstacle& o : scene.obstacles) {
