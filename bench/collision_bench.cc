@@ -9,7 +9,8 @@
 // colliding, early exit) or along free motions (every sample checked: a direct path; each from a
 // free configuration a quarter of the way to the next one, kept if free). BM_AreFree checks the
 // configurations in batches of 64 (AreFree; the primitive checker works 4 lanes at a time).
-// Counters: ns_per_check, free_fraction, checks_per_motion. Run:
+// Counters: ns_per_check, free_fraction, checks_per_motion (and, on free motions,
+// checks_per_motion_reach_1_2m: the samples of the former single-reach MotionSteps). Run:
 //   build/bench/vb_collision_bench --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 #include <memory>
 #include <random>
@@ -153,12 +154,16 @@ void BM_Motion(benchmark::State& state) {
   std::vector<std::unique_ptr<CollisionChecker>> checkers;
   for (const CollisionScene& scene : f.scenes) checkers.push_back(Make(state.range(0), f.robot, scene));
   const bool free_only = state.range(1) >= 1, by_is_free = state.range(1) == 2;
-  int64_t motions = 0, free = 0;
+  int64_t motions = 0, free = 0, uniform_checks = 0;
   size_t k = 0;
   for (auto _ : state) {
     const int v = static_cast<int>(k % kVines);
     const std::vector<Joints>& qs = f.free[v];
     const auto& fm = f.free_motions[v];
+    if (free_only) {
+      const size_t i = (k / kVines) % fm.size();
+      uniform_checks += MotionSteps(fm[i].first, fm[i].second, 0.01, kDefaultReachM) + 1;
+    }
     const size_t i = (k / kVines) % (free_only ? fm.size() : qs.size() - 1);
     const bool ok = by_is_free ? MotionByIsFree(*checkers[v], fm[i].first, fm[i].second)
                     : free_only ? checkers[v]->IsMotionFree(fm[i].first, fm[i].second, 0.01)
@@ -173,6 +178,11 @@ void BM_Motion(benchmark::State& state) {
   state.counters["ns_per_check"] = benchmark::Counter(
       static_cast<double>(checks) * 1e-9, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
   state.counters["checks_per_motion"] = static_cast<double>(checks) / std::max<int64_t>(1, motions);
+  // What the former single 1.2 m reach would sample on the same free motions (all samples).
+  if (free_only) {
+    state.counters["checks_per_motion_reach_1_2m"] =
+        static_cast<double>(uniform_checks) / std::max<int64_t>(1, motions);
+  }
   state.counters["free_fraction"] = static_cast<double>(free) / std::max<int64_t>(1, motions);
 }
 
