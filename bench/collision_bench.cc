@@ -4,9 +4,13 @@
 // simulated vines (sim::GenerateScene, seeds 1100-1107, ground truth, no neighbours) with the
 // default UR5 mount and a mill-end tool. Configurations are drawn uniformly within the joint
 // limits (fixed seed); `free` variants use only configurations that are free (no early exit: the
-// worst case for a checker), `motion` variants check straight joint-space motions between free
-// configurations at 1 cm resolution (IsMotionFree; what a planner asks). Counters: ns_per_check,
-// free_fraction. Run:
+// worst case for a checker), `motion` variants check straight joint-space motions at 1 cm
+// resolution (IsMotionFree; what a planner asks): between consecutive free configurations (mostly
+// colliding, early exit) or along free motions (every sample checked: a direct path; each from a
+// free configuration a quarter of the way to the next one, kept if free). BM_AreFree checks the
+// configurations in batches of 64 (AreFree; the primitive checker works 4 lanes at a time).
+// Counters: ns_per_check, free_fraction, checks_per_motion (and, on free motions,
+// checks_per_motion_reach_1_2m: the samples of the former single-reach MotionSteps). Run:
 //   build/bench/vb_collision_bench --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 #include <memory>
 #include <random>
@@ -37,6 +41,7 @@ struct Fixture {
   std::vector<CollisionScene> scenes;
   std::vector<Joints> random;                  // uniform within the limits
   std::vector<std::vector<Joints>> free;       // per scene: free configurations only
+  std::vector<std::vector<std::pair<Joints, Joints>>> free_motions;  // per scene
 
   Fixture() {
     sim::VineGeneratorOptions options;
@@ -60,6 +65,14 @@ struct Fixture {
       free.emplace_back();
       for (const Joints& q : random) {
         if (checker.IsFree(q)) free.back().push_back(q);
+      }
+      free_motions.emplace_back();
+      const std::vector<Joints>& qs = free.back();
+      for (size_t i = 0; i + 1 < qs.size() && free_motions.back().size() < 256; ++i) {
+        const Joints b = qs[i] + 0.25 * (qs[i + 1] - qs[i]);
+        if (checker.CollisionChecker::IsMotionFree(qs[i], b, 0.01)) {
+          free_motions.back().emplace_back(qs[i], b);
+        }
       }
     }
   }
@@ -100,18 +113,61 @@ void BM_Check(benchmark::State& state) {
   state.counters["free_fraction"] = static_cast<double>(free) / std::max<int64_t>(1, checks);
 }
 
-// Motions between consecutive free configurations of a scene, 1 cm resolution.
+// state.range(0): checker kind, range(1): 0 free configurations, 1 also colliding ones.
+void BM_AreFree(benchmark::State& state) {
+  const Fixture& f = GetFixture();
+  std::vector<std::unique_ptr<CollisionChecker>> checkers;
+  for (const CollisionScene& scene : f.scenes) checkers.push_back(Make(state.range(0), f.robot, scene));
+  const bool free_only = state.range(1) == 1;
+  constexpr size_t kBatch = 64;
+  bool out[kBatch];
+  int64_t checks = 0, free = 0;
+  size_t k = 0;
+  for (auto _ : state) {
+    const int v = static_cast<int>(k % kVines);
+    const std::vector<Joints>& qs = free_only ? f.free[v] : f.random;
+    const size_t first = ((k / kVines) * kBatch) % (qs.size() - kBatch);
+    checkers[v]->AreFree(std::span<const Joints>(&qs[first], kBatch), out);
+    benchmark::DoNotOptimize(out);
+    for (bool b : out) free += b;
+    checks += kBatch;
+    ++k;
+  }
+  state.counters["ns_per_check"] = benchmark::Counter(
+      static_cast<double>(checks) * 1e-9, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.counters["free_fraction"] = static_cast<double>(free) / std::max<int64_t>(1, checks);
+}
+
+// state.range(0): checker kind; range(1): 0 motions between consecutive free configurations of
+// a scene, 1 free motions only, 2 free motions with IsFree at each sample (unbatched, the same
+// samples). 1 cm resolution.
+bool MotionByIsFree(CollisionChecker& checker, const Joints& a, const Joints& b) {
+  const int n = MotionSteps(a, b, 0.01, checker.lever_m());
+  for (int k = 0; k <= n; ++k) {
+    if (!checker.IsFree(a + (b - a) * (double(k) / n))) return false;
+  }
+  return true;
+}
+
 void BM_Motion(benchmark::State& state) {
   const Fixture& f = GetFixture();
   std::vector<std::unique_ptr<CollisionChecker>> checkers;
   for (const CollisionScene& scene : f.scenes) checkers.push_back(Make(state.range(0), f.robot, scene));
-  int64_t motions = 0, free = 0;
+  const bool free_only = state.range(1) >= 1, by_is_free = state.range(1) == 2;
+  int64_t motions = 0, free = 0, uniform_checks = 0;
   size_t k = 0;
   for (auto _ : state) {
     const int v = static_cast<int>(k % kVines);
     const std::vector<Joints>& qs = f.free[v];
-    const size_t i = (k / kVines) % (qs.size() - 1);
-    const bool ok = checkers[v]->IsMotionFree(qs[i], qs[i + 1], 0.01);
+    const auto& fm = f.free_motions[v];
+    if (free_only) {
+      const size_t i = (k / kVines) % fm.size();
+      uniform_checks += MotionSteps(fm[i].first, fm[i].second, 0.01, kDefaultReachM) + 1;
+    }
+    const size_t i = (k / kVines) % (free_only ? fm.size() : qs.size() - 1);
+    const bool ok = by_is_free ? MotionByIsFree(*checkers[v], fm[i].first, fm[i].second)
+                    : free_only ? checkers[v]->IsMotionFree(fm[i].first, fm[i].second, 0.01)
+                                : checkers[v]->IsMotionFree(qs[i], qs[i + 1], 0.01);
     benchmark::DoNotOptimize(ok);
     free += ok;
     ++motions;
@@ -122,6 +178,11 @@ void BM_Motion(benchmark::State& state) {
   state.counters["ns_per_check"] = benchmark::Counter(
       static_cast<double>(checks) * 1e-9, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
   state.counters["checks_per_motion"] = static_cast<double>(checks) / std::max<int64_t>(1, motions);
+  // What the former single 1.2 m reach would sample on the same free motions (all samples).
+  if (free_only) {
+    state.counters["checks_per_motion_reach_1_2m"] =
+        static_cast<double>(uniform_checks) / std::max<int64_t>(1, motions);
+  }
   state.counters["free_fraction"] = static_cast<double>(free) / std::max<int64_t>(1, motions);
 }
 
@@ -133,11 +194,18 @@ BENCHMARK(BM_Check)
     ->Args({kFclPrimitives, 1})
     ->Args({kFclMesh, 0})
     ->Args({kFclMesh, 1});
+BENCHMARK(BM_AreFree)
+    ->ArgNames({"checker", "free_only"})
+    ->Args({kPrimitive, 0})
+    ->Args({kPrimitive, 1});
 BENCHMARK(BM_Motion)
-    ->ArgNames({"checker"})
-    ->Arg(kPrimitive)
-    ->Arg(kFclPrimitives)
-    ->Arg(kFclMesh);
+    ->ArgNames({"checker", "free_only"})
+    ->Args({kPrimitive, 0})
+    ->Args({kPrimitive, 1})
+    ->Args({kPrimitive, 2})
+    ->Args({kFclPrimitives, 0})
+    ->Args({kFclPrimitives, 1})
+    ->Args({kFclMesh, 0});
 
 }  // namespace
 }  // namespace vb::plan

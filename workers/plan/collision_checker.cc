@@ -12,28 +12,47 @@ void CollisionChecker::AreFree(std::span<const Joints> qs, std::span<bool> out) 
   for (size_t i = 0; i < qs.size() && i < out.size(); ++i) out[i] = IsFree(qs[i]);
 }
 
-JointLevers JointLeverArms(const RobotModel& robot) {
+namespace {
+
+// Carries the cylinder about z_j that holds point p of frame `frame` (for every q_{j+1..frame})
+// down the chain, calling visit(j, the cylinder about z_{j-1}) for j = frame .. 1; see the header.
+template <typename Visit>
+ReachCylinder CarryDown(int frame, const Eigen::Vector3d& p, Visit visit) {
   const DhParameters& dh = Ur5Dh();
+  ReachCylinder c{std::hypot(p.x(), p.y()), p.z(), p.z()};
+  for (int j = frame; j >= 1; --j) {
+    const double ca = std::cos(dh.alpha[j - 1]), sa = std::sin(dh.alpha[j - 1]);
+    const double a = std::abs(dh.a[j - 1]), z = std::max(std::abs(c.lo_z_m), std::abs(c.hi_z_m));
+    const double lo_c = std::min(c.lo_z_m * ca, c.hi_z_m * ca);
+    const double hi_c = std::max(c.lo_z_m * ca, c.hi_z_m * ca);
+    const double rho = c.radius_m;
+    c.lo_z_m = dh.d[j - 1] + lo_c - rho * std::abs(sa);
+    c.hi_z_m = dh.d[j - 1] + hi_c + rho * std::abs(sa);
+    c.radius_m =
+        std::sqrt((rho + a) * (rho + a) + 2 * rho * z * std::abs(sa * ca) + z * z * sa * sa);
+    visit(j, c);
+  }
+  return c;
+}
+
+}  // namespace
+
+JointLevers JointLeverArms(const RobotModel& robot) {
   JointLevers lever{};
   for (const LinkBody& body : robot.BodiesWithTool()) {
     for (const Capsule& c : body.capsules) {
       for (const Eigen::Vector3d& e : {c.a, c.b}) {
-        // The cylinder about z_j holding the endpoint for every q_{j+1..k}; see the header.
-        double rho = std::hypot(e.x(), e.y()), lo = e.z(), hi = e.z();
-        for (int j = body.frame; j >= 1; --j) {
-          const double ca = std::cos(dh.alpha[j - 1]), sa = std::sin(dh.alpha[j - 1]);
-          const double a = std::abs(dh.a[j - 1]), z = std::max(std::abs(lo), std::abs(hi));
-          const double lo_c = std::min(lo * ca, hi * ca), hi_c = std::max(lo * ca, hi * ca);
-          lo = dh.d[j - 1] + lo_c - rho * std::abs(sa);
-          hi = dh.d[j - 1] + hi_c + rho * std::abs(sa);
-          rho = std::sqrt((rho + a) * (rho + a) + 2 * rho * z * std::abs(sa * ca) +
-                          z * z * sa * sa);
-          lever[j - 1] = std::max(lever[j - 1], rho + c.radius);
-        }
+        CarryDown(body.frame, e, [&](int j, const ReachCylinder& cyl) {
+          lever[j - 1] = std::max(lever[j - 1], cyl.radius_m + c.radius);
+        });
       }
     }
   }
   return lever;
+}
+
+ReachCylinder ReachOfPoint(int frame, const Eigen::Vector3d& p) {
+  return CarryDown(std::clamp(frame, 0, 6), p, [](int, const ReachCylinder&) {});
 }
 
 int MotionSteps(const Joints& a, const Joints& b, double max_step_m, double reach_m) {

@@ -52,6 +52,15 @@ constexpr JointLevers UniformLevers(double reach_m) {
 // 6) and looser toward the base, where it merges the arm's offsets into one cylinder.
 JointLevers JointLeverArms(const RobotModel& robot);
 
+// A cylinder about the base z axis (DH frame 0): radius_m, heights [lo_z_m, hi_z_m].
+struct ReachCylinder {
+  double radius_m = 0, lo_z_m = 0, hi_z_m = 0;
+};
+// A cylinder that holds point `p` of DH frame `frame` (0..6, UR5 chain) in every configuration:
+// the chain bound of JointLeverArms carried down to frame 0. For per-link reach culling
+// (Botterill et al. 2017 section 3.4).
+ReachCylinder ReachOfPoint(int frame, const Eigen::Vector3d& p);
+
 class CollisionChecker {
  public:
   virtual ~CollisionChecker() = default;

@@ -292,6 +292,28 @@ TEST(JointLeverArms, WristJointsMoveLessThanTheShoulder) {
   EXPECT_LT(3 * MotionSteps(a, b, 0.01, lever), MotionSteps(a, b, 0.01));
 }
 
+TEST(ReachOfPoint, HoldsThePointInEveryConfiguration) {
+  const RobotModel robot = DefaultUr5(SecateurTool());
+  std::mt19937 rng(1121);
+  double widest = 0;
+  for (int trial = 0; trial < 2000; ++trial) {
+    const auto f = LinkFrames(RandomJoints(rng, robot.limits));
+    for (const LinkBody& body : robot.BodiesWithTool()) {
+      for (const Capsule& c : body.capsules) {
+        for (const Eigen::Vector3d& e : {c.a, c.b}) {
+          const ReachCylinder cyl = ReachOfPoint(body.frame, e);
+          const Eigen::Vector3d p = f[body.frame] * e;
+          ASSERT_LE(std::hypot(p.x(), p.y()), cyl.radius_m + 1e-12) << body.name;
+          ASSERT_GE(p.z(), cyl.lo_z_m - 1e-12) << body.name;
+          ASSERT_LE(p.z(), cyl.hi_z_m + 1e-12) << body.name;
+          if (body.frame == 6) widest = std::max(widest, std::hypot(p.x(), p.y()) / cyl.radius_m);
+        }
+      }
+    }
+  }
+  EXPECT_GT(widest, 0.8);  // not vacuous
+}
+
 TEST(CollisionChecker, MotionThroughAnObstacleIsNotFree) {
   const RobotModel robot = DefaultUr5(MillEnd());
   Joints a = Raised(), b = Raised();

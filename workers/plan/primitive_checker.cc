@@ -307,6 +307,9 @@ struct PrimitiveChecker::Impl {
   std::vector<int> self_lanes;
   std::vector<float> cap_soa;  // scratch, see Free()
   std::vector<HalfSpace> planes;
+  // planes_of[c]: the planes capsule c of `all` can reach in some configuration (per-link reach
+  // culling, Botterill et al. 2017 section 3.4: the others are never tested for it).
+  std::vector<std::vector<HalfSpace>> planes_of;
   bool base_blocked = false;
 
   std::vector<Piece> pieces;        // in leaf order
@@ -364,8 +367,9 @@ struct PrimitiveChecker::Impl {
     return false;
   }
 
-  bool SegHitsPlanes(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double r) const {
-    for (const HalfSpace& h : planes) {
+  bool SegHitsPlanes(size_t c, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                     double r) const {
+    for (const HalfSpace& h : planes_of[c]) {
       if (std::max(h.normal.dot(a), h.normal.dot(b)) + r + h.margin_m > h.offset) return true;
     }
     return false;
@@ -376,7 +380,7 @@ struct PrimitiveChecker::Impl {
     Place(q);
     // `all` lists moving capsules first (distal first), then fixed ones; see the constructor.
     for (size_t i = 0; i < moving.size(); ++i) {
-      if (SegHitsPlanes(world_a[i], world_b[i], all[i].radius)) return false;
+      if (SegHitsPlanes(i, world_a[i], world_b[i], all[i].radius)) return false;
     }
     for (size_t i = 0; i < moving.size(); ++i) {
       if (SegHitsObstacles(world_a[i], world_b[i], all[i].radius)) return false;
@@ -415,6 +419,9 @@ struct PrimitiveChecker::Impl {
   };
   std::vector<PlacedLanes> lanes_scratch;
   std::vector<float> leaf_lo, leaf_hi;  // leaf boxes, 3 floats per leaf
+  // Leaf bounding capsules: q0 xyz, d xyz, |d|^2, 1/|d|^2 (0 for a sphere), radius + slack.
+  std::vector<std::array<float, 9>> leaf_caps;
+  std::vector<float> cap_half_reach;  // per capsule: half its length plus its radius
   std::vector<float> cap_len2, cap_inv_len2;  // per capsule of `all` (rigid: configuration-free)
 
   void PlaceLanes(const Joints* q, int count) {
@@ -495,6 +502,14 @@ struct PrimitiveChecker::Impl {
           ls &= ls - 1;
           unsigned todo = LanesOverlap(pl.lo, pl.hi, &leaf_lo[3 * leaf], &leaf_hi[3 * leaf]) &
                           lanes & ~hit;
+          if (!todo) continue;
+          // The leaf's bounding capsule against all lanes at once.
+          const std::array<float, 9>& lb = leaf_caps[leaf];
+          todo &= Bits(CapsulesTouch(pl.p[0], pl.p[1], pl.p[2], pl.d[0], pl.d[1], pl.d[2],
+                                     Splat(cap_len2[c]), Splat(cap_inv_len2[c]), Splat(lb[0]),
+                                     Splat(lb[1]), Splat(lb[2]), Splat(lb[3]), Splat(lb[4]),
+                                     Splat(lb[5]), Splat(lb[6]), Splat(lb[7]),
+                                     Splat(lb[8] + all[c].radius)));
           while (todo) {
             const int l = __builtin_ctz(todo);
             todo &= todo - 1;
@@ -522,7 +537,7 @@ struct PrimitiveChecker::Impl {
     for (size_t c = 0; c < moving.size(); ++c) {
       const PlacedLanes& pl = lanes_scratch[c];
       const F4 r = Splat(all[c].radius);
-      for (const HalfSpace& h : planes) {
+      for (const HalfSpace& h : planes_of[c]) {
         const F4 nx = Splat(h.normal.x()), ny = Splat(h.normal.y()), nz = Splat(h.normal.z());
         const F4 da = nx * pl.p[0] + ny * pl.p[1] + nz * pl.p[2];
         const F4 db = da + nx * pl.d[0] + ny * pl.d[1] + nz * pl.d[2];
@@ -547,6 +562,14 @@ struct PrimitiveChecker::Impl {
     for (const auto& [i, j] : self_pairs) {
       const PlacedLanes& x = lanes_scratch[i];
       const PlacedLanes& y = lanes_scratch[j];
+      // Bounding spheres about the midpoints first: most pairs are far apart.
+      F4 gap2 = Splat(0.f);
+      for (int k = 0; k < 3; ++k) {
+        const F4 g = (x.p[k] + Splat(0.5f) * x.d[k]) - (y.p[k] + Splat(0.5f) * y.d[k]);
+        gap2 += g * g;
+      }
+      const F4 reach = Splat(cap_half_reach[i] + cap_half_reach[j]);
+      if (!(Bits(gap2 < reach * reach) & all_lanes & ~hit)) continue;
       hit |= Bits(CapsulesTouch(x.p[0], x.p[1], x.p[2], x.d[0], x.d[1], x.d[2],
                                 Splat(cap_len2[i]), Splat(cap_inv_len2[i]), y.p[0], y.p[1],
                                 y.p[2], y.d[0], y.d[1], y.d[2], Splat(cap_len2[j]),
@@ -622,6 +645,7 @@ PrimitiveChecker::PrimitiveChecker(const RobotModel& robot, const CollisionScene
     const double len2 = (c.b - c.a).squaredNorm();
     m.cap_len2.push_back(static_cast<float>(len2));
     m.cap_inv_len2.push_back(len2 > 0 ? static_cast<float>(1.0 / len2) : 0.f);
+    m.cap_half_reach.push_back(static_cast<float>(0.5 * std::sqrt(len2) + c.radius + kCoarseSlackM));
   }
   for (const auto& [bi, bj] : robot.SelfCollisionPairs()) {
     for (int i : capsules_of[bi]) {
@@ -640,6 +664,20 @@ PrimitiveChecker::PrimitiveChecker(const RobotModel& robot, const CollisionScene
     for (size_t k = 0; k < 4; ++k) m.self_lanes.push_back(padded[g + k].second);
   }
   m.planes = scene.planes;
+  // A capsule reaches plane n . x <= offset only if its reach cylinder about the base axis
+  // (ReachOfPoint of both ends, plus the radius) does: max over the cylinder of n . x is
+  // radius |n_xy| + max(n_z lo, n_z hi).
+  for (const ArmCapsule& c : m.all) {
+    const ReachCylinder ra = ReachOfPoint(c.frame, c.a), rb = ReachOfPoint(c.frame, c.b);
+    const double rho = std::max(ra.radius_m, rb.radius_m);
+    const double lo = std::min(ra.lo_z_m, rb.lo_z_m), hi = std::max(ra.hi_z_m, rb.hi_z_m);
+    m.planes_of.emplace_back();
+    for (const HalfSpace& h : m.planes) {
+      const double farthest = rho * std::hypot(h.normal.x(), h.normal.y()) +
+                              std::max(h.normal.z() * lo, h.normal.z() * hi);
+      if (farthest + c.radius + h.margin_m + kCoarseSlackM > h.offset) m.planes_of.back().push_back(h);
+    }
+  }
 
   // Obstacle pieces, split so that none is longer than kMaxPieceM (the union is unchanged).
   for (const Obstacle& o : scene.obstacles) {
@@ -668,6 +706,15 @@ PrimitiveChecker::PrimitiveChecker(const RobotModel& robot, const CollisionScene
   std::vector<Box> leaf_boxes, node_boxes;
   for (int l = 0; l < n_leaves; ++l) {
     leaf_boxes.push_back(BoxOfPieces(m.pieces, l * kLeaf, std::min(n_pieces, (l + 1) * kLeaf)));
+  }
+  for (const Bound& b : m.leaf_bounds) {
+    const Eigen::Vector3d d = b.b - b.a;
+    const double e = d.squaredNorm();
+    m.leaf_caps.push_back({static_cast<float>(b.a.x()), static_cast<float>(b.a.y()),
+                           static_cast<float>(b.a.z()), static_cast<float>(d.x()),
+                           static_cast<float>(d.y()), static_cast<float>(d.z()),
+                           static_cast<float>(e), e > 0 ? static_cast<float>(1.0 / e) : 0.f,
+                           static_cast<float>(b.radius + kCoarseSlackM)});
   }
   for (const Box& box : leaf_boxes) {
     for (int k = 0; k < 3; ++k) {
