@@ -32,6 +32,7 @@ using plan::Joints;
 
 struct CheckerRecord {
   std::vector<double> path_s, vine_s, checks_per_path, check_ns;
+  std::map<std::string, std::vector<double>> stage_s;  // per vine
   int reachable = 0, planned = 0, passes = 0;
   std::map<std::string, int> unplanned;  // reason -> cuts
 };
@@ -70,7 +71,9 @@ double IkNs(const plan::JointLimits& limits) {
 }
 
 nlohmann::json Summary(const CheckerRecord& r) {
-  return {{"per_path_median_s", Median(r.path_s)},
+  nlohmann::json stages = nlohmann::json::object();
+  for (const auto& [name, values] : r.stage_s) stages[name] = Median(values);
+  return {{"stage_median_s", stages},{"per_path_median_s", Median(r.path_s)},
           {"per_path_p95_s", Quantile(r.path_s, 0.95)},
           {"vine_median_s", Median(r.vine_s)},
           {"checks_per_path", Median(r.checks_per_path)},
@@ -127,6 +130,11 @@ absl::Status RunBenchPlan(Flags& flags) {
       CheckerRecord& r = records[kind];
       const plan::PlanStats& s = result->stats;
       r.vine_s.push_back(s.total_s);
+      for (const auto& [name, value] :
+           {std::pair<const char*, double>{"scene", s.scene_s}, {"cut_motions", s.cut_motions_s},
+            {"margins", s.margins_s}, {"ordering", s.ordering_s}, {"paths", s.paths_s},
+            {"timing", s.timing_s}})
+        r.stage_s[name].push_back(value);
       for (const plan::PathRecord& p : s.paths) {
         r.path_s.push_back(p.planning_s);
         r.checks_per_path.push_back(static_cast<double>(p.checks));

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "app/plan_flags.h"
 
+#include <cmath>
+
 #include "absl/strings/str_cat.h"
 #include "core/status_macros.h"
 #include "workers/plan/tool.h"
@@ -20,8 +22,17 @@ absl::StatusOr<PlanSetup> ParsePlanSetup(Flags& flags) {
   VB_ASSIGN_OR_RETURN(const std::string tool, flags.String("tool", "mill_end"));
   VB_ASSIGN_OR_RETURN(const std::string checker, flags.String("checker", "primitives"));
   VB_ASSIGN_OR_RETURN(const double max_margin_m, flags.Double("max-margin-m", 0.03));
-  VB_ASSIGN_OR_RETURN(const double path_time_limit_s, flags.Double("path-time-limit-s", 1.0));
+  VB_ASSIGN_OR_RETURN(const double path_time_limit_s, flags.Double("path-time-limit-s", 0.25));
   PlanSetup setup;
+  plan::CutMotionOptions& cut = setup.options.cut_motion;
+  VB_ASSIGN_OR_RETURN(cut.sweep_m, flags.Double("sweep-m", cut.sweep_m));
+  VB_ASSIGN_OR_RETURN(cut.max_slide_m, flags.Double("max-slide-m", cut.max_slide_m));
+  VB_ASSIGN_OR_RETURN(const double tilt_deg, flags.Double("max-tilt-deg", cut.max_tilt_rad * 180 / M_PI));
+  VB_ASSIGN_OR_RETURN(const int64_t tilt_steps, flags.Int("tilt-steps", cut.tilt_steps));
+  VB_ASSIGN_OR_RETURN(const int64_t passes, flags.Int("max-passes", setup.options.max_passes));
+  cut.max_tilt_rad = tilt_deg * M_PI / 180;
+  cut.tilt_steps = static_cast<int>(tilt_steps);
+  setup.options.max_passes = static_cast<int>(passes);
   if (tool == "mill_end") {
     setup.robot = plan::DefaultUr5(plan::MillEndTool());
   } else if (tool == "secateur") {

@@ -17,7 +17,7 @@ struct PlanSetup {
 };
 
 // --tool mill_end|secateur (default mill_end), --checker primitives|fcl_primitives|fcl_mesh
-// (default primitives), --max-margin-m M (default 0.03), --path-time-limit-s T (default 1.0).
+// (default primitives), --max-margin-m M (default 0.03), --path-time-limit-s T (default 0.25).
 // INVALID_ARGUMENT naming the flag.
 absl::StatusOr<PlanSetup> ParsePlanSetup(Flags& flags);
 

@@ -64,10 +64,11 @@ TEST(CollisionScene, CanesBecomeShortCapsulesInTheBaseFrame) {
     const int expected = std::max<int>(1, std::lround(cane.polyline.Length() / 0.03));
     EXPECT_EQ(count, expected) << "cane " << cane.id.value;
   }
-  // The trunk's base lies on the ground: 0.55 m below the arm base.
+  // The trunk's base, moved into the arm base frame by the mount's inverse, written out.
   const Cane& trunk = vine.canes.front();
+  const Eigen::Isometry3d mount = DefaultPlatformFromArmBase();
   EXPECT_LT((base_from_platform * trunk.polyline.points.front() -
-             (trunk.polyline.points.front() - Eigen::Vector3d(0, 0.35, 0.55)))
+             mount.linear().transpose() * (trunk.polyline.points.front() - mount.translation()))
                 .norm(),
             1e-12);
   int heads = 0, wires = 0, posts = 0, platform = 0;

@@ -18,6 +18,7 @@ absl::Status CutMotionOptions::Validate() const {
     return absl::InvalidArgumentError("options.approach_sides: must be 1 or 2");
   }
   if (tilt_steps < 0) return absl::InvalidArgumentError("options.tilt_steps: must be >= 0");
+  if (alternatives < 0) return absl::InvalidArgumentError("options.alternatives: must be >= 0");
   if (!(max_tilt_rad >= 0 && max_tilt_rad < M_PI / 2)) {
     return absl::InvalidArgumentError("options.max_tilt_rad: must be in [0, pi/2)");
   }
@@ -199,10 +200,14 @@ std::optional<double> EvaluatePath(CollisionChecker& checker, const std::vector<
   return clearance;
 }
 
+// Cut configurations closer than this in every joint are one choice, not two.
+constexpr double kDistinctRad = 0.5;
+
 CutMotion Fail(CutMotion motion, CutMotionOutcome outcome, std::string message) {
   motion.outcome = outcome;
   motion.message = std::move(message);
   motion.path.clear();
+  motion.alternatives.clear();
   return motion;
 }
 
@@ -265,9 +270,16 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
     }
     // Boolean checks first, exact clearance only for strokes that are free: in clutter most
     // strokes collide, and Clearance costs several IsFree. A path's clearance is at most its cut
-    // configuration's, which bounds the search once one path is found.
-    double best = -std::numeric_limits<double>::infinity();
-    std::vector<Joints> path, best_path;
+    // configuration's, which bounds the search once enough paths are found. The best
+    // 1 + options.alternatives paths whose cut configurations differ are kept: a motion that is
+    // free may still be out of the paths' reach (an arm threaded behind the wires), and the
+    // planner then tries the next.
+    const size_t keep = 1 + static_cast<size_t>(options.alternatives);
+    std::vector<std::pair<double, std::vector<Joints>>> found;  // by decreasing clearance
+    auto bar = [&] {
+      return found.size() < keep ? -std::numeric_limits<double>::infinity() : found.back().first;
+    };
+    std::vector<Joints> path;
     for (Candidate& candidate : candidates) {
       if (deadline.Expired()) return Fail(motion, CutMotionOutcome::kDeadline, what + ": deadline");
       const StrokeResult stroke =
@@ -277,22 +289,35 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
       ++strokes_followed;
       if (stroke == StrokeResult::kCollides) continue;
       candidate.clearance_m = checker->Clearance(candidate.q);
-      if (candidate.clearance_m <= best) continue;
+      if (candidate.clearance_m <= bar()) continue;
       const std::optional<double> clearance =
-          EvaluatePath(*checker, path, best, options.max_step_m);
+          EvaluatePath(*checker, path, bar(), options.max_step_m);
       if (!clearance.has_value()) continue;
-      best = *clearance;
-      best_path = path;
+      // A path whose cut configuration is near a better one adds no choice: keep the better.
+      const Joints& q = path[cut_index];
+      auto similar = std::find_if(found.begin(), found.end(), [&](const auto& f) {
+        return (f.second[cut_index] - q).cwiseAbs().maxCoeff() < kDistinctRad;
+      });
+      if (similar != found.end()) {
+        if (similar->first >= *clearance) continue;
+        found.erase(similar);
+      }
+      found.insert(std::upper_bound(found.begin(), found.end(), *clearance,
+                                    [](double c, const auto& f) { return c > f.first; }),
+                   {*clearance, path});
+      if (found.size() > keep) found.pop_back();
     }
-    if (!best_path.empty()) {
+    if (!found.empty()) {
       motion.outcome = CutMotionOutcome::kPlanned;
-      motion.path = std::move(best_path);
+      motion.path = std::move(found.front().second);
+      for (size_t i = 1; i < found.size(); ++i)
+        motion.alternatives.push_back(std::move(found[i].second));
       motion.cut_index = cut_index;
-      motion.clearance_m = best;
+      motion.clearance_m = found.front().first;
       motion.slid_m = k * options.slide_step_m;
       motion.cut_point_in_platform = point;
-      motion.message =
-          absl::StrCat(what, ": planned, clearance ", best, " m, slid ", motion.slid_m, " m");
+      motion.message = absl::StrCat(what, ": planned, clearance ", motion.clearance_m,
+                                    " m, slid ", motion.slid_m, " m");
       return motion;
     }
   }

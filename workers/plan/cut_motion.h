@@ -49,9 +49,10 @@ struct CutMotionOptions {
   double slide_step_m = 0.01;           // slide increment
   double cut_cane_free_radius_m = 0.04; // cut-cane capsules within this of the cut may touch
   double max_step_m = 0.005;            // IsMotionFree resolution between path configurations
+  int alternatives = 3;                 // other motions kept per cut (CutMotion::alternatives)
 
   // INVALID_ARGUMENT naming the field ("options.sweep_m: ..."): counts < 1 (sides > 2, tilt_steps
-  // < 0), max_tilt_rad outside [0, pi/2),
+  // < 0, alternatives < 0), max_tilt_rad outside [0, pi/2),
   // non-finite or non-positive lengths (max_slide_m may be 0), slide_step_m > 0 when sliding.
   absl::Status Validate() const;
 };
@@ -73,6 +74,10 @@ struct CutMotion {
   // are one Cartesian step apart and their straight joint interpolation passed IsMotionFree.
   // Empty unless planned.
   std::vector<Joints> path;
+  // Other collision-free motions for the same (slid) cut point, by decreasing clearance, whose cut
+  // configurations differ from the path's and from each other by >= 0.5 rad in some joint: the
+  // planner tries them when no path reaches `path` (e.g. an arm threaded behind the wires).
+  std::vector<std::vector<Joints>> alternatives;
   int cut_index = -1;              // path[cut_index] puts the TCP on the (slid) cut point
   double clearance_m = 0;          // min Clearance() over the path configurations (ranking key)
   double slid_m = 0;               // how far the cut point moved outward along the cane

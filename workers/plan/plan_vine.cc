@@ -113,6 +113,48 @@ std::string_view CutMotionReason(CutMotionOutcome outcome) {
 
 namespace {
 
+// The copy of `path` shifted by whole turns in the joints whose limits allow it that the arm can
+// reach from `from` without folding onto itself: IK gives each joint its turn nearest zero, but
+// the wrist links cannot pass through the forearm, so a wrist angle one turn away is often on the
+// wrong side of that fold, and only its other turn is connected to `from`. Shifts are tried by
+// increasing joint travel; the first whose straight joint segment from `from` is free of
+// self-collision (`self_checker` has an empty scene) wins, else the path is returned unshifted.
+std::vector<Joints> ShiftedForReach(const std::vector<Joints>& path, const Joints& from,
+                                    const JointLimits& limits, CollisionChecker& self_checker,
+                                    double max_step_m) {
+  Joints lo = path.front(), hi = path.front();
+  for (const Joints& q : path) {
+    lo = lo.cwiseMin(q);
+    hi = hi.cwiseMax(q);
+  }
+  std::vector<std::pair<double, Joints>> shifts;  // (travel, shift)
+  std::vector<Joints> partial = {Joints::Zero()};
+  for (int j = 0; j < 6; ++j) {
+    std::vector<Joints> next;
+    for (const Joints& shift : partial) {
+      for (int k = -1; k <= 1; ++k) {
+        const double d = 2.0 * M_PI * k;
+        if (k != 0 && (lo[j] + d < limits.lower[j] || hi[j] + d > limits.upper[j])) continue;
+        Joints s = shift;
+        s[j] = d;
+        next.push_back(s);
+      }
+    }
+    partial = std::move(next);
+  }
+  for (const Joints& shift : partial)
+    shifts.push_back({(path.front() + shift - from).cwiseAbs().sum(), shift});
+  std::sort(shifts.begin(), shifts.end(),
+            [](const auto& a, const auto& b) { return a.first < b.first; });
+  for (size_t i = 0; i < shifts.size() && i < 8; ++i) {
+    if (!self_checker.IsMotionFree(from, path.front() + shifts[i].second, max_step_m)) continue;
+    std::vector<Joints> shifted = path;
+    for (Joints& q : shifted) q += shifts[i].second;
+    return shifted;
+  }
+  return path;
+}
+
 // A planned cut: the transit that reaches it and its cut motion.
 struct Leg {
   std::vector<Joints> transit;
@@ -132,6 +174,7 @@ struct Planning {
   // The last pass's inflated scene, its checker and its path planner (for the way home).
   std::unique_ptr<CollisionChecker> checker;
   std::unique_ptr<PathPlanner> planner;
+  std::unique_ptr<CollisionChecker> self_checker;  // the arm alone (ShiftedForReach)
 
   const Joints& At() const { return legs.empty() ? options.home : legs.back().motion.path.back(); }
 
@@ -200,9 +243,17 @@ absl::StatusOr<std::vector<int>> PlanPass(const VineModel& model, const std::vec
   std::vector<ProtectedMotion> protect;
   protect.push_back({{options.home, p.At()}, CaneId{0}, Eigen::Vector3d::Zero(), 0.0});
   for (int k : planned) {
-    protect.push_back({motions[k].path, cuts[k].cane_id,
-                       base_from_platform * motions[k].cut_point_in_platform,
-                       options.cut_motion.cut_cane_free_radius_m});
+    const Eigen::Vector3d point = base_from_platform * motions[k].cut_point_in_platform;
+    // The stroke may touch its own cane near the cut; its ends, where transits arrive and
+    // leave, must stay clear of everything (one protected motion each, nothing ignored).
+    auto protect_motion = [&](const std::vector<Joints>& path) {
+      protect.push_back({path, cuts[k].cane_id, point, options.cut_motion.cut_cane_free_radius_m});
+      protect.push_back({{path.front()}, CaneId{0}, Eigen::Vector3d::Zero(), 0.0});
+      protect.push_back({{path.back()}, CaneId{0}, Eigen::Vector3d::Zero(), 0.0});
+    };
+    protect_motion(motions[k].path);
+    for (const std::vector<Joints>& alternative : motions[k].alternatives)
+      protect_motion(alternative);
   }
   CollisionScene inflated = scene;
   const MarginSummary margins = InflateMargins(p.robot, protect, options.margins, &inflated);
@@ -241,7 +292,18 @@ absl::StatusOr<std::vector<int>> PlanPass(const VineModel& model, const std::vec
   t = std::chrono::steady_clock::now();
   for (int node : order.order) {
     const int k = planned[node - 1];
-    auto transit = p.Path(motions[k].path.front(), cuts[k].id);
+    // The best motion first, then the alternatives, until a path reaches one.
+    std::optional<std::vector<Joints>> transit;
+    std::vector<std::vector<Joints>> choices = {std::move(motions[k].path)};
+    for (auto& alternative : motions[k].alternatives) choices.push_back(std::move(alternative));
+    for (std::vector<Joints>& choice : choices) {
+      choice = ShiftedForReach(choice, p.At(), p.robot.limits, *p.self_checker,
+                               options.path.max_step_m);
+      transit = p.Path(choice.front(), cuts[k].id);
+      if (!transit) continue;
+      motions[k].path = std::move(choice);
+      break;
+    }
     if (!transit) {
       p.Unplanned(cuts[k].id, PathReason(stats.paths.back().outcome));
       continue;
@@ -288,7 +350,8 @@ absl::StatusOr<PlanResult> PlanVine(const VineModel& model, const CutPlan& plan,
   }
   VB_RETURN_IF_ERROR(deadline.Check("plan"));
 
-  Planning p{plan, robot, platform, options, deadline, result, {}, nullptr, nullptr};
+  Planning p{plan, robot, platform, options, deadline, result, {}, nullptr, nullptr, nullptr};
+  p.self_checker = MakeChecker(options.checker, robot, CollisionScene{});
   std::vector<int> todo(plan.cuts.size());
   for (size_t i = 0; i < todo.size(); ++i) todo[i] = static_cast<int>(i);
   VineModel now = model;

@@ -46,7 +46,13 @@ struct PlanOptions {
   SceneOptions scene;
   CutMotionOptions cut_motion;
   MarginOptions margins;
-  PathOptions path;
+  // Paths between cuts. A path that RRT-Connect does not find in 0.25 s is usually not there
+  // (the goal is walled in); the cut's alternative motions are tried next.
+  PathOptions path = [] {
+    PathOptions o;
+    o.time_limit_s = 0.25;
+    return o;
+  }();
   // Where the arm starts and ends: folded clear of the cameras' view (DefaultHome()).
   Joints home = Joints::Zero();
   bool return_home = true;

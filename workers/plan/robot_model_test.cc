@@ -111,7 +111,10 @@ TEST(DefaultUr5, LimitsMountAndRadii) {
   EXPECT_DOUBLE_EQ(robot.limits.lower[2], -M_PI);
   EXPECT_DOUBLE_EQ(robot.limits.upper[0], 2 * M_PI);
   EXPECT_TRUE(robot.platform_from_arm_base.isApprox(DefaultPlatformFromArmBase()));
-  EXPECT_NEAR(robot.platform_from_arm_base.translation().y(), 0.35, 1e-12);
+  // The mount study's mount: 0.45 m in front of the cameras, tilted 50 degrees toward the vine.
+  EXPECT_NEAR(robot.platform_from_arm_base.translation().y(), 0.45, 1e-12);
+  EXPECT_NEAR((robot.platform_from_arm_base.linear() * Eigen::Vector3d::UnitZ()).z(),
+              std::cos(50.0 * M_PI / 180.0), 1e-12);
   EXPECT_NEAR(CapsuleOf(robot, "upper_arm", 0).radius, 0.06, 1e-12);
   EXPECT_NEAR(CapsuleOf(robot, "forearm", 0).radius, 0.06, 1e-12);
   for (const char* wrist : {"wrist_2", "wrist_3"}) {
