@@ -31,7 +31,8 @@ using plan::CheckerKind;
 using plan::Joints;
 
 struct CheckerRecord {
-  std::vector<double> path_s, vine_s, checks_per_path, check_ns;
+  std::vector<double> path_s, solved_path_s, vine_s, checks_per_path, check_ns;
+  int direct = 0;
   std::map<std::string, std::vector<double>> stage_s;  // per vine
   int reachable = 0, planned = 0, passes = 0;
   std::map<std::string, int> unplanned;  // reason -> cuts
@@ -80,6 +81,9 @@ nlohmann::json Summary(const CheckerRecord& r) {
           {"check_ns", Median(r.check_ns)},
           {"success_rate", r.reachable > 0 ? double(r.planned) / r.reachable : 0.0},
           {"paths", r.path_s.size()},
+          {"solved_path_median_s", Median(r.solved_path_s)},
+          {"solved_path_p95_s", Quantile(r.solved_path_s, 0.95)},
+          {"direct_path_fraction", r.path_s.empty() ? 0.0 : double(r.direct) / r.path_s.size()},
           {"max_passes_used", r.passes},
           {"unplanned_reasons", r.unplanned}};
 }
@@ -105,7 +109,8 @@ absl::Status RunBenchPlan(Flags& flags) {
   }
 
   std::map<CheckerKind, CheckerRecord> records;
-  std::vector<double> execution_s, saving, saving_vs_nn, cuts_per_vine;
+  std::vector<double> execution_s, saving, saving_vs_nn, cuts_per_vine, transit_s, cut_s,
+      planned_per_vine;
   int verified = 0, verified_free = 0, failures = 0;
   for (int64_t v = 0; v < vines; ++v) {
     const uint64_t seed = static_cast<uint64_t>(seed_base + v);
@@ -137,6 +142,8 @@ absl::Status RunBenchPlan(Flags& flags) {
         r.stage_s[name].push_back(value);
       for (const plan::PathRecord& p : s.paths) {
         r.path_s.push_back(p.planning_s);
+        if (p.outcome == plan::PathOutcome::kSolved) r.solved_path_s.push_back(p.planning_s);
+        if (p.direct) ++r.direct;
         r.checks_per_path.push_back(static_cast<double>(p.checks));
       }
       r.reachable += s.cuts - s.unreachable;
@@ -150,6 +157,14 @@ absl::Status RunBenchPlan(Flags& flags) {
       }
       if (kind != CheckerKind::kPrimitives) continue;
       execution_s.push_back(result->trajectory.duration_s);
+      double transit = 0, cutting = 0;
+      for (const TrajectorySegment& segment : result->trajectory.segments) {
+        const double d = segment.points.back().t - segment.points.front().t;
+        (segment.kind == SegmentKind::kCut ? cutting : transit) += d;
+      }
+      transit_s.push_back(transit);
+      cut_s.push_back(cutting);
+      planned_per_vine.push_back(s.planned);
       if (s.given_order_cost_s > 0) saving.push_back(1.0 - s.order_cost_s / s.given_order_cost_s);
       if (s.nearest_neighbour_cost_s > 0)
         saving_vs_nn.push_back(1.0 - s.order_cost_s / s.nearest_neighbour_cost_s);
@@ -175,6 +190,9 @@ absl::Status RunBenchPlan(Flags& flags) {
   for (const auto& [kind, record] : records) out[std::string(plan::CheckerKindName(kind))] = Summary(record);
   out["ik_all_solutions_ns"] = IkNs(setup.robot.limits);
   out["execution_s_per_vine_median"] = Median(execution_s);
+  out["transit_s_per_vine_median"] = Median(transit_s);
+  out["cut_stroke_s_per_vine_median"] = Median(cut_s);
+  out["planned_cuts_per_vine_median"] = Median(planned_per_vine);
   out["order_saving_fraction"] = Median(saving);
   out["order_saving_vs_nearest_neighbour_fraction"] = Median(saving_vs_nn);
   if (verify) {

@@ -19,34 +19,37 @@ absl::StatusOr<plan::CheckerKind> ParseCheckerKind(const std::string& name) {
 }
 
 absl::StatusOr<PlanSetup> ParsePlanSetup(Flags& flags) {
-  VB_ASSIGN_OR_RETURN(const std::string tool, flags.String("tool", "mill_end"));
-  VB_ASSIGN_OR_RETURN(const std::string checker, flags.String("checker", "primitives"));
-  VB_ASSIGN_OR_RETURN(const double max_margin_m, flags.Double("max-margin-m", 0.03));
-  VB_ASSIGN_OR_RETURN(const double path_time_limit_s, flags.Double("path-time-limit-s", 0.25));
   PlanSetup setup;
-  plan::CutMotionOptions& cut = setup.options.cut_motion;
+  plan::PlanOptions& o = setup.options;
+  plan::CutMotionOptions& cut = o.cut_motion;
+  VB_ASSIGN_OR_RETURN(const std::string tool, flags.String("tool", "secateur"));
+  VB_ASSIGN_OR_RETURN(const std::string checker, flags.String("checker", "primitives"));
+  VB_ASSIGN_OR_RETURN(o.margins.max_margin_m, flags.Double("max-margin-m", o.margins.max_margin_m));
+  VB_ASSIGN_OR_RETURN(o.path.time_limit_s, flags.Double("path-time-limit-s", o.path.time_limit_s));
+  VB_ASSIGN_OR_RETURN(o.path.range_rad, flags.Double("path-range-rad", o.path.range_rad));
+  VB_ASSIGN_OR_RETURN(const int64_t rounds, flags.Int("shortcut-rounds", o.path.shortcut_rounds));
+  VB_ASSIGN_OR_RETURN(const int64_t passes, flags.Int("max-passes", o.max_passes));
   VB_ASSIGN_OR_RETURN(cut.sweep_m, flags.Double("sweep-m", cut.sweep_m));
   VB_ASSIGN_OR_RETURN(cut.max_slide_m, flags.Double("max-slide-m", cut.max_slide_m));
-  VB_ASSIGN_OR_RETURN(const double tilt_deg, flags.Double("max-tilt-deg", cut.max_tilt_rad * 180 / M_PI));
+  VB_ASSIGN_OR_RETURN(const double tilt_deg,
+                      flags.Double("max-tilt-deg", cut.max_tilt_rad * 180 / M_PI));
   VB_ASSIGN_OR_RETURN(const int64_t tilt_steps, flags.Int("tilt-steps", cut.tilt_steps));
-  VB_ASSIGN_OR_RETURN(const int64_t passes, flags.Int("max-passes", setup.options.max_passes));
+  o.path.shortcut_rounds = static_cast<int>(rounds);
+  o.max_passes = static_cast<int>(passes);
   cut.max_tilt_rad = tilt_deg * M_PI / 180;
   cut.tilt_steps = static_cast<int>(tilt_steps);
-  setup.options.max_passes = static_cast<int>(passes);
   if (tool == "mill_end") {
     setup.robot = plan::DefaultUr5(plan::MillEndTool());
   } else if (tool == "secateur") {
     setup.robot = plan::DefaultUr5(plan::SecateurTool());
   } else {
     return absl::InvalidArgumentError(
-        absl::StrCat("--tool: unknown tool '", tool, "' (expected mill_end or secateur)"));
+        absl::StrCat("--tool: unknown tool '", tool, "' (expected secateur or mill_end)"));
   }
   setup.platform = plan::DefaultPlatform();
-  VB_ASSIGN_OR_RETURN(setup.options.checker, ParseCheckerKind(checker));
-  setup.options.home = plan::DefaultHome();
-  setup.options.margins.max_margin_m = max_margin_m;
-  setup.options.path.time_limit_s = path_time_limit_s;
-  if (absl::Status s = setup.options.Validate(); !s.ok())
+  VB_ASSIGN_OR_RETURN(o.checker, ParseCheckerKind(checker));
+  o.home = plan::DefaultHome();
+  if (absl::Status s = o.Validate(); !s.ok())
     return absl::InvalidArgumentError(absl::StrCat("plan flags: ", s.message()));
   return setup;
 }

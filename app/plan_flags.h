@@ -16,8 +16,10 @@ struct PlanSetup {
   plan::PlanOptions options;
 };
 
-// --tool mill_end|secateur (default mill_end), --checker primitives|fcl_primitives|fcl_mesh
-// (default primitives), --max-margin-m M (default 0.03), --path-time-limit-s T (default 0.25).
+// --tool secateur|mill_end (default secateur), --checker primitives|fcl_primitives|fcl_mesh
+// (default primitives), --max-margin-m M, --path-time-limit-s T, --path-range-rad R,
+// --shortcut-rounds N, --sweep-m S, --max-slide-m M, --max-tilt-deg D, --tilt-steps N,
+// --max-passes N (defaults: PlanOptions').
 // INVALID_ARGUMENT naming the flag.
 absl::StatusOr<PlanSetup> ParsePlanSetup(Flags& flags);
 

@@ -64,12 +64,15 @@ double Seconds(std::chrono::steady_clock::time_point since) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
 }
 
-// Appends `waypoints` timed from the end of the trajectory so far as one segment.
+// Appends `waypoints` timed from the end of the trajectory so far as one segment: a transit at
+// rest at each of its few waypoints, a cut stroke (dense Cartesian steps) in one profile.
 absl::Status AppendSegment(SegmentKind kind, CutId cut_id, std::span<const Joints> waypoints,
                            const JointLimits& limits, double sample_dt_s, Trajectory* out) {
   const double start_s = out->duration_s;
   VB_ASSIGN_OR_RETURN(const std::vector<TimedJoints> timed,
-                      TimeParameterize(waypoints, limits, start_s, sample_dt_s));
+                      kind == SegmentKind::kCut
+                          ? TimeParameterizeStroke(waypoints, limits, start_s, sample_dt_s)
+                          : TimeParameterize(waypoints, limits, start_s, sample_dt_s));
   TrajectorySegment segment;
   segment.kind = kind;
   segment.cut_id = cut_id;
@@ -292,13 +295,20 @@ absl::StatusOr<std::vector<int>> PlanPass(const VineModel& model, const std::vec
   t = std::chrono::steady_clock::now();
   for (int node : order.order) {
     const int k = planned[node - 1];
-    // The best motion first, then the alternatives, until a path reaches one.
+    // The motion (or alternative) nearest in move time first: all are collision-free, and the
+    // arm's execution time is mostly transits; the next one when no path reaches it.
     std::optional<std::vector<Joints>> transit;
     std::vector<std::vector<Joints>> choices = {std::move(motions[k].path)};
     for (auto& alternative : motions[k].alternatives) choices.push_back(std::move(alternative));
     for (std::vector<Joints>& choice : choices) {
       choice = ShiftedForReach(choice, p.At(), p.robot.limits, *p.self_checker,
                                options.path.max_step_m);
+    }
+    std::stable_sort(choices.begin(), choices.end(), [&](const auto& a, const auto& b) {
+      return MoveTimeS(p.At(), a.front(), p.robot.limits) <
+             MoveTimeS(p.At(), b.front(), p.robot.limits);
+    });
+    for (std::vector<Joints>& choice : choices) {
       transit = p.Path(choice.front(), cuts[k].id);
       if (!transit) continue;
       motions[k].path = std::move(choice);

@@ -81,10 +81,10 @@ Joints MoveStateAt(const Joints& a, const Joints& b, const JointLimits& limits, 
   return a + s * (b - a);
 }
 
-absl::StatusOr<std::vector<TimedJoints>> TimeParameterize(std::span<const Joints> waypoints,
-                                                          const JointLimits& limits,
-                                                          double start_time_s,
-                                                          double sample_dt_s) {
+namespace {
+
+absl::Status CheckInput(std::span<const Joints> waypoints, const JointLimits& limits,
+                        double start_time_s, double sample_dt_s) {
   if (waypoints.empty()) return absl::InvalidArgumentError("time parameterisation: waypoints: empty");
   for (size_t k = 0; k < waypoints.size(); ++k) {
     if (!waypoints[k].allFinite()) {
@@ -101,6 +101,16 @@ absl::StatusOr<std::vector<TimedJoints>> TimeParameterize(std::span<const Joints
   if (!(sample_dt_s > 0.0) || !std::isfinite(sample_dt_s)) {
     return absl::InvalidArgumentError("time parameterisation: sample_dt_s: must be finite and > 0");
   }
+  return absl::OkStatus();
+}
+
+}  // namespace
+
+absl::StatusOr<std::vector<TimedJoints>> TimeParameterize(std::span<const Joints> waypoints,
+                                                          const JointLimits& limits,
+                                                          double start_time_s,
+                                                          double sample_dt_s) {
+  if (absl::Status s = CheckInput(waypoints, limits, start_time_s, sample_dt_s); !s.ok()) return s;
   std::vector<Profile> profiles;
   profiles.reserve(waypoints.size());
   double expected = 1.0;
@@ -131,6 +141,74 @@ absl::StatusOr<std::vector<TimedJoints>> TimeParameterize(std::span<const Joints
     }
     t0 += p.t_total;
     samples.push_back({t0, b});
+  }
+  return samples;
+}
+
+absl::StatusOr<std::vector<TimedJoints>> TimeParameterizeStroke(std::span<const Joints> waypoints,
+                                                                const JointLimits& limits,
+                                                                double start_time_s,
+                                                                double sample_dt_s) {
+  if (absl::Status s = CheckInput(waypoints, limits, start_time_s, sample_dt_s); !s.ok()) return s;
+  // Arc length fraction of each segment, then the parameter's limits: on segment i, joint j moves
+  // d_ij per unit of the parameter's fraction f_i, so ds/dt <= vmax_j f_i / d_ij (and likewise
+  // for the acceleration).
+  std::vector<double> start_fraction = {0.0};
+  double total = 0.0;
+  for (size_t k = 1; k < waypoints.size(); ++k) total += (waypoints[k] - waypoints[k - 1]).norm();
+  if (!(total > kZeroMoveRad)) return std::vector<TimedJoints>{{start_time_s, waypoints[0]}};
+  Profile p;
+  double v = std::numeric_limits<double>::infinity(), acc = v;
+  for (size_t k = 1; k < waypoints.size(); ++k) {
+    const Joints d = waypoints[k] - waypoints[k - 1];
+    const double f = d.norm() / total;
+    start_fraction.push_back(start_fraction.back() + f);
+    for (int j = 0; j < 6; ++j) {
+      if (!(std::abs(d[j]) > kZeroMoveRad)) continue;
+      v = std::min(v, limits.max_velocity[j] * f / std::abs(d[j]));
+      acc = std::min(acc, limits.max_acceleration[j] * f / std::abs(d[j]));
+    }
+  }
+  p.accel = acc;
+  if (v * v / acc >= 1.0) {
+    p.t_ramp = std::sqrt(1.0 / acc);
+    p.peak = acc * p.t_ramp;
+    p.t_total = 2.0 * p.t_ramp;
+  } else {
+    p.peak = v;
+    p.t_ramp = v / acc;
+    p.t_total = 1.0 / v + v / acc;
+  }
+  if (p.t_total / sample_dt_s + waypoints.size() > static_cast<double>(kMaxSamples)) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "time parameterisation: sample_dt_s: would give more than ", kMaxSamples, " samples"));
+  }
+  // The time at which the parameter reaches fraction x (the inverse of ParameterAt).
+  auto time_at = [&](double x) {
+    const double ramp_s = 0.5 * p.accel * p.t_ramp * p.t_ramp;
+    if (x <= ramp_s) return std::sqrt(2.0 * x / p.accel);
+    if (x <= 1.0 - ramp_s) return p.t_ramp + (x - ramp_s) / p.peak;
+    return p.t_total - std::sqrt(std::max(0.0, 2.0 * (1.0 - x) / p.accel));
+  };
+  auto position_at = [&](double x) {
+    const size_t k = std::min<size_t>(
+        waypoints.size() - 1,
+        std::upper_bound(start_fraction.begin(), start_fraction.end(), x) - start_fraction.begin());
+    const double f0 = start_fraction[k - 1], f1 = start_fraction[k];
+    const double u = f1 > f0 ? std::clamp((x - f0) / (f1 - f0), 0.0, 1.0) : 1.0;
+    return Joints(waypoints[k - 1] + u * (waypoints[k] - waypoints[k - 1]));
+  };
+  // Waypoint times and grid samples merged in time order, strictly increasing.
+  std::vector<TimedJoints> samples = {{start_time_s, waypoints[0]}};
+  double next_grid = sample_dt_s;
+  for (size_t k = 1; k < waypoints.size(); ++k) {
+    const double t_k = k + 1 == waypoints.size() ? p.t_total : time_at(start_fraction[k]);
+    for (; next_grid < t_k - 1e-3 * sample_dt_s; next_grid += sample_dt_s) {
+      // A grid time just before the previous waypoint's time has been passed already.
+      if (start_time_s + next_grid <= samples.back().t + 1e-3 * sample_dt_s) continue;
+      samples.push_back({start_time_s + next_grid, position_at(ParameterAt(p, next_grid))});
+    }
+    if (start_time_s + t_k > samples.back().t) samples.push_back({start_time_s + t_k, waypoints[k]});
   }
   return samples;
 }

@@ -41,6 +41,17 @@ absl::StatusOr<std::vector<TimedJoints>> TimeParameterize(std::span<const Joints
                                                           double start_time_s,
                                                           double sample_dt_s);
 
+// One profile over the whole polyline instead of a stop at every waypoint: the path parameter
+// runs along the joint-space arc length with one synchronised trapezoid whose speed and
+// acceleration keep every joint within its limits on every segment. Corners are passed without
+// stopping, where the joint velocity turns instantly; that suits dense, nearly straight paths such
+// as a cut stroke (Cartesian steps of 5 mm), not transits. Same samples and errors as
+// TimeParameterize.
+absl::StatusOr<std::vector<TimedJoints>> TimeParameterizeStroke(std::span<const Joints> waypoints,
+                                                                const JointLimits& limits,
+                                                                double start_time_s,
+                                                                double sample_dt_s);
+
 // Position of the timed move a -> b at time t in [0, MoveTimeS(a, b)] after its start (clamped
 // outside). Exposed for tests and for executors that interpolate themselves.
 Joints MoveStateAt(const Joints& a, const Joints& b, const JointLimits& limits, double t);

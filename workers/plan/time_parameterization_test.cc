@@ -165,3 +165,48 @@ TEST(TimeParameterize, BadInputIsRejected) {
 
 }  // namespace
 }  // namespace vb::plan
+
+namespace vb::plan {
+namespace {
+
+// A dense, gently curving stroke: one profile over all of it, within the joint limits, every
+// waypoint kept, times strictly increasing.
+TEST(TimeParameterizeStroke, OneProfileWithinTheLimits) {
+  std::vector<Joints> stroke;
+  for (int i = 0; i <= 24; ++i) {
+    Joints q;
+    q << 0.01 * i, 0.5 + 0.004 * i, -1.0 + 0.0001 * i * i, 0.2, 1.0 - 0.003 * i, 0.0;
+    stroke.push_back(q);
+  }
+  JointLimits limits;
+  limits.max_velocity *= 0.25;
+  limits.max_acceleration *= 0.25;
+  auto samples = TimeParameterizeStroke(stroke, limits, 3.0, 0.013);
+  ASSERT_TRUE(samples.ok()) << samples.status();
+  EXPECT_DOUBLE_EQ(samples->front().t, 3.0);
+  EXPECT_TRUE(samples->back().q.isApprox(stroke.back()));
+  size_t found = 0;
+  for (size_t i = 1; i < samples->size(); ++i) {
+    const double dt = (*samples)[i].t - (*samples)[i - 1].t;
+    ASSERT_GT(dt, 0.0) << i;
+    const Joints v = ((*samples)[i].q - (*samples)[i - 1].q) / dt;
+    for (int j = 0; j < 6; ++j) EXPECT_LE(std::abs(v[j]), limits.max_velocity[j] * 1.001);
+  }
+  for (const Joints& q : stroke) {
+    for (const TimedJoints& s : *samples) found += (s.q - q).norm() < 1e-12 ? 1 : 0;
+  }
+  EXPECT_GE(found, stroke.size());
+  // Faster than stopping at every waypoint.
+  auto stops = TimeParameterize(stroke, limits, 3.0, 0.013);
+  ASSERT_TRUE(stops.ok());
+  EXPECT_LT(samples->back().t, 0.5 * stops->back().t);
+}
+
+TEST(TimeParameterizeStroke, RejectsBadInput) {
+  EXPECT_FALSE(TimeParameterizeStroke({}, JointLimits{}, 0.0, 0.01).ok());
+  std::vector<Joints> one = {Joints::Zero(), Joints::Ones()};
+  EXPECT_FALSE(TimeParameterizeStroke(one, JointLimits{}, 0.0, 0.0).ok());
+}
+
+}  // namespace
+}  // namespace vb::plan

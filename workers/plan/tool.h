@@ -4,7 +4,8 @@
 //
 // TCP frame convention (both tools):
 //   - TCP z is the tool axis, pointing away from the flange (flange z, the UR's tool direction).
-//   - The cane crosses the TCP along TCP y, perpendicular to z: at the cut pose the cane axis
+//   - The cane crosses the TCP along TCP y, perpendicular to z (for a cut pose tilted about x,
+//     cut_motion.h, the cut is oblique by the tilt): at the cut pose the cane axis
 //     passes through the TCP origin, parallel to TCP y (either sign).
 //   - Mill end (Botterill et al. 2017 section 3.4, a spinning router bit): the TCP is on the bit
 //     axis in the middle of the flute; a cut is a straight sweep of the TCP along TCP x, centred on
