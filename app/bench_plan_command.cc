@@ -7,6 +7,7 @@
 // plus IK time, execution time per vine, the ordering's saving, and the dense re-check of every
 // trajectory planned with our checker against FCL meshes with the margins removed.
 #include <chrono>
+#include <cmath>
 #include <iostream>
 #include <map>
 #include <numeric>
@@ -32,6 +33,8 @@ using plan::Joints;
 
 struct CheckerRecord {
   std::vector<double> path_s, solved_path_s, vine_s, checks_per_path, check_ns;
+  // Vine times on the vines the baselines also plan whole (for the speed-up).
+  std::vector<double> baseline_vines_vine_s;
   int direct = 0;
   std::map<std::string, std::vector<double>> stage_s;  // per vine
   int reachable = 0, planned = 0, passes = 0;
@@ -71,6 +74,12 @@ double IkNs(const plan::JointLimits& limits) {
   return 1e9 * s / poses.size();
 }
 
+// The same path queries replanned by one checker.
+struct Replay {
+  std::vector<double> path_s, checks, check_ns;
+  int solved = 0;
+};
+
 nlohmann::json Summary(const CheckerRecord& r) {
   nlohmann::json stages = nlohmann::json::object();
   for (const auto& [name, values] : r.stage_s) stages[name] = Median(values);
@@ -96,12 +105,24 @@ absl::Status RunBenchPlan(Flags& flags) {
   VB_ASSIGN_OR_RETURN(const std::string checkers_flag,
                       flags.String("checkers", "primitives,fcl_primitives,fcl_mesh"));
   VB_ASSIGN_OR_RETURN(const bool verify, flags.Bool("verify", true));
+  // Per path, every checker replans the same queries: the transits our planner attempted on the
+  // first --baseline-vines vines, in the vine's scene without margins, with the time limit scaled
+  // by --baseline-time-scale for FCL (~50x slower per check) so that it gets as many checks.
+  // Whole vines with an FCL checker (cut motions included) take minutes each: only the first
+  // --baseline-full-vines are planned whole with them (default 0: their vine_median_s is null).
+  VB_ASSIGN_OR_RETURN(const int64_t baseline_vines, flags.Int("baseline-vines", 3));
+  VB_ASSIGN_OR_RETURN(const double baseline_time_scale, flags.Double("baseline-time-scale", 50.0));
+  VB_ASSIGN_OR_RETURN(const int64_t baseline_full_vines, flags.Int("baseline-full-vines", 0));
   VB_ASSIGN_OR_RETURN(const bool json_flag, flags.Bool("json", true));
   VB_ASSIGN_OR_RETURN(PlanSetup setup, ParsePlanSetup(flags));
   VB_RETURN_IF_ERROR(flags.Finish());
   (void)json_flag;  // the output is always one JSON object; the flag is accepted for scripts
   if (vines < 1 || vines > 10000) return absl::InvalidArgumentError("--vines must be in [1, 10000]");
   if (seed_base < 0) return absl::InvalidArgumentError("--seed-base must be >= 0");
+  if (baseline_vines < 0 || baseline_full_vines < 0)
+    return absl::InvalidArgumentError("--baseline-vines and --baseline-full-vines must be >= 0");
+  if (!(baseline_time_scale >= 1) || !std::isfinite(baseline_time_scale))
+    return absl::InvalidArgumentError("--baseline-time-scale must be finite and >= 1");
   std::vector<CheckerKind> kinds;
   for (absl::string_view name : absl::StrSplit(checkers_flag, ',')) {
     VB_ASSIGN_OR_RETURN(const CheckerKind kind, ParseCheckerKind(std::string(name)));
@@ -109,6 +130,7 @@ absl::Status RunBenchPlan(Flags& flags) {
   }
 
   std::map<CheckerKind, CheckerRecord> records;
+  std::map<CheckerKind, Replay> replays;
   std::vector<double> execution_s, saving, saving_vs_nn, cuts_per_vine, transit_s, cut_s,
       planned_per_vine;
   int verified = 0, verified_free = 0, failures = 0;
@@ -122,10 +144,15 @@ absl::Status RunBenchPlan(Flags& flags) {
       continue;
     }
     cuts_per_vine.push_back(decision->plan.cuts.size());
+    std::vector<plan::PathRecord> queries;  // our planner's transits on this vine
     for (CheckerKind kind : kinds) {
-      setup.options.checker = kind;
+      const bool baseline = kind != CheckerKind::kPrimitives;
+      if (baseline && v >= baseline_full_vines) continue;
+      plan::PlanOptions options = setup.options;
+      options.checker = kind;
+      if (baseline) options.path.time_limit_s *= baseline_time_scale;
       auto result = plan::PlanVine(scene.vine, decision->plan, setup.robot, setup.platform,
-                                   setup.options, Deadline::In(60.0));
+                                   options, Deadline::In(60.0 * (baseline ? baseline_time_scale : 1)));
       if (!result.ok()) {
         ++failures;
         std::cerr << "seed " << seed << " " << plan::CheckerKindName(kind) << ": "
@@ -135,6 +162,8 @@ absl::Status RunBenchPlan(Flags& flags) {
       CheckerRecord& r = records[kind];
       const plan::PlanStats& s = result->stats;
       r.vine_s.push_back(s.total_s);
+      if (v < baseline_full_vines) r.baseline_vines_vine_s.push_back(s.total_s);
+      if (!baseline && v < baseline_vines) queries = s.paths;
       for (const auto& [name, value] :
            {std::pair<const char*, double>{"scene", s.scene_s}, {"cut_motions", s.cut_motions_s},
             {"margins", s.margins_s}, {"ordering", s.ordering_s}, {"paths", s.paths_s},
@@ -178,16 +207,58 @@ absl::Status RunBenchPlan(Flags& flags) {
         else std::cerr << "seed " << seed << ": " << collisions << " colliding configurations\n";
       }
     }
+    if (queries.empty()) continue;
+    // The same queries for every checker, on the vine's scene without margins.
+    auto base_scene = plan::CollisionScene::Build(scene.vine, setup.platform, setup.robot);
+    if (!base_scene.ok()) continue;
+    for (CheckerKind kind : kinds) {
+      auto checker = plan::MakeChecker(kind, setup.robot, *base_scene);
+      plan::PathOptions options = setup.options.path;
+      if (kind != CheckerKind::kPrimitives) options.time_limit_s *= baseline_time_scale;
+      plan::PathPlanner planner(*checker, setup.robot.limits, options);
+      Replay& replay = replays[kind];
+      replay.check_ns.push_back(CheckNs(*checker, setup.robot.limits, seed));
+      for (const plan::PathRecord& q : queries) {
+        const plan::PathResult path = planner.Plan(q.start, q.goal, Deadline::Infinite());
+        replay.path_s.push_back(path.planning_s);
+        replay.checks.push_back(static_cast<double>(path.checks));
+        replay.solved += path.outcome == plan::PathOutcome::kSolved;
+      }
+    }
   }
 
   nlohmann::json out = {{"vines", vines},
+                        {"baseline_vines", std::min(vines, baseline_vines)},
+                        {"baseline_time_scale", baseline_time_scale},
+                        {"baseline_full_vines", std::min(vines, baseline_full_vines)},
                         {"seed_base", seed_base},
                         {"tool", setup.robot.tool.name},
                         {"failures", failures},
                         {"cuts_per_vine_mean", cuts_per_vine.empty() ? 0.0 :
                              std::accumulate(cuts_per_vine.begin(), cuts_per_vine.end(), 0.0) /
                                  cuts_per_vine.size()}};
-  for (const auto& [kind, record] : records) out[std::string(plan::CheckerKindName(kind))] = Summary(record);
+  for (CheckerKind kind : kinds) {
+    nlohmann::json j;
+    const auto r = records.find(kind);
+    if (r != records.end()) j["whole_vines"] = Summary(r->second);
+    // The keys: per path on the replayed queries (identical for every checker), per vine
+    // from whole vines (null where none were planned with this checker).
+    const Replay& replay = replays[kind];
+    j["per_path_median_s"] = Median(replay.path_s);
+    j["per_path_p95_s"] = Quantile(replay.path_s, 0.95);
+    j["checks_per_path"] = Median(replay.checks);
+    j["path_solved_fraction"] =
+        replay.path_s.empty() ? 0.0 : double(replay.solved) / replay.path_s.size();
+    j["paths"] = replay.path_s.size();
+    j["check_ns"] = Median(replay.check_ns);
+    // Fraction of reachable cuts planned, and the whole-vine time: from whole vines only.
+    j["success_rate"] = r != records.end() ? nlohmann::json(r->second.reachable > 0
+                                                 ? double(r->second.planned) / r->second.reachable
+                                                 : 0.0)
+                                           : nlohmann::json();
+    j["vine_median_s"] = r != records.end() ? nlohmann::json(Median(r->second.vine_s)) : nlohmann::json();
+    out[std::string(plan::CheckerKindName(kind))] = j;
+  }
   out["ik_all_solutions_ns"] = IkNs(setup.robot.limits);
   out["execution_s_per_vine_median"] = Median(execution_s);
   out["transit_s_per_vine_median"] = Median(transit_s);
@@ -199,11 +270,15 @@ absl::Status RunBenchPlan(Flags& flags) {
     out["verified_trajectories"] = verified;
     out["verified_collision_free_fraction"] = verified > 0 ? double(verified_free) / verified : 0.0;
   }
-  const auto fast = records.find(CheckerKind::kPrimitives);
-  const auto mesh = records.find(CheckerKind::kFclMesh);
-  if (fast != records.end() && mesh != records.end() && Median(fast->second.path_s) > 0) {
+  const auto fast = replays.find(CheckerKind::kPrimitives);
+  const auto mesh = replays.find(CheckerKind::kFclMesh);
+  if (fast != replays.end() && mesh != replays.end() && Median(fast->second.path_s) > 0)
     out["speedup_per_path_vs_fcl_mesh"] = Median(mesh->second.path_s) / Median(fast->second.path_s);
-    out["speedup_per_vine_vs_fcl_mesh"] = Median(mesh->second.vine_s) / Median(fast->second.vine_s);
+  const auto fast_vines = records.find(CheckerKind::kPrimitives);
+  const auto mesh_vines = records.find(CheckerKind::kFclMesh);
+  if (fast_vines != records.end() && mesh_vines != records.end()) {
+    out["speedup_per_vine_vs_fcl_mesh"] = Median(mesh_vines->second.vine_s) /
+                                          Median(fast_vines->second.baseline_vines_vine_s);
   }
   std::cout << out.dump(1) << "\n";
   return absl::OkStatus();

@@ -129,6 +129,7 @@ struct ArmPart {
   int body;
   fcl::Transform3d link_from_part;
   std::unique_ptr<fcl::CollisionObjectd> object;
+  std::vector<Capsule> capsules;  // its geometry in the link frame (for plane distances)
 };
 
 struct CollideData {
@@ -153,13 +154,14 @@ class FclChecker : public CollisionChecker {
       if (mode == FclMode::kMesh) {
         parts_.push_back(ArmPart{bodies[b].frame, b, fcl::Transform3d::Identity(),
                                  std::make_unique<fcl::CollisionObjectd>(
-                                     MakeMesh(bodies[b].capsules, 0.0))});
+                                     MakeMesh(bodies[b].capsules, 0.0)),
+                                 bodies[b].capsules});
         continue;
       }
       for (const Capsule& c : bodies[b].capsules) {
         auto [geometry, pose] = MakePrimitive(c, 0.0);
         parts_.push_back(ArmPart{bodies[b].frame, b, pose,
-                                 std::make_unique<fcl::CollisionObjectd>(geometry)});
+                                 std::make_unique<fcl::CollisionObjectd>(geometry), {c}});
       }
     }
     for (const auto& [bi, bj] : robot.SelfCollisionPairs()) {
@@ -178,6 +180,7 @@ class FclChecker : public CollisionChecker {
         obstacles_.push_back(std::make_unique<fcl::CollisionObjectd>(geometry, pose));
       }
     }
+    planes_geometry_ = scene.planes;
     for (const HalfSpace& h : scene.planes) {
       if (mode == FclMode::kMesh) {
         planes_.push_back(std::make_unique<fcl::CollisionObjectd>(MakePlaneBox(h)));
@@ -236,9 +239,22 @@ class FclChecker : public CollisionChecker {
         }
         best = std::min(best, d);
       };
+      const auto frames = LinkFrames(q);
       for (auto& part : parts_) {
         for (auto& o : obstacles_) pair_distance(part.object.get(), o.get());
-        for (auto& p : planes_) pair_distance(part.object.get(), p.get());
+        if (mode_ == FclMode::kMesh) {
+          for (auto& p : planes_) pair_distance(part.object.get(), p.get());
+          continue;
+        }
+        // FCL 0.7's GJK distance to a half-space calls a support function libccd lacks (a
+        // crash); a capsule's distance to a plane is exact and short anyway.
+        for (const HalfSpace& h : planes_geometry_) {
+          for (const Capsule& c : part.capsules) {
+            const Eigen::Vector3d a = frames[part.frame] * c.a, b = frames[part.frame] * c.b;
+            best = std::min(best, (h.offset - h.margin_m) -
+                                      std::max(h.normal.dot(a), h.normal.dot(b)) - c.radius);
+          }
+        }
       }
       for (const auto& [i, j] : self_pairs_) {
         pair_distance(parts_[i].object.get(), parts_[j].object.get());
@@ -263,6 +279,7 @@ class FclChecker : public CollisionChecker {
   std::vector<std::pair<int, int>> self_pairs_;
   std::vector<std::unique_ptr<fcl::CollisionObjectd>> obstacles_;
   std::vector<std::unique_ptr<fcl::CollisionObjectd>> planes_;
+  std::vector<HalfSpace> planes_geometry_;
   fcl::DynamicAABBTreeCollisionManagerd manager_;
 };
 

@@ -183,7 +183,8 @@ struct Planning {
 
   std::optional<std::vector<Joints>> Path(const Joints& goal, CutId to) {
     PathResult path = planner->Plan(At(), goal, deadline);
-    result.stats.paths.push_back({to, path.outcome, path.planning_s, path.checks, path.direct});
+    result.stats.paths.push_back(
+        {to, path.outcome, path.planning_s, path.checks, path.direct, At(), goal});
     if (path.outcome != PathOutcome::kSolved) return std::nullopt;
     return std::move(path.waypoints);
   }

@@ -85,6 +85,7 @@ struct PathRecord {
   double planning_s = 0.0;
   int64_t checks = 0;
   bool direct = false;        // the straight line was free
+  Joints start = Joints::Zero(), goal = Joints::Zero();  // the query (for baselines to replay)
 };
 
 struct PlanStats {
