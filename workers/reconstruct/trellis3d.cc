@@ -44,11 +44,13 @@ std::optional<Line3> Intersect(const Plane& a, const Plane& b, double min_sin) {
 }
 
 // RMS pixel distance of the 3D segment [p, q]'s projection to the nearest of `lines` in `view`
-// (nullopt if fewer than 3 of its samples are in the image).
+// (nullopt if fewer than 3 of its samples are in the image); *nearest is that line's index.
 std::optional<double> Residual(const CameraCalibration& camera, const std::vector<Line2D>& lines,
-                               const Eigen::Vector3d& p, const Eigen::Vector3d& q) {
+                               const Eigen::Vector3d& p, const Eigen::Vector3d& q, int* nearest) {
   double best = 1e9;
-  for (const Line2D& line : lines) {
+  *nearest = -1;
+  for (size_t i = 0; i < lines.size(); ++i) {
+    const Line2D& line = lines[i];
     double sum = 0;
     int n = 0;
     for (int k = 0; k <= 10; ++k) {
@@ -61,7 +63,10 @@ std::optional<double> Residual(const CameraCalibration& camera, const std::vecto
       ++n;
     }
     if (n < 3) return std::nullopt;
-    best = std::min(best, std::sqrt(sum / n));
+    if (std::sqrt(sum / n) < best) {
+      best = std::sqrt(sum / n);
+      *nearest = static_cast<int>(i);
+    }
   }
   return best;
 }
@@ -71,6 +76,7 @@ struct Candidate {
   double residual;        // worst confirming residual (0 if no other view could confirm)
   int confirmations;
   int view_a, line_a, view_b, line_b;
+  std::vector<int> lines;  // per view: the 2D line it was built from or confirmed by, or -1
   double width_px;
 };
 
@@ -137,13 +143,19 @@ std::vector<Candidate> Candidates(const std::vector<View2D>& views, const RigCal
           }
           c.residual = 0.0;
           c.confirmations = 0;
+          c.lines.assign(views.size(), -1);
+          c.lines[va] = static_cast<int>(i);
+          c.lines[vb] = static_cast<int>(j);
           bool rejected = false;
           for (size_t v = 0; v < views.size() && !rejected; ++v) {
             if (v == va || v == vb) continue;
-            const auto r = Residual(rig.cameras[v], posts ? views[v].posts : views[v].wires, c.a, c.b);
+            int nearest = -1;
+            const auto r = Residual(rig.cameras[v], posts ? views[v].posts : views[v].wires, c.a,
+                                    c.b, &nearest);
             if (!r) continue;
             if (*r > options.max_residual_px) rejected = true;
             c.residual = std::max(c.residual, *r);
+            c.lines[v] = nearest;
             ++c.confirmations;
           }
           // With three or more views, an unconfirmed line is as likely a mismatch as not.
@@ -211,6 +223,25 @@ absl::StatusOr<Trellis> ReconstructTrellis(const std::vector<View2D>& views,
     trellis.posts.push_back(post);
   }
   return trellis;
+}
+
+absl::StatusOr<std::vector<TrellisLineMatch>> MatchTrellisLines(const std::vector<View2D>& views,
+                                                                const RigCalibration& rig,
+                                                                const WorkingVolume& volume,
+                                                                const TrellisOptions& options) {
+  if (absl::Status s = options.Validate(); !s.ok()) return s;
+  if (views.size() != rig.cameras.size()) {
+    return absl::InvalidArgumentError(absl::StrCat("trellis: ", views.size(), " views for ",
+                                                   rig.cameras.size(), " cameras"));
+  }
+  std::vector<TrellisLineMatch> out;
+  for (bool posts : {false, true}) {
+    for (const Candidate& c :
+         Choose(Candidates(views, rig, volume, options, posts), options, views.size())) {
+      out.push_back({posts, c.a, c.b, c.lines});
+    }
+  }
+  return out;
 }
 
 }  // namespace vb::reconstruct
