@@ -33,15 +33,16 @@ double DistanceToLine(const Eigen::Vector3d& p, const Polyline3& line) {
 
 JoinWeights DefaultJoinWeights() {
   // Trained by JoinClassifier.DISABLED_TrainOnSimulatedStops (join_classifier_test.cc) on the
-  // candidate joins of the real pipeline on rendered stops, seeds 1000-1099, vine 1, calibration
-  // 1 px off, once from the renderer's label images and once from the segmenter's output:
-  // 114309 joins to a cane (5034 right) and 6362 to the trunk or head (3868 right), gaps up to
-  // 15 cm; training AUC 0.943.
+  // candidate joins of the real pipeline, rig refinement included (MatchWithRigRefinement), on
+  // rendered stops, seeds 1000-1099, vine 1, calibration 1 px off, once from the renderer's label
+  // images and once from the segmenter's output: 91760 joins to a cane (3827 right) and 5887 to
+  // the trunk or head (3649 right), gaps up to 15 cm; training AUC 0.949 (the previous weights,
+  // trained without rig refinement, score 0.947 on the same joins).
   JoinWeights w;
-  w.cane = {-1.4190, -0.0850, -1.4005, 0.0000, 0.0000, 2.0327, 0.3107, -1.3065, -0.9402,
-            -0.5694, 0.4303, 0.0171, 2.1391, 1.6675, -0.1815, -0.4049, -1.5714};
-  w.root = {-0.2824, -0.0483, -0.0378, -0.1891, 0.1891, 0.0000, 0.2899, 0.0000, 0.0000,
-            0.1661, 0.3013, 0.0000, 2.1116, -0.7006, 0.0171, 0.0613, 0.9429};
+  w.cane = {-1.2217, -0.0975, -1.4158, 0.0000, 0.0000, 1.8666, 0.3789, -1.3667, -0.8048,
+            -0.6220, 0.3570, -0.0481, 2.1674, 1.8245, -0.1850, -0.3708, -1.6654};
+  w.root = {-0.0064, -0.1069, -0.2217, -0.4956, 0.4956, 0.0000, 0.4540, 0.0000, 0.0000,
+            0.1436, 0.1499, 0.0000, 2.2595, -0.2450, 0.1800, 0.0073, 0.4913};
   return w;
 }
 
