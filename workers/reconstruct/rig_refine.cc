@@ -346,8 +346,8 @@ absl::StatusOr<RigCalibration> RefineRig(const std::vector<View2D>& views,
     projectors.emplace_back(rig.cameras[v]);
   }
   std::vector<std::array<double, 3>> rotations(rig.cameras.size(), {0.0, 0.0, 0.0});
-  // Per camera: focal scale - 1, principal point shift x and y in pixels.
-  std::vector<std::array<double, 3>> focal_scales(rig.cameras.size(), {0.0, 0.0, 0.0});
+  // Per camera: focal scale - 1, and the principal point's shift in x and y, pixels.
+  std::vector<std::array<double, 3>> intrinsics(rig.cameras.size(), {0.0, 0.0, 0.0});
   std::vector<std::array<double, 3>> blocks(points.size());
   for (size_t i = 0; i < points.size(); ++i) blocks[i] = {points[i].x(), points[i].y(), points[i].z()};
 
@@ -372,7 +372,7 @@ absl::StatusOr<RigCalibration> RefineRig(const std::vector<View2D>& views,
         problem.AddResidualBlock(
             new ceres::AutoDiffCostFunction<CorrectedCentrelineCost, 1, 3, 3, 3>(
                 new CorrectedCentrelineCost(projectors[v], fields[v]->interpolator(), inv_sd)),
-            &loss, rotations[v].data(), focal_scales[v].data(), blocks[i].data());
+            &loss, rotations[v].data(), intrinsics[v].data(), blocks[i].data());
       }
       ++out.residuals;
     }
@@ -387,7 +387,7 @@ absl::StatusOr<RigCalibration> RefineRig(const std::vector<View2D>& views,
   std::vector<std::array<double, 2>> line_ends(2 * trellis.size());
   std::vector<double> sags(trellis.size(), 0.0);
   struct TrellisTerm {
-    std::unique_ptr<TrellisLineCost> cost;  // for the before/after medians
+    std::unique_ptr<TrellisLineCost> cost;  // a copy, for the RMS before and after
     size_t view, match;
   };
   std::vector<TrellisTerm> terms;
@@ -422,7 +422,7 @@ absl::StatusOr<RigCalibration> RefineRig(const std::vector<View2D>& views,
           terms.push_back({std::make_unique<TrellisLineCost>(*cost), v, m});
           problem.AddResidualBlock(
               new ceres::AutoDiffCostFunction<TrellisLineCost, 1, 3, 3, 2, 2, 1>(cost.release()),
-              &trellis_loss, rotations[v].data(), focal_scales[v].data(), line_ends[2 * m].data(),
+              &trellis_loss, rotations[v].data(), intrinsics[v].data(), line_ends[2 * m].data(),
               line_ends[2 * m + 1].data(), &sags[m]);
         }
       }
@@ -441,7 +441,7 @@ absl::StatusOr<RigCalibration> RefineRig(const std::vector<View2D>& views,
     out.trellis_residuals = static_cast<int>(terms.size());
     if (reference < views.size() && problem.HasParameterBlock(rotations[reference].data())) {
       problem.SetParameterBlockConstant(rotations[reference].data());
-      problem.SetParameterBlockConstant(focal_scales[reference].data());
+      problem.SetParameterBlockConstant(intrinsics[reference].data());
     }
   }
   auto trellis_rms = [&]() {
@@ -449,7 +449,7 @@ absl::StatusOr<RigCalibration> RefineRig(const std::vector<View2D>& views,
     int n = 0;
     for (const TrellisTerm& term : terms) {
       double r = 0.0;
-      if ((*term.cost)(rotations[term.view].data(), focal_scales[term.view].data(),
+      if ((*term.cost)(rotations[term.view].data(), intrinsics[term.view].data(),
                        line_ends[2 * term.match].data(), line_ends[2 * term.match + 1].data(),
                        &sags[term.match], &r)) {
         sum += r * r * options.trellis_sd_px * options.trellis_sd_px;
@@ -469,9 +469,9 @@ absl::StatusOr<RigCalibration> RefineRig(const std::vector<View2D>& views,
                                  new CorrectionPrior(focal / options.correction_prior_px,
                                                      half_width / options.correction_prior_px,
                                                      1.0 / options.correction_prior_px)),
-                             nullptr, rotations[v].data(), focal_scales[v].data());
+                             nullptr, rotations[v].data(), intrinsics[v].data());
     if (!options.refine_principal_point) {
-      problem.SetManifold(focal_scales[v].data(), new ceres::SubsetManifold(3, {1, 2}));
+      problem.SetManifold(intrinsics[v].data(), new ceres::SubsetManifold(3, {1, 2}));
     }
   }
 
@@ -492,15 +492,15 @@ absl::StatusOr<RigCalibration> RefineRig(const std::vector<View2D>& views,
   for (size_t v = 0; v < rig.cameras.size(); ++v) {
     const Eigen::Vector3d w(rotations[v][0], rotations[v][1], rotations[v][2]);
     out.correction_px[v] = std::max(w.norm() * rig.cameras[v].camera_matrix(0, 0),
-                                    std::max(std::abs(focal_scales[v][0]) * 0.5 * rig.cameras[v].image_width,
-                                             std::hypot(focal_scales[v][1], focal_scales[v][2])));
+                                    std::max(std::abs(intrinsics[v][0]) * 0.5 * rig.cameras[v].image_width,
+                                             std::hypot(intrinsics[v][1], intrinsics[v][2])));
     if (out.correction_px[v] > options.max_correction_px) {
       out.reason = absl::StrCat("camera '", rig.cameras[v].name, "' would turn by ",
                                 out.correction_px[v], " px; not trusted");
       return rig;
     }
     if (v != reference) {
-      refined.cameras[v] = Corrected(rig.cameras[v], rotations[v].data(), focal_scales[v]);
+      refined.cameras[v] = Corrected(rig.cameras[v], rotations[v].data(), intrinsics[v]);
     }
   }
   std::vector<Eigen::Vector3d> adjusted(points.size());
