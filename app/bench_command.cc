@@ -87,7 +87,7 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   // Cut-point metrics decide under this policy (default: PruningPolicy's defaults).
   VB_ASSIGN_OR_RETURN(const std::string policy_path, flags.String("policy", ""));
   // --rig-refine off, canes (canes only) or trellis (canes, wires and posts): for comparisons.
-  VB_ASSIGN_OR_RETURN(const std::string rig_refine, flags.String("rig-refine", "trellis"));
+  VB_ASSIGN_OR_RETURN(const std::string rig_refine, flags.String("rig-refine", "canes"));
   if (rig_refine != "off" && rig_refine != "canes" && rig_refine != "trellis")
     return absl::InvalidArgumentError("--rig-refine must be off, canes or trellis");
   if (input != "images" && input != "labels" && input != "truth")

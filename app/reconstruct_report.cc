@@ -37,6 +37,7 @@ nlohmann::json ReconstructReport(const reconstruct::ReconstructResult& result) {
                           {"median_before_px", rr.median_before_px},
                           {"median_after_px", rr.median_after_px},
                           {"trellis_lines", rr.trellis_lines},
+                          {"trellis_rejected", rr.trellis_rejected},
                           {"trellis_rms_before_px", rr.trellis_rms_before_px},
                           {"trellis_rms_after_px", rr.trellis_rms_after_px},
                           {"correction_px", rr.correction_px}};

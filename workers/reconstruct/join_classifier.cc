@@ -35,14 +35,13 @@ JoinWeights DefaultJoinWeights() {
   // Trained by JoinClassifier.DISABLED_TrainOnSimulatedStops (join_classifier_test.cc) on the
   // candidate joins of the real pipeline, rig refinement included (MatchWithRigRefinement), on
   // rendered stops, seeds 1000-1099, vine 1, calibration 1 px off, once from the renderer's label
-  // images and once from the segmenter's output: 91760 joins to a cane (3827 right) and 5887 to
-  // the trunk or head (3649 right), gaps up to 15 cm; training AUC 0.949 (the previous weights,
-  // trained without rig refinement, score 0.947 on the same joins).
+  // images and once from the segmenter's output: 98300 joins to a cane (4124 right) and 6035 to
+  // the trunk or head (3767 right), gaps up to 15 cm; training AUC 0.949.
   JoinWeights w;
-  w.cane = {-1.2217, -0.0975, -1.4158, 0.0000, 0.0000, 1.8666, 0.3789, -1.3667, -0.8048,
-            -0.6220, 0.3570, -0.0481, 2.1674, 1.8245, -0.1850, -0.3708, -1.6654};
-  w.root = {-0.0064, -0.1069, -0.2217, -0.4956, 0.4956, 0.0000, 0.4540, 0.0000, 0.0000,
-            0.1436, 0.1499, 0.0000, 2.2595, -0.2450, 0.1800, 0.0073, 0.4913};
+  w.cane = {-1.2139, -0.1304, -1.3839, 0.0000, 0.0000, 1.8388, 0.3131, -1.2641, -0.8144,
+            -0.5831, 0.4344, -0.0426, 2.1683, 1.9745, -0.2300, -0.3947, -1.8483};
+  w.root = {0.0375, -0.1257, -0.1564, -0.5324, 0.5324, 0.0000, 0.3971, 0.0000, 0.0000,
+            0.2487, 0.2238, 0.0000, 2.2878, -0.2551, 0.1184, 0.0812, 0.4196};
   return w;
 }
 

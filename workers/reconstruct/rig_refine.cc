@@ -248,9 +248,11 @@ absl::Status RigRefineOptions::Validate() const {
         "must be > 0");
   }
   if (max_iterations < 1) return absl::InvalidArgumentError("rig_refine.max_iterations must be >= 1");
-  if (!positive(trellis_sd_px) || !positive(trellis_match_residual_px))
+  if (!positive(trellis_sd_px) || !positive(trellis_match_residual_px) ||
+      !positive(trellis_max_rms_px) || !(trellis_direction_sd >= 0))
     return absl::InvalidArgumentError(
-        "rig_refine: trellis_sd_px and trellis_match_residual_px must be > 0");
+        "rig_refine: trellis_sd_px, trellis_match_residual_px and trellis_max_rms_px must be > 0, "
+        "trellis_direction_sd >= 0");
   if (trellis_samples < 2) return absl::InvalidArgumentError("rig_refine.trellis_samples must be >= 2");
   return absl::OkStatus();
 }
@@ -378,6 +380,63 @@ absl::StatusOr<RigCalibration> RefineRig(const std::vector<View2D>& views,
     }
   }
 
+  // Priors on the corrections of every camera (but the reference) that has observations; called
+  // again when the trellis brings in a camera that no cane point reached.
+  std::vector<bool> has_prior(views.size(), false);
+  auto add_priors = [&]() {
+    for (size_t v = 0; v < views.size(); ++v) {
+      if (v == reference || has_prior[v]) continue;
+      if (!problem.HasParameterBlock(rotations[v].data())) continue;  // the camera saw nothing
+      has_prior[v] = true;
+      const double focal = rig.cameras[v].camera_matrix(0, 0);
+      const double half_width = 0.5 * rig.cameras[v].image_width;
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<CorrectionPrior, 6, 3, 3>(
+                                   new CorrectionPrior(focal / options.correction_prior_px,
+                                                       half_width / options.correction_prior_px,
+                                                       1.0 / options.correction_prior_px)),
+                               nullptr, rotations[v].data(), intrinsics[v].data());
+      if (!options.refine_principal_point) {
+        problem.SetManifold(intrinsics[v].data(), new ceres::SubsetManifold(3, {1, 2}));
+      }
+    }
+  };
+  add_priors();
+  ceres::Solver::Options solver_options;
+  solver_options.linear_solver_type = ceres::DENSE_SCHUR;  // points eliminated, cameras dense
+  solver_options.num_threads = 1;
+  solver_options.max_num_iterations = options.max_iterations;
+  // One solve; false (with out.reason set) when its solution is unusable.
+  auto solve = [&]() -> absl::StatusOr<bool> {
+    VB_ASSIGN_OR_RETURN(const DeadlineSolve result,
+                        SolveWithDeadline(solver_options, &problem, deadline, "RefineRig"));
+    if (result.expired) return absl::DeadlineExceededError("RefineRig: deadline exceeded");
+    if (!result.summary.IsSolutionUsable()) {
+      out.reason = absl::StrCat("solve failed: ", result.summary.message);
+      return false;
+    }
+    return true;
+  };
+  auto set_cameras_constant = [&](bool constant) {
+    for (size_t v = 0; v < views.size(); ++v) {
+      if (!problem.HasParameterBlock(rotations[v].data())) continue;
+      if (constant || v == reference) {
+        problem.SetParameterBlockConstant(rotations[v].data());
+        problem.SetParameterBlockConstant(intrinsics[v].data());
+      } else {
+        problem.SetParameterBlockVariable(rotations[v].data());
+        problem.SetParameterBlockVariable(intrinsics[v].data());
+      }
+    }
+  };
+  // With the trellis, the canes refine the rig first; each wire or post is then fitted to that
+  // rig alone, and one that misses its traces by more than trellis_max_rms_px is a mismatch and
+  // is left out before everything is solved together.
+  const bool staged = options.use_trellis && !trellis.empty();
+  if (staged) {
+    VB_ASSIGN_OR_RETURN(const bool usable, solve());
+    if (!usable) return rig;
+  }
+
   // Wires and posts: one 3D line per match, observed at trellis_samples points in every view
   // whose 2D line supports them (inside its extent and the image, with the calibrated rig).
   std::deque<std::vector<Eigen::Vector2d>> curves;  // per (match, view); costs point into it
@@ -438,11 +497,40 @@ absl::StatusOr<RigCalibration> RefineRig(const std::vector<View2D>& views,
         if (match.post || !options.trellis_wire_sag) problem.SetParameterBlockConstant(&sags[m]);
       }
     }
-    out.trellis_residuals = static_cast<int>(terms.size());
-    if (reference < views.size() && problem.HasParameterBlock(rotations[reference].data())) {
-      problem.SetParameterBlockConstant(rotations[reference].data());
-      problem.SetParameterBlockConstant(intrinsics[reference].data());
+    if (!terms.empty()) {
+      add_priors();
+      set_cameras_constant(true);
+      VB_ASSIGN_OR_RETURN(const bool usable, solve());
+      if (!usable) return rig;
+      std::vector<double> sum(trellis.size(), 0.0);
+      std::vector<int> count(trellis.size(), 0);
+      for (const TrellisTerm& term : terms) {
+        double r = 0.0;
+        if ((*term.cost)(rotations[term.view].data(), intrinsics[term.view].data(),
+                         line_ends[2 * term.match].data(), line_ends[2 * term.match + 1].data(),
+                         &sags[term.match], &r)) {
+          sum[term.match] += r * r * options.trellis_sd_px * options.trellis_sd_px;
+        } else {
+          sum[term.match] += 1e6;  // behind a camera: certainly a mismatch
+        }
+        ++count[term.match];
+      }
+      for (size_t m = 0; m < trellis.size(); ++m) {
+        if (count[m] == 0 || std::sqrt(sum[m] / count[m]) <= options.trellis_max_rms_px) continue;
+        // Removing its parameter blocks removes its residuals (and its direction prior).
+        problem.RemoveParameterBlock(line_ends[2 * m].data());
+        problem.RemoveParameterBlock(line_ends[2 * m + 1].data());
+        problem.RemoveParameterBlock(&sags[m]);
+        --out.trellis_lines;
+        ++out.trellis_rejected;
+      }
+      std::erase_if(terms, [&](const TrellisTerm& term) {
+        return count[term.match] > 0 &&
+               std::sqrt(sum[term.match] / count[term.match]) > options.trellis_max_rms_px;
+      });
+      set_cameras_constant(false);
     }
+    out.trellis_residuals = static_cast<int>(terms.size());
   }
   auto trellis_rms = [&]() {
     double sum = 0.0;
@@ -460,32 +548,9 @@ absl::StatusOr<RigCalibration> RefineRig(const std::vector<View2D>& views,
   };
   out.trellis_rms_before_px = trellis_rms();
 
-  for (size_t v = 0; v < views.size(); ++v) {
-    if (v == reference) continue;
-    if (!problem.HasParameterBlock(rotations[v].data())) continue;  // the camera saw no point
-    const double focal = rig.cameras[v].camera_matrix(0, 0);
-    const double half_width = 0.5 * rig.cameras[v].image_width;
-    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<CorrectionPrior, 6, 3, 3>(
-                                 new CorrectionPrior(focal / options.correction_prior_px,
-                                                     half_width / options.correction_prior_px,
-                                                     1.0 / options.correction_prior_px)),
-                             nullptr, rotations[v].data(), intrinsics[v].data());
-    if (!options.refine_principal_point) {
-      problem.SetManifold(intrinsics[v].data(), new ceres::SubsetManifold(3, {1, 2}));
-    }
-  }
-
-  ceres::Solver::Options solver_options;
-  solver_options.linear_solver_type = ceres::DENSE_SCHUR;  // points eliminated, cameras dense
-  solver_options.num_threads = 1;
-  solver_options.max_num_iterations = options.max_iterations;
-  VB_ASSIGN_OR_RETURN(const DeadlineSolve solve,
-                      SolveWithDeadline(solver_options, &problem, deadline, "RefineRig"));
-  if (solve.expired) return absl::DeadlineExceededError("RefineRig: deadline exceeded");
-  const ceres::Solver::Summary& ceres_summary = solve.summary;
-  if (!ceres_summary.IsSolutionUsable()) {
-    out.reason = absl::StrCat("solve failed: ", ceres_summary.message);
-    return rig;
+  {
+    VB_ASSIGN_OR_RETURN(const bool usable, solve());
+    if (!usable) return rig;
   }
 
   RigCalibration refined = rig;

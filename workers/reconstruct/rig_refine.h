@@ -48,12 +48,15 @@ struct RigRefineOptions {
   // point looks like a small rotation at the image centre but not at the edges, where the lens
   // distortion is strong and the wires run.
   bool refine_principal_point = true;
-  // Wires and posts (TrellisLineMatch) as observations too: each is a 3D line (4 unknowns) that
-  // must project onto its 2D line in every view that sees it.
-  bool use_trellis = true;
+  // Wires and posts (TrellisLineMatch) as observations too: each is a 3D line (4 unknowns, plus
+  // a sag for wires) that must project onto its trace in every view that sees it. Off: on tuning
+  // seeds it changed nothing measurable once made robust (docs/reconstruction.md, 3b).
+  bool use_trellis = false;
   double trellis_sd_px = 0.5;              // residual scale of a wire or post to its 2D line
   int trellis_samples = 16;                // points along each wire or post
   bool trellis_wire_sag = true;            // each wire may sag (one more unknown)
+  double trellis_max_rms_px = 4.0;         // a wire or post fitted to the canes' rig missing
+                                           // its traces by more (RMS) is a mismatch: left out
   // Prior that wires run along the row (x) and posts stand upright (z): sd of the slope of the
   // other two coordinates, m per m; 0: none.
   double trellis_direction_sd = 0.01;
@@ -71,7 +74,10 @@ struct RigRefineSummary {
   int residuals = 0;              // point-view observations
   int trellis_lines = 0;          // wires and posts in the adjustment
   int trellis_residuals = 0;      // their sample-view observations
-  double trellis_rms_before_px = 0.0;  // RMS distance of those samples to their 2D lines
+  int trellis_rejected = 0;       // matches left out as mismatches (trellis_max_rms_px)
+  // RMS distance of those samples to their traces, with the lines fitted to the canes' rig, and
+  // at the end.
+  double trellis_rms_before_px = 0.0;
   double trellis_rms_after_px = 0.0;
   double median_before_px = 0.0;  // median distance to the skeleton before and after
   double median_after_px = 0.0;

@@ -147,38 +147,33 @@ std::vector<TrellisLineMatch> MatchTrellis(const std::vector<View2D>& views,
   return MatchTrellisLines(views, rig, WorkingVolume(), options).value();
 }
 
-// Two cameras pitched (and turned) by 3 px, and few confident canes, as on a sparse stop: the
-// canes alone leave the pitch loose, and the wires, seen across every view, pin it.
-TEST(RigRefine, WiresPinAPitchedRigThatFewCanesLeaveLoose) {
-  Stop stop = MakeStop(1101);
-  std::vector<Piece3D> few;
-  for (size_t i = 0; i < stop.pieces.size(); i += 5) few.push_back(stop.pieces[i]);
-  RigCalibration drifted = stop.true_rig;
-  const double pixel = 1.0 / drifted.cameras[1].camera_matrix(0, 0);
-  drifted.cameras[1] = Turned(drifted.cameras[1], {1, 0.3, 0}, 3.0 * pixel);
-  drifted.cameras[2] = Turned(drifted.cameras[2], {1, 1, 0.5}, 3.0 * pixel);
+// A wire matched to the wrong line in one view (the next wire up) misses its traces by tens of
+// pixels once fitted to the canes' rig: it is left out, and the rig comes out as from the canes
+// and the other wires.
+TEST(RigRefine, LeavesOutAMismatchedWire) {
+  const Stop stop = MakeStop(1101);
+  const RigCalibration drifted = sim::PerturbCalibration(stop.true_rig, 1.0, 3);
   const std::vector<View2D> views = ViewsMeasuredWith(stop, drifted);
-  const std::vector<TrellisLineMatch> trellis = MatchTrellis(views, drifted);
+  std::vector<TrellisLineMatch> trellis = MatchTrellis(views, drifted);
   ASSERT_EQ(trellis.size(), 4u);  // the scene's four wires; no post in view
   RigRefineOptions options;
-  options.reference_camera = 0;  // exact here: hold it
-  options.min_points = 20;
-  double error_m[2];
-  for (bool use_trellis : {false, true}) {
-    options.use_trellis = use_trellis;
-    RigRefineSummary summary;
-    const absl::StatusOr<RigCalibration> refined =
-        RefineRig(views, drifted, few, trellis, options, Deadline::Infinite(), &summary);
-    ASSERT_TRUE(refined.ok()) << refined.status();
-    ASSERT_TRUE(summary.applied) << summary.reason;
-    error_m[use_trellis] = TriangulationRmsM(stop.true_rig, *refined);
-    if (use_trellis) {
-      EXPECT_EQ(summary.trellis_lines, 4);
-      EXPECT_LT(summary.trellis_rms_after_px, 0.2 * summary.trellis_rms_before_px);
-    }
-  }
-  EXPECT_LT(error_m[1], 0.7 * error_m[0])
-      << "canes alone " << error_m[0] << " m, with the wires " << error_m[1] << " m";
+  options.use_trellis = true;
+  RigRefineSummary good;
+  const auto with_good = RefineRig(views, drifted, stop.pieces, trellis, options,
+                                   Deadline::Infinite(), &good);
+  ASSERT_TRUE(with_good.ok()) << with_good.status();
+  EXPECT_EQ(good.trellis_rejected, 0);
+  EXPECT_EQ(good.trellis_lines, 4);
+  trellis[0].lines[2] = trellis[1].lines[2];  // wire 0 given wire 1's line in view 2
+  RigRefineSummary bad;
+  const auto with_bad = RefineRig(views, drifted, stop.pieces, trellis, options,
+                                  Deadline::Infinite(), &bad);
+  ASSERT_TRUE(with_bad.ok()) << with_bad.status();
+  ASSERT_TRUE(bad.applied) << bad.reason;
+  EXPECT_EQ(bad.trellis_rejected, 1);
+  EXPECT_EQ(bad.trellis_lines, 3);
+  EXPECT_LT(TriangulationRmsM(stop.true_rig, *with_bad),
+            1.1 * TriangulationRmsM(stop.true_rig, *with_good) + 1e-4);
 }
 
 // On rigs drifted in every camera and every parameter, with every cane piece certain, the trellis
@@ -189,9 +184,12 @@ TEST(RigRefine, WithTheTrellisStillHalvesTriangulationErrorOfAPerturbedRig) {
   for (uint64_t seed : {1, 2, 3, 4, 5, 6}) {
     const RigCalibration drifted = sim::PerturbCalibration(stop.true_rig, 1.0, seed);
     const std::vector<View2D> views = ViewsMeasuredWith(stop, drifted);
+    RigRefineOptions options;
+    options.use_trellis = true;
     RigRefineSummary summary;
     const absl::StatusOr<RigCalibration> refined = RefineRig(
-        views, drifted, stop.pieces, MatchTrellis(views, drifted), {}, Deadline::Infinite(), &summary);
+        views, drifted, stop.pieces, MatchTrellis(views, drifted), options, Deadline::Infinite(),
+        &summary);
     ASSERT_TRUE(refined.ok()) << refined.status();
     ASSERT_TRUE(summary.applied) << summary.reason;
     EXPECT_GE(summary.trellis_lines, 3) << "seed " << seed;
