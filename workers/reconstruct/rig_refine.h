@@ -6,11 +6,11 @@
 // of a first correspondence pass give 3D points, and a bundle adjustment moves those points and
 // a small rotation, focal-length scale and principal-point shift of each camera so that every
 // point projects onto the skeleton in every view that sees it (distance-to-skeleton residuals,
-// robust loss). Wires and posts (TrellisLineMatch) join as 3D lines that must project onto each
-// view's trace of them. Camera
-// centres stay as calibrated (a drift of the mounts is mostly rotation, and with fixed centres
-// the scale is fixed too); weak priors on the corrections settle the near-gauge freedom (the
-// whole rig turning together) at the smallest correction that explains the images. This goes
+// robust loss); optionally wires and posts (TrellisLineMatch) join as 3D lines that must
+// project onto each view's trace of them. Camera centres stay as calibrated (a drift of the
+// mounts is mostly rotation, and with fixed centres the scale is fixed too); weak priors on the
+// corrections settle the near-gauge freedom (the whole rig turning together) at the smallest
+// correction that explains the images. This goes
 // beyond Botterill et al. 2017, who calibrated once with a target; it is standard
 // self-calibration (Triggs et al., "Bundle Adjustment - A Modern Synthesis", 2000).
 // Thread-safe (pure function).
@@ -98,11 +98,11 @@ absl::StatusOr<RigCalibration> RefineRig(const std::vector<View2D>& views,
                                          RigRefineSummary* summary = nullptr);
 
 // As above, with the wires and posts of `trellis` (MatchTrellisLines with `rig` and
-// options.trellis_match_residual_px) as further observations when options.use_trellis. The
-// trellis pins what the canes leave loose: wires are long, nearly horizontal lines that every
-// view sees across the whole image, so the upper camera's pitch against the lower pair (which
-// sets every wire's and horizontal cane's depth) is measured over a wide baseline, and posts do
-// the same for yaw. A match whose line index is out of range for its view is INVALID_ARGUMENT.
+// options.trellis_match_residual_px) as further observations when options.use_trellis: the
+// canes refine the rig first, each wire or post is fitted to that rig and left out when it misses
+// its traces by more than trellis_max_rms_px, then all are solved together. Each wire's depth is
+// free, so the trellis cannot pin a depth distortion of the whole rig (docs/reconstruction.md,
+// 3b). A match whose line index is out of range for its view is INVALID_ARGUMENT.
 absl::StatusOr<RigCalibration> RefineRig(const std::vector<View2D>& views,
                                          const RigCalibration& rig,
                                          const std::vector<Piece3D>& pieces,
