@@ -7,6 +7,7 @@
 #include <string>
 
 #include "absl/strings/str_cat.h"
+#include "Eigen/Eigenvalues"
 
 namespace vb::reconstruct {
 namespace {
@@ -94,6 +95,40 @@ bool Clip(const Line3& line, const WorkingVolume& volume, int axis, double max_s
   for (int k = 0; k < 3; ++k)
     if (k != axis && (mid[k] < volume.box.min()[k] || mid[k] > volume.box.max()[k])) return false;
   return true;
+}
+
+// Replaces a chosen candidate's line, the intersection of two views' planes, by the line nearest
+// (least squares, in metres from each plane) to the planes of every view that saw it: with
+// three views this averages the two lower cameras' errors instead of taking one of them.
+void FitToAllViews(const std::vector<View2D>& views, const RigCalibration& rig,
+                   const WorkingVolume& volume, const TrellisOptions& options, bool posts,
+                   Candidate* c) {
+  std::vector<Plane> planes;
+  for (size_t v = 0; v < views.size(); ++v) {
+    if (c->lines[v] < 0) continue;
+    const auto& lines = posts ? views[v].posts : views[v].wires;
+    planes.push_back(BackProject(rig.cameras[v], lines[static_cast<size_t>(c->lines[v])]));
+  }
+  if (planes.size() < 3) return;
+  Eigen::Matrix3d normals = Eigen::Matrix3d::Zero();
+  for (const Plane& p : planes) normals += p.normal * p.normal.transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(normals);
+  const Eigen::Vector3d direction = solver.eigenvectors().col(0);  // least explained by normals
+  Eigen::Matrix3d a = direction * direction.transpose();
+  Eigen::Vector3d b = Eigen::Vector3d::Zero();
+  for (const Plane& p : planes) {
+    a += p.normal * p.normal.transpose();
+    b -= p.normal * p.offset;
+  }
+  const Eigen::Vector3d point = a.ldlt().solve(b);
+  if (!point.allFinite() || !direction.allFinite()) return;
+  Eigen::Vector3d ea, eb;
+  if (!Clip({point, direction}, volume, posts ? 2 : 0,
+            posts ? options.max_post_tilt : options.max_wire_slope, &ea, &eb)) {
+    return;
+  }
+  c->a = ea;
+  c->b = eb;
 }
 
 std::vector<Candidate> Choose(std::vector<Candidate> candidates, const TrellisOptions& options,
@@ -201,6 +236,8 @@ absl::StatusOr<Trellis> ReconstructTrellis(const std::vector<View2D>& views,
   Trellis trellis;
   std::vector<Candidate> wires =
       Choose(Candidates(views, rig, volume, options, false), options, views.size());
+  if (options.fit_all_views)
+    for (Candidate& c : wires) FitToAllViews(views, rig, volume, options, false, &c);
   std::sort(wires.begin(), wires.end(),
             [](const Candidate& x, const Candidate& y) { return x.a.z() + x.b.z() < y.a.z() + y.b.z(); });
   for (const Candidate& c : wires) {
@@ -212,6 +249,8 @@ absl::StatusOr<Trellis> ReconstructTrellis(const std::vector<View2D>& views,
   }
   std::vector<Candidate> posts =
       Choose(Candidates(views, rig, volume, options, true), options, views.size());
+  if (options.fit_all_views)
+    for (Candidate& c : posts) FitToAllViews(views, rig, volume, options, true, &c);
   std::sort(posts.begin(), posts.end(),
             [](const Candidate& x, const Candidate& y) { return x.a.x() < y.a.x(); });
   for (const Candidate& c : posts) {

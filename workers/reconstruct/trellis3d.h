@@ -24,6 +24,8 @@ struct TrellisOptions {
   double duplicate_distance_m = 0.02; // candidates this close to a chosen wire are duplicates
   double max_wire_slope = 0.2;        // wires run along the row: |dz|, |dy| per metre of x
   double max_post_tilt = 0.3;         // posts stand up: |dx|, |dy| per metre of z
+  bool fit_all_views = true;          // a chosen line is refitted to the planes of every view
+                                      // that saw it (not only the two it was built from)
 
   absl::Status Validate() const;
 };
