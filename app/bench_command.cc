@@ -86,6 +86,10 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   VB_ASSIGN_OR_RETURN(const std::string input, flags.String("input", "images"));
   // Cut-point metrics decide under this policy (default: PruningPolicy's defaults).
   VB_ASSIGN_OR_RETURN(const std::string policy_path, flags.String("policy", ""));
+  // --rig-refine off, canes (canes only) or trellis (canes, wires and posts): for comparisons.
+  VB_ASSIGN_OR_RETURN(const std::string rig_refine, flags.String("rig-refine", "canes"));
+  if (rig_refine != "off" && rig_refine != "canes" && rig_refine != "trellis")
+    return absl::InvalidArgumentError("--rig-refine must be off, canes or trellis");
   if (input != "images" && input != "labels" && input != "truth")
     return absl::InvalidArgumentError("--input must be images, labels or truth");
   VB_RETURN_IF_ERROR(flags.Finish());
@@ -100,6 +104,8 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   VB_RETURN_IF_ERROR(sim_options.Validate());
   reconstruct::ReconstructOptions options;
   options.threads = static_cast<int>(threads);
+  options.rig_refine.enabled = rig_refine != "off";
+  options.rig_refine.use_trellis = rig_refine == "trellis";
   const reconstruct::SegmenterModel& segmenter = reconstruct::BuiltinSegmenterModel();
 
   std::vector<ReconstructionMetrics> metrics;

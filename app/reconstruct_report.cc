@@ -36,6 +36,10 @@ nlohmann::json ReconstructReport(const reconstruct::ReconstructResult& result) {
                           {"points", rr.points},
                           {"median_before_px", rr.median_before_px},
                           {"median_after_px", rr.median_after_px},
+                          {"trellis_lines", rr.trellis_lines},
+                          {"trellis_rejected", rr.trellis_rejected},
+                          {"trellis_rms_before_px", rr.trellis_rms_before_px},
+                          {"trellis_rms_after_px", rr.trellis_rms_after_px},
                           {"correction_px", rr.correction_px}};
   if (!rr.reason.empty()) report["rig_refine"]["reason"] = rr.reason;
   if (!result.empty_reason.empty()) report["empty_reason"] = result.empty_reason;

@@ -44,7 +44,8 @@ const std::vector<Command>& Commands() {
        "filled in",
        vb::app::RunPhenomics},
       {"bench reconstruct",
-       "--vines N --seed-base S [--calibration-error-px X] [--policy policy.json]",
+       "--vines N --seed-base S [--calibration-error-px X] [--policy policy.json]"
+       " [--input images|labels|truth] [--rig-refine off|canes|trellis]",
        vb::app::RunBenchReconstruct},
       {"plan",
        "--model model.json --cuts cut_plan.json --out trajectory.json [--tool mill_end|secateur] "

@@ -33,15 +33,15 @@ double DistanceToLine(const Eigen::Vector3d& p, const Polyline3& line) {
 
 JoinWeights DefaultJoinWeights() {
   // Trained by JoinClassifier.DISABLED_TrainOnSimulatedStops (join_classifier_test.cc) on the
-  // candidate joins of the real pipeline on rendered stops, seeds 1000-1099, vine 1, calibration
-  // 1 px off, once from the renderer's label images and once from the segmenter's output:
-  // 114309 joins to a cane (5034 right) and 6362 to the trunk or head (3868 right), gaps up to
-  // 15 cm; training AUC 0.943.
+  // candidate joins of the real pipeline, rig refinement included (MatchWithRigRefinement), on
+  // rendered stops, seeds 1000-1099, vine 1, calibration 1 px off, once from the renderer's label
+  // images and once from the segmenter's output: 98300 joins to a cane (4124 right) and 6035 to
+  // the trunk or head (3767 right), gaps up to 15 cm; training AUC 0.949.
   JoinWeights w;
-  w.cane = {-1.4190, -0.0850, -1.4005, 0.0000, 0.0000, 2.0327, 0.3107, -1.3065, -0.9402,
-            -0.5694, 0.4303, 0.0171, 2.1391, 1.6675, -0.1815, -0.4049, -1.5714};
-  w.root = {-0.2824, -0.0483, -0.0378, -0.1891, 0.1891, 0.0000, 0.2899, 0.0000, 0.0000,
-            0.1661, 0.3013, 0.0000, 2.1116, -0.7006, 0.0171, 0.0613, 0.9429};
+  w.cane = {-1.2139, -0.1304, -1.3839, 0.0000, 0.0000, 1.8388, 0.3131, -1.2641, -0.8144,
+            -0.5831, 0.4344, -0.0426, 2.1683, 1.9745, -0.2300, -0.3947, -1.8483};
+  w.root = {0.0375, -0.1257, -0.1564, -0.5324, 0.5324, 0.0000, 0.3971, 0.0000, 0.0000,
+            0.2487, 0.2238, 0.0000, 2.2878, -0.2551, 0.1184, 0.0812, 0.4196};
   return w;
 }
 

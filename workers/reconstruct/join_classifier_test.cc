@@ -120,9 +120,10 @@ TEST(JoinClassifier, DISABLED_TrainOnSimulatedStops) {
       const SimulatedStop stop = MakeRenderedStop(1000 + k, images);
       if (stop.views.empty()) continue;
       const Deadline deadline = Deadline::Infinite();
-      const auto pieces = MatchSegments(stop.views, stop.rig, options.correspondence, deadline);
-      ASSERT_TRUE(pieces.ok()) << pieces.status();
-      auto canes = AssembleCanes(*pieces, options.assembly, deadline);
+      // Correspondence with the rig refined in between, as the pipeline does it.
+      const auto matched = MatchWithRigRefinement(stop.views, stop.rig, options, deadline);
+      ASSERT_TRUE(matched.ok()) << matched.status();
+      auto canes = AssembleCanes(matched->pieces, options.assembly, deadline);
       ASSERT_TRUE(canes.ok()) << canes.status();
       std::erase_if(*canes, [&](const Polyline3& cane) {
         size_t outside = 0;
@@ -131,7 +132,7 @@ TEST(JoinClassifier, DISABLED_TrainOnSimulatedStops) {
       });
       std::vector<Eigen::Vector3d> hints;
       for (const Polyline3& c : *canes) hints.insert(hints.end(), c.points.begin(), c.points.end());
-      const auto head = ReconstructHeadAndTrunk(stop.views, stop.rig, options.volume,
+      const auto head = ReconstructHeadAndTrunk(stop.views, matched->rig, options.volume,
                                                 options.head, deadline, hints);
       ASSERT_TRUE(head.ok()) << head.status();
       const auto prepared = PrepareCanes(*canes, head->trunk, head->head, options.connect);

@@ -87,8 +87,11 @@ TEST(PipelineStages, DISABLED_Report) {
     ASSERT_FALSE(stop.views.empty());
     const VineModel& truth = stop.scene.vine;
     const Deadline deadline = Deadline::Infinite();
-    const auto pieces = MatchSegments(stop.views, stop.rig, options.correspondence, deadline);
-    ASSERT_TRUE(pieces.ok()) << pieces.status();
+    // Correspondence with the rig refined in between, as the pipeline does it.
+    const auto matched = MatchWithRigRefinement(stop.views, stop.rig, options, deadline);
+    ASSERT_TRUE(matched.ok()) << matched.status();
+    const std::vector<Piece3D>* pieces = &matched->pieces;
+    const RigCalibration& rig = matched->rig;
     std::vector<Polyline3> piece_lines;
     for (const Piece3D& p : *pieces) piece_lines.push_back(p.polyline);
     auto canes = AssembleCanes(*pieces, options.assembly, deadline);
@@ -100,7 +103,7 @@ TEST(PipelineStages, DISABLED_Report) {
     });
     std::vector<Eigen::Vector3d> hints;
     for (const Polyline3& c : *canes) hints.insert(hints.end(), c.points.begin(), c.points.end());
-    const auto head = ReconstructHeadAndTrunk(stop.views, stop.rig, options.volume, options.head,
+    const auto head = ReconstructHeadAndTrunk(stop.views, rig, options.volume, options.head,
                                               deadline, hints);
     ASSERT_TRUE(head.ok()) << head.status();
     ConnectSummary summary;
@@ -116,7 +119,7 @@ TEST(PipelineStages, DISABLED_Report) {
     auto model = BuildTree(*prepared, joins, head->head, options.connect, &summary);
     ASSERT_TRUE(model.ok()) << model.status();
     VineModel connected = *model;
-    ASSERT_TRUE(RefineModel(&*model, stop.views, stop.rig, options.fit, deadline).ok());
+    ASSERT_TRUE(RefineModel(&*model, stop.views, rig, options.fit, deadline).ok());
 
     const auto mp = EvaluateReconstruction(Flat(piece_lines), truth).value();
     std::vector<Polyline3> with_trunk;

@@ -52,6 +52,43 @@ absl::Status CheckRig(const RigCalibration& rig) {
   return absl::OkStatus();
 }
 
+// MatchWithRigRefinement after validation; `first_pass`, if given, is the first pass's result
+// (the caller timed it separately) and is moved from.
+absl::StatusOr<MatchedStop> MatchAndRefine(const std::vector<View2D>& views,
+                                           const RigCalibration& calibrated_rig,
+                                           const ReconstructOptions& options,
+                                           const Deadline& deadline,
+                                           std::vector<Piece3D>* first_pass) {
+  std::vector<Piece3D> computed;
+  if (first_pass == nullptr) {
+    VB_ASSIGN_OR_RETURN(computed,
+                        MatchSegments(views, calibrated_rig, options.correspondence, deadline));
+    first_pass = &computed;
+  }
+  MatchedStop out;
+  std::vector<TrellisLineMatch> trellis_lines;
+  if (options.rig_refine.enabled && options.rig_refine.use_trellis) {
+    TrellisOptions match_options = options.trellis;
+    match_options.max_residual_px = options.rig_refine.trellis_match_residual_px;
+    VB_ASSIGN_OR_RETURN(trellis_lines,
+                        MatchTrellisLines(views, calibrated_rig, options.volume, match_options));
+  }
+  VB_ASSIGN_OR_RETURN(out.rig, RefineRig(views, calibrated_rig, *first_pass, trellis_lines,
+                                         options.rig_refine, deadline, &out.rig_refine));
+  if (!out.rig_refine.applied) {
+    out.pieces = std::move(*first_pass);
+    return out;
+  }
+  // Wire and post lines are in normalised coordinates, which a new focal length changes.
+  out.refined_views = views;
+  for (size_t v = 0; v < views.size(); ++v) {
+    ReexpressLines(calibrated_rig.cameras[v], out.rig.cameras[v], &out.refined_views[v].wires);
+    ReexpressLines(calibrated_rig.cameras[v], out.rig.cameras[v], &out.refined_views[v].posts);
+  }
+  VB_ASSIGN_OR_RETURN(out.pieces, MatchSegments(views, out.rig, options.correspondence, deadline));
+  return out;
+}
+
 }  // namespace
 
 absl::Status ReconstructOptions::Validate() const {
@@ -67,6 +104,15 @@ absl::Status ReconstructOptions::Validate() const {
   return absl::OkStatus();
 }
 
+absl::StatusOr<MatchedStop> MatchWithRigRefinement(const std::vector<View2D>& views,
+                                                   const RigCalibration& calibrated_rig,
+                                                   const ReconstructOptions& options,
+                                                   const Deadline& deadline) {
+  VB_RETURN_IF_ERROR(options.Validate());
+  VB_RETURN_IF_ERROR(CheckRig(calibrated_rig));
+  return MatchAndRefine(views, calibrated_rig, options, deadline, nullptr);
+}
+
 absl::StatusOr<ReconstructResult> ReconstructFromViews(const std::vector<View2D>& views,
                                                        const RigCalibration& calibrated_rig,
                                                        const ReconstructOptions& options,
@@ -80,18 +126,12 @@ absl::StatusOr<ReconstructResult> ReconstructFromViews(const std::vector<View2D>
   result.timings.correspondence_s = SecondsSince(t);
 
   t = std::chrono::steady_clock::now();
-  VB_ASSIGN_OR_RETURN(result.rig, RefineRig(views, calibrated_rig, pieces, options.rig_refine,
-                                            deadline, &result.rig_refine));
-  // Wire and post lines are in normalised coordinates, which a new focal length changes.
-  std::vector<View2D> refined_views;
-  if (result.rig_refine.applied) {
-    refined_views = views;
-    for (size_t v = 0; v < views.size(); ++v) {
-      ReexpressLines(calibrated_rig.cameras[v], result.rig.cameras[v], &refined_views[v].wires);
-      ReexpressLines(calibrated_rig.cameras[v], result.rig.cameras[v], &refined_views[v].posts);
-    }
-    VB_ASSIGN_OR_RETURN(pieces, MatchSegments(views, result.rig, options.correspondence, deadline));
-  }
+  VB_ASSIGN_OR_RETURN(MatchedStop matched,
+                      MatchAndRefine(views, calibrated_rig, options, deadline, &pieces));
+  std::vector<View2D> refined_views = std::move(matched.refined_views);
+  pieces = std::move(matched.pieces);
+  result.rig = std::move(matched.rig);
+  result.rig_refine = std::move(matched.rig_refine);
   result.pieces = static_cast<int>(pieces.size());
   result.timings.rig_refine_s = SecondsSince(t);
   const RigCalibration& rig = result.rig;

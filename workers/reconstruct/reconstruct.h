@@ -79,6 +79,24 @@ absl::StatusOr<ReconstructResult> Reconstruct(const std::vector<Image>& images,
                                               const ReconstructOptions& options,
                                               const Deadline& deadline);
 
+// Step 3 with the rig refined in between (3b): a first correspondence pass with `calibrated_rig`,
+// RefineRig on its confident pieces and on the trellis lines (MatchTrellisLines), and, when the
+// rig changed, a second pass with the refined rig. What the later steps are given; the training
+// and diagnosis tools call it to see what the pipeline sees. Errors as MatchSegments and
+// RefineRig.
+struct MatchedStop {
+  std::vector<Piece3D> pieces;
+  RigCalibration rig;             // the refined rig, or calibrated_rig when not applied
+  RigRefineSummary rig_refine;
+  // When rig_refine.applied: the views with their wire and post lines re-expressed for the
+  // refined focal lengths (ReexpressLines); empty otherwise (use the input views).
+  std::vector<View2D> refined_views;
+};
+absl::StatusOr<MatchedStop> MatchWithRigRefinement(const std::vector<View2D>& views,
+                                                   const RigCalibration& calibrated_rig,
+                                                   const ReconstructOptions& options,
+                                                   const Deadline& deadline);
+
 // Steps 3-8 from given views (for tests and benchmarks of the 3D stages on SyntheticViews).
 absl::StatusOr<ReconstructResult> ReconstructFromViews(const std::vector<View2D>& views,
                                                        const RigCalibration& rig,

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "opencv2/imgproc.hpp"
 
@@ -31,6 +32,17 @@ Line2D LineFrom(const CameraCalibration& camera, const Eigen::Vector3d& a,
   l /= l.head<2>().norm();
   line.line = l;
   line.width_px = WidthPx(camera, 0.5 * (a + b), radius);
+  // The centre as the line's pixels, every ~8 px (the 2D stage's trace of what it saw).
+  constexpr int kSamples = 4000;
+  for (int k = 0; k <= kSamples; ++k) {
+    const std::optional<Eigen::Vector2d> uv = camera.Project(a + (b - a) * k / double(kSamples));
+    if (!uv || !camera.InImage(*uv)) continue;
+    // Beyond the fold of the lens a point far outside the view can land in the image.
+    const Eigen::Vector3d in_camera = cam * (a + (b - a) * k / double(kSamples));
+    if ((camera.PixelToNormalised(*uv) - in_camera.hnormalized()).norm() > 1e-6) continue;
+    if (!line.centre_px.empty() && (*uv - line.centre_px.back()).norm() < 8.0) continue;
+    line.centre_px.push_back(*uv);
+  }
   return line;
 }
 

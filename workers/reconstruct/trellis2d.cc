@@ -69,6 +69,37 @@ double CoveredLength(const std::vector<Eigen::Vector2d>& points, const LinePiece
   return covered;
 }
 
+// The weighted means of `pixels` over the piece's inliers in runs of about `step_px` along the
+// line, in order along it.
+std::vector<Eigen::Vector2d> CentreTrace(const std::vector<Eigen::Vector2d>& points,
+                                         const std::vector<Eigen::Vector2d>& pixels,
+                                         const std::vector<int>& weights, const LinePiece& piece,
+                                         double step_px) {
+  std::vector<int> order = piece.inliers;
+  const Eigen::Vector2d direction = piece.Direction();
+  std::sort(order.begin(), order.end(), [&](int a, int b) {
+    return direction.dot(points[a]) < direction.dot(points[b]);
+  });
+  std::vector<Eigen::Vector2d> trace;
+  Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+  double weight = 0.0;
+  Eigen::Vector2d start = Eigen::Vector2d::Zero();
+  for (int i : order) {
+    if (weight > 0 && (pixels[i] - start).norm() >= step_px) {
+      trace.push_back(sum / weight);
+      sum.setZero();
+      weight = 0.0;
+    }
+    if (weight == 0.0) start = pixels[i];
+    sum += weights[i] * pixels[i];
+    weight += weights[i];
+  }
+  if (weight > 0) trace.push_back(sum / weight);
+  return trace;
+}
+
+constexpr double kTraceStepPx = 8.0;
+
 Line2D ToLine2D(const LinePiece& piece, double width_px, int support_px) {
   Line2D line;
   line.line = piece.line;
@@ -119,6 +150,7 @@ std::vector<Line2D> ExtractWires(const ClassImage& classes, const CameraCalibrat
     }
   }
   std::vector<Eigen::Vector2d> points;
+  std::vector<Eigen::Vector2d> pixels;  // the same points in pixels
   std::vector<int> weights;  // wire pixels summarised by each point
   std::vector<std::vector<int>> members(regions.kept.size());
   for (size_t k = 0; k < bins.size(); ++k) {
@@ -126,8 +158,8 @@ std::vector<Line2D> ExtractWires(const ClassImage& classes, const CameraCalibrat
     for (size_t i = 0; i < b.count.size(); ++i) {
       if (b.count[i] == 0) continue;
       members[k].push_back(static_cast<int>(points.size()));
-      points.push_back(camera.PixelToNormalised(
-          Eigen::Vector2d(b.sum_x[i] / b.count[i], b.sum_y[i] / b.count[i])));
+      pixels.emplace_back(b.sum_x[i] / b.count[i], b.sum_y[i] / b.count[i]);
+      points.push_back(camera.PixelToNormalised(pixels.back()));
       weights.push_back(b.count[i]);
     }
   }
@@ -156,6 +188,7 @@ std::vector<Line2D> ExtractWires(const ClassImage& classes, const CameraCalibrat
     int support = 0;
     for (int i : piece.inliers) support += weights[i];
     wires.push_back(ToLine2D(piece, support / length_px, support));
+    wires.back().centre_px = CentreTrace(points, pixels, weights, piece, kTraceStepPx);
   }
   return wires;
 }
@@ -164,6 +197,7 @@ std::vector<Line2D> ExtractPosts(const ClassImage& classes, const CameraCalibrat
                                  const Structure2DOptions& options) {
   const Regions regions = RegionsOf(classes, PixelClass::kPost, options.min_post_area_px);
   std::vector<Eigen::Vector2d> centres;  // normalised, one per row of each region
+  std::vector<Eigen::Vector2d> centres_px;  // the same in pixels
   std::vector<double> spans_px;          // row span, pixels
   std::vector<int> counts;               // post pixels in that row
   std::vector<LinePiece> pieces;
@@ -185,7 +219,8 @@ std::vector<Line2D> ExtractPosts(const ClassImage& classes, const CameraCalibrat
       if (count == 0 || lo == 0 || hi == classes.width - 1) continue;
       // The pixel midpoint: the lens bends a post's width by far less than a pixel.
       members.push_back(static_cast<int>(centres.size()));
-      centres.push_back(camera.PixelToNormalised(Eigen::Vector2d(0.5 * (lo + hi), y)));
+      centres_px.emplace_back(0.5 * (lo + hi), y);
+      centres.push_back(camera.PixelToNormalised(centres_px.back()));
       spans_px.push_back(hi - lo + 1);
       counts.push_back(count);
     }
@@ -217,6 +252,7 @@ std::vector<Line2D> ExtractPosts(const ClassImage& classes, const CameraCalibrat
     }
     std::nth_element(spans.begin(), spans.begin() + spans.size() / 2, spans.end());
     posts.push_back(ToLine2D(piece, spans[spans.size() / 2], support));
+    posts.back().centre_px = CentreTrace(centres, centres_px, counts, piece, kTraceStepPx);
   }
   return posts;
 }

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "absl/strings/str_cat.h"
+#include "Eigen/Eigenvalues"
 
 namespace vb::reconstruct {
 namespace {
@@ -44,11 +45,13 @@ std::optional<Line3> Intersect(const Plane& a, const Plane& b, double min_sin) {
 }
 
 // RMS pixel distance of the 3D segment [p, q]'s projection to the nearest of `lines` in `view`
-// (nullopt if fewer than 3 of its samples are in the image).
+// (nullopt if fewer than 3 of its samples are in the image); *nearest is that line's index.
 std::optional<double> Residual(const CameraCalibration& camera, const std::vector<Line2D>& lines,
-                               const Eigen::Vector3d& p, const Eigen::Vector3d& q) {
+                               const Eigen::Vector3d& p, const Eigen::Vector3d& q, int* nearest) {
   double best = 1e9;
-  for (const Line2D& line : lines) {
+  *nearest = -1;
+  for (size_t i = 0; i < lines.size(); ++i) {
+    const Line2D& line = lines[i];
     double sum = 0;
     int n = 0;
     for (int k = 0; k <= 10; ++k) {
@@ -61,7 +64,10 @@ std::optional<double> Residual(const CameraCalibration& camera, const std::vecto
       ++n;
     }
     if (n < 3) return std::nullopt;
-    best = std::min(best, std::sqrt(sum / n));
+    if (std::sqrt(sum / n) < best) {
+      best = std::sqrt(sum / n);
+      *nearest = static_cast<int>(i);
+    }
   }
   return best;
 }
@@ -71,6 +77,7 @@ struct Candidate {
   double residual;        // worst confirming residual (0 if no other view could confirm)
   int confirmations;
   int view_a, line_a, view_b, line_b;
+  std::vector<int> lines;  // per view: the 2D line it was built from or confirmed by, or -1
   double width_px;
 };
 
@@ -88,6 +95,40 @@ bool Clip(const Line3& line, const WorkingVolume& volume, int axis, double max_s
   for (int k = 0; k < 3; ++k)
     if (k != axis && (mid[k] < volume.box.min()[k] || mid[k] > volume.box.max()[k])) return false;
   return true;
+}
+
+// Replaces a chosen candidate's line, the intersection of two views' planes, by the line nearest
+// (least squares, in metres from each plane) to the planes of every view that saw it: with
+// three views this averages the two lower cameras' errors instead of taking one of them.
+void FitToAllViews(const std::vector<View2D>& views, const RigCalibration& rig,
+                   const WorkingVolume& volume, const TrellisOptions& options, bool posts,
+                   Candidate* c) {
+  std::vector<Plane> planes;
+  for (size_t v = 0; v < views.size(); ++v) {
+    if (c->lines[v] < 0) continue;
+    const auto& lines = posts ? views[v].posts : views[v].wires;
+    planes.push_back(BackProject(rig.cameras[v], lines[static_cast<size_t>(c->lines[v])]));
+  }
+  if (planes.size() < 3) return;
+  Eigen::Matrix3d normals = Eigen::Matrix3d::Zero();
+  for (const Plane& p : planes) normals += p.normal * p.normal.transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(normals);
+  const Eigen::Vector3d direction = solver.eigenvectors().col(0);  // least explained by normals
+  Eigen::Matrix3d a = direction * direction.transpose();
+  Eigen::Vector3d b = Eigen::Vector3d::Zero();
+  for (const Plane& p : planes) {
+    a += p.normal * p.normal.transpose();
+    b -= p.normal * p.offset;
+  }
+  const Eigen::Vector3d point = a.ldlt().solve(b);
+  if (!point.allFinite() || !direction.allFinite()) return;
+  Eigen::Vector3d ea, eb;
+  if (!Clip({point, direction}, volume, posts ? 2 : 0,
+            posts ? options.max_post_tilt : options.max_wire_slope, &ea, &eb)) {
+    return;
+  }
+  c->a = ea;
+  c->b = eb;
 }
 
 std::vector<Candidate> Choose(std::vector<Candidate> candidates, const TrellisOptions& options,
@@ -137,13 +178,19 @@ std::vector<Candidate> Candidates(const std::vector<View2D>& views, const RigCal
           }
           c.residual = 0.0;
           c.confirmations = 0;
+          c.lines.assign(views.size(), -1);
+          c.lines[va] = static_cast<int>(i);
+          c.lines[vb] = static_cast<int>(j);
           bool rejected = false;
           for (size_t v = 0; v < views.size() && !rejected; ++v) {
             if (v == va || v == vb) continue;
-            const auto r = Residual(rig.cameras[v], posts ? views[v].posts : views[v].wires, c.a, c.b);
+            int nearest = -1;
+            const auto r = Residual(rig.cameras[v], posts ? views[v].posts : views[v].wires, c.a,
+                                    c.b, &nearest);
             if (!r) continue;
             if (*r > options.max_residual_px) rejected = true;
             c.residual = std::max(c.residual, *r);
+            c.lines[v] = nearest;
             ++c.confirmations;
           }
           // With three or more views, an unconfirmed line is as likely a mismatch as not.
@@ -189,6 +236,8 @@ absl::StatusOr<Trellis> ReconstructTrellis(const std::vector<View2D>& views,
   Trellis trellis;
   std::vector<Candidate> wires =
       Choose(Candidates(views, rig, volume, options, false), options, views.size());
+  if (options.fit_all_views)
+    for (Candidate& c : wires) FitToAllViews(views, rig, volume, options, false, &c);
   std::sort(wires.begin(), wires.end(),
             [](const Candidate& x, const Candidate& y) { return x.a.z() + x.b.z() < y.a.z() + y.b.z(); });
   for (const Candidate& c : wires) {
@@ -200,6 +249,8 @@ absl::StatusOr<Trellis> ReconstructTrellis(const std::vector<View2D>& views,
   }
   std::vector<Candidate> posts =
       Choose(Candidates(views, rig, volume, options, true), options, views.size());
+  if (options.fit_all_views)
+    for (Candidate& c : posts) FitToAllViews(views, rig, volume, options, true, &c);
   std::sort(posts.begin(), posts.end(),
             [](const Candidate& x, const Candidate& y) { return x.a.x() < y.a.x(); });
   for (const Candidate& c : posts) {
@@ -211,6 +262,25 @@ absl::StatusOr<Trellis> ReconstructTrellis(const std::vector<View2D>& views,
     trellis.posts.push_back(post);
   }
   return trellis;
+}
+
+absl::StatusOr<std::vector<TrellisLineMatch>> MatchTrellisLines(const std::vector<View2D>& views,
+                                                                const RigCalibration& rig,
+                                                                const WorkingVolume& volume,
+                                                                const TrellisOptions& options) {
+  if (absl::Status s = options.Validate(); !s.ok()) return s;
+  if (views.size() != rig.cameras.size()) {
+    return absl::InvalidArgumentError(absl::StrCat("trellis: ", views.size(), " views for ",
+                                                   rig.cameras.size(), " cameras"));
+  }
+  std::vector<TrellisLineMatch> out;
+  for (bool posts : {false, true}) {
+    for (const Candidate& c :
+         Choose(Candidates(views, rig, volume, options, posts), options, views.size())) {
+      out.push_back({posts, c.a, c.b, c.lines});
+    }
+  }
+  return out;
 }
 
 }  // namespace vb::reconstruct

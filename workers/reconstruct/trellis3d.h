@@ -24,6 +24,8 @@ struct TrellisOptions {
   double duplicate_distance_m = 0.02; // candidates this close to a chosen wire are duplicates
   double max_wire_slope = 0.2;        // wires run along the row: |dz|, |dy| per metre of x
   double max_post_tilt = 0.3;         // posts stand up: |dx|, |dy| per metre of z
+  bool fit_all_views = true;          // a chosen line is refitted to the planes of every view
+                                      // that saw it (not only the two it was built from)
 
   absl::Status Validate() const;
 };
@@ -37,5 +39,22 @@ struct Trellis {
 absl::StatusOr<Trellis> ReconstructTrellis(const std::vector<View2D>& views,
                                            const RigCalibration& rig, const WorkingVolume& volume,
                                            const TrellisOptions& options = {});
+
+// A wire or post matched across views: its 3D segment as ReconstructTrellis would place it, and the
+// 2D line of each view that it was built from or confirmed by. Input to RefineRig
+// (rig_refine.h), which uses the trellis as observations of the rig.
+struct TrellisLineMatch {
+  bool post = false;                               // false: a wire (along x); true: a post (along z)
+  Eigen::Vector3d a = Eigen::Vector3d::Zero();     // ends, clipped to the volume along the main axis
+  Eigen::Vector3d b = Eigen::Vector3d::Zero();
+  std::vector<int> lines;                          // per view: index into View2D::wires (or posts), -1: none
+};
+
+// The wires, then the posts, that ReconstructTrellis would choose, with their 2D lines. Errors as
+// ReconstructTrellis.
+absl::StatusOr<std::vector<TrellisLineMatch>> MatchTrellisLines(const std::vector<View2D>& views,
+                                                                const RigCalibration& rig,
+                                                                const WorkingVolume& volume,
+                                                                const TrellisOptions& options = {});
 
 }  // namespace vb::reconstruct

@@ -44,6 +44,27 @@ TEST(ReconstructTrellis, RecoversWiresAndPostsFromThreeViews) {
   EXPECT_NEAR(trellis->posts[0].radius, 0.04, 0.01);
 }
 
+TEST(MatchTrellisLines, NamesTheLineOfEveryViewThatSeesIt) {
+  const RigCalibration rig = sim::MakeRig().value();
+  const std::vector<View2D> views = SyntheticViews(Trellis3(), rig);
+  const auto matches = MatchTrellisLines(views, rig, WorkingVolume());
+  ASSERT_TRUE(matches.ok()) << matches.status();
+  ASSERT_EQ(matches->size(), 4u);
+  for (size_t m = 0; m < matches->size(); ++m) {
+    const TrellisLineMatch& match = (*matches)[m];
+    EXPECT_EQ(match.post, m == 3) << m;  // wires first, then the post
+    ASSERT_EQ(match.lines.size(), 3u);
+    for (size_t v = 0; v < 3; ++v) {
+      ASSERT_GE(match.lines[v], 0) << "match " << m << " view " << v;
+      const Line2D& line = match.post ? views[v].posts[match.lines[v]] : views[v].wires[match.lines[v]];
+      // The 3D segment's midpoint lies on the named line.
+      const Eigen::Vector3d mid = rig.cameras[v].camera_from_platform() * (0.5 * (match.a + match.b));
+      EXPECT_NEAR(line.line.dot(mid.hnormalized().homogeneous()) * rig.cameras[v].camera_matrix(0, 0),
+                  0.0, 0.5) << "match " << m << " view " << v;
+    }
+  }
+}
+
 TEST(ReconstructTrellis, RejectsMismatchedViewsAndBadOptions) {
   const RigCalibration rig = sim::MakeRig().value();
   std::vector<View2D> views = SyntheticViews(Trellis3(), rig);

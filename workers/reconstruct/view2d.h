@@ -56,6 +56,11 @@ struct Line2D {
   Eigen::Vector2d end = Eigen::Vector2d::Zero();
   double width_px = 0.0;   // mean width across the line, pixels
   int support_px = 0;      // number of class pixels explained by the line
+  // The observed centre of the wire or post in pixels, every ~8 px along it, in order: what the
+  // straight line was fitted to, kept in pixels so that a later correction of the calibration
+  // (rig_refine.h) can compare against what was seen, not against a line straightened through
+  // the old lens model. May be empty (then the line stands for its pixels).
+  std::vector<Eigen::Vector2d> centre_px;
 };
 
 struct View2D {
