@@ -224,12 +224,7 @@ absl::Status WriteCutPlan(const std::string& path, const CutPlan& plan) {
 }
 
 absl::StatusOr<CutPlan> ReadCutPlan(const std::string& path) {
-  VB_ASSIGN_OR_RETURN(json j, ReadJsonFile(path));
-  auto plan = CutPlanFromJson(j);
-  if (!plan.ok()) {
-    return absl::Status(plan.status().code(), absl::StrCat(path, ": ", plan.status().message()));
-  }
-  return plan;
+  return ReadJsonFileAs<CutPlan>(path, CutPlanFromJson);
 }
 
 }  // namespace vb

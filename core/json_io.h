@@ -17,6 +17,20 @@ absl::StatusOr<nlohmann::json> ReadJsonFile(const std::string& path);
 // Writes pretty-printed JSON atomically (temp file + rename). INTERNAL on I/O failure.
 absl::Status WriteJsonFile(const std::string& path, const nlohmann::json& json);
 
+// Reads `path` and parses it with `parse`; parse errors are prefixed with the path.
+template <typename T>
+absl::StatusOr<T> ReadJsonFileAs(const std::string& path,
+                                 absl::StatusOr<T> (*parse)(const nlohmann::json&)) {
+  absl::StatusOr<nlohmann::json> json = ReadJsonFile(path);
+  if (!json.ok()) return json.status();
+  absl::StatusOr<T> value = parse(*json);
+  if (!value.ok()) {
+    return absl::Status(value.status().code(),
+                        path + ": " + std::string(value.status().message()));
+  }
+  return value;
+}
+
 // Field accessors: INVALID_ARGUMENT naming `field` when missing or of the wrong type.
 absl::StatusOr<const nlohmann::json*> Field(const nlohmann::json& object, const std::string& field);
 absl::StatusOr<double> NumberField(const nlohmann::json& object, const std::string& field);

@@ -319,13 +319,7 @@ absl::Status WriteTrajectory(const std::string& path, const Trajectory& trajecto
 }
 
 absl::StatusOr<Trajectory> ReadTrajectory(const std::string& path) {
-  VB_ASSIGN_OR_RETURN(json j, ReadJsonFile(path));
-  auto trajectory = TrajectoryFromJson(j);
-  if (!trajectory.ok()) {
-    return absl::Status(trajectory.status().code(),
-                        absl::StrCat(path, ": ", trajectory.status().message()));
-  }
-  return trajectory;
+  return ReadJsonFileAs<Trajectory>(path, TrajectoryFromJson);
 }
 
 }  // namespace vb

@@ -23,21 +23,11 @@ struct Profile {
   double t_total = 0.0;
 };
 
-Profile MakeProfile(const Joints& a, const Joints& b, const JointLimits& limits) {
+// The parameter covers distance 1 with ramps up and down at acceleration `acc`, cruising at `v`:
+// triangular when v is never reached.
+Profile ProfileOf(double v, double acc) {
   Profile p;
-  double v = std::numeric_limits<double>::infinity();
-  double acc = std::numeric_limits<double>::infinity();
-  bool moves = false;
-  for (int i = 0; i < 6; ++i) {
-    const double d = std::abs(b[i] - a[i]);
-    if (!(d > kZeroMoveRad)) continue;
-    moves = true;
-    v = std::min(v, limits.max_velocity[i] / d);
-    acc = std::min(acc, limits.max_acceleration[i] / d);
-  }
-  if (!moves) return p;
   p.accel = acc;
-  // Distance 1 covered with ramps up and down at A: triangular when V is never reached.
   if (v * v / acc >= 1.0) {
     p.t_ramp = std::sqrt(1.0 / acc);
     p.peak = acc * p.t_ramp;
@@ -48,6 +38,21 @@ Profile MakeProfile(const Joints& a, const Joints& b, const JointLimits& limits)
     p.t_total = 1.0 / v + v / acc;
   }
   return p;
+}
+
+Profile MakeProfile(const Joints& a, const Joints& b, const JointLimits& limits) {
+  double v = std::numeric_limits<double>::infinity();
+  double acc = std::numeric_limits<double>::infinity();
+  bool moves = false;
+  for (int i = 0; i < 6; ++i) {
+    const double d = std::abs(b[i] - a[i]);
+    if (!(d > kZeroMoveRad)) continue;
+    moves = true;
+    v = std::min(v, limits.max_velocity[i] / d);
+    acc = std::min(acc, limits.max_acceleration[i] / d);
+  }
+  if (!moves) return Profile{};
+  return ProfileOf(v, acc);
 }
 
 double ParameterAt(const Profile& p, double t) {
@@ -157,7 +162,6 @@ absl::StatusOr<std::vector<TimedJoints>> TimeParameterizeStroke(std::span<const 
   double total = 0.0;
   for (size_t k = 1; k < waypoints.size(); ++k) total += (waypoints[k] - waypoints[k - 1]).norm();
   if (!(total > kZeroMoveRad)) return std::vector<TimedJoints>{{start_time_s, waypoints[0]}};
-  Profile p;
   double v = std::numeric_limits<double>::infinity(), acc = v;
   for (size_t k = 1; k < waypoints.size(); ++k) {
     const Joints d = waypoints[k] - waypoints[k - 1];
@@ -169,16 +173,7 @@ absl::StatusOr<std::vector<TimedJoints>> TimeParameterizeStroke(std::span<const 
       acc = std::min(acc, limits.max_acceleration[j] * f / std::abs(d[j]));
     }
   }
-  p.accel = acc;
-  if (v * v / acc >= 1.0) {
-    p.t_ramp = std::sqrt(1.0 / acc);
-    p.peak = acc * p.t_ramp;
-    p.t_total = 2.0 * p.t_ramp;
-  } else {
-    p.peak = v;
-    p.t_ramp = v / acc;
-    p.t_total = 1.0 / v + v / acc;
-  }
+  const Profile p = ProfileOf(v, acc);
   if (p.t_total / sample_dt_s + waypoints.size() > static_cast<double>(kMaxSamples)) {
     return absl::InvalidArgumentError(absl::StrCat(
         "time parameterisation: sample_dt_s: would give more than ", kMaxSamples, " samples"));
