@@ -127,6 +127,7 @@ struct Candidate {
   Joints q;
   double clearance_m = 0;  // Clearance(q), computed once its stroke is known to be free
   Eigen::Isometry3d base_from_tcp;
+  int pose = 0;  // index of the sampled cut pose
 };
 
 double MaxJointChange(const Joints& a, const Joints& b) { return (a - b).cwiseAbs().maxCoeff(); }
@@ -262,12 +263,14 @@ class FlangeBodies {
     std::reverse(capsules_.begin(), capsules_.end());
   }
 
-  // Keeps the obstacles of `scene` that a flange body can touch while the TCP is at `tcp_point`.
-  void Select(const CollisionScene& scene, const Eigen::Vector3d& tcp_point) {
+  // Keeps the obstacles of `scene` that a flange body can touch while the TCP is within
+  // `tcp_travel_m` of `tcp_point`.
+  void Select(const CollisionScene& scene, const Eigen::Vector3d& tcp_point, double tcp_travel_m) {
     near_.clear();
     for (const Obstacle& o : scene.obstacles) {
       const double radius = o.capsule.radius + o.margin_m;
-      if (PointSegmentDistance(tcp_point, o.capsule.a, o.capsule.b) - radius <= reach_m_) {
+      if (PointSegmentDistance(tcp_point, o.capsule.a, o.capsule.b) - radius <=
+          reach_m_ + tcp_travel_m) {
         near_.push_back({o.capsule.a, o.capsule.b, 0.5 * (o.capsule.a + o.capsule.b), radius,
                          0.5 * (o.capsule.b - o.capsule.a).norm() + radius});
       }
@@ -276,7 +279,7 @@ class FlangeBodies {
   }
 
   // True if a flange body overlaps a selected obstacle or a plane by more than kToleranceM at
-  // `base_from_flange` (the TCP at the selected point). Exact, in double: a checker that works
+  // `base_from_flange` (the TCP within the travel of the selected point). Exact, in double: a checker that works
   // in float (the primitive checker's ~1e-6 m) rejects every such pose too.
   bool Collides(const Eigen::Isometry3d& base_from_flange) const {
     for (const Capsule& c : capsules_) {
@@ -350,6 +353,8 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
   const std::vector<Eigen::Vector3d> waypoints =
       StrokeWaypoints(StrokeOf(robot.tool), options, &cut_index);
   const bool mirrored = IsMirrored(waypoints, cut_index);
+  double stroke_travel_m = 0;  // farthest stroke waypoint from the cut
+  for (const Eigen::Vector3d& w : waypoints) stroke_travel_m = std::max(stroke_travel_m, w.norm());
   const int slides = options.max_slide_m > 0
                          ? static_cast<int>(options.max_slide_m / options.slide_step_m + 1e-9)
                          : 0;
@@ -375,12 +380,14 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
     // capsules of the cut cane: an unchanged scene keeps its checker.
     CollisionScene local =
         scene.WithoutCaneNear(cut.cane_id, point_in_base, options.cut_cane_free_radius_m);
-    flange_bodies.Select(local, point_in_base);
+    flange_bodies.Select(local, point_in_base, stroke_travel_m);
     // Every IK solution at every sampled pose, checked in one batch (AreFree checks several
     // configurations at once), in sampling order.
     std::vector<Candidate> solutions;
-    for (const Eigen::Isometry3d& pose :
-         SampleCutPoses(point_in_base, direction_in_base, options)) {
+    const std::vector<Eigen::Isometry3d> poses =
+        SampleCutPoses(point_in_base, direction_in_base, options);
+    for (int pose_index = 0; pose_index < static_cast<int>(poses.size()); ++pose_index) {
+      const Eigen::Isometry3d& pose = poses[pose_index];
       if (deadline.Expired()) return Fail(motion, CutMotionOutcome::kDeadline, what + ": deadline");
       const Eigen::Isometry3d base_from_flange = pose * tcp_from_flange;
       // Reachability still needs the IK of a blocked pose, but only until one pose is reachable.
@@ -389,7 +396,7 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
       const IkSolutions ik = InverseKinematics(base_from_flange, robot.limits);
       reachable = reachable || ik.count > 0;
       if (blocked) continue;
-      for (int i = 0; i < ik.count; ++i) solutions.push_back({ik.q[i], 0.0, pose});
+      for (int i = 0; i < ik.count; ++i) solutions.push_back({ik.q[i], 0.0, pose, pose_index});
     }
     if (solutions.empty()) continue;
     if (checker == nullptr || !SameObstacles(local, checker_scene)) {
@@ -421,7 +428,28 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
     // on their path's clearance), so the bar rises early and the rest stop at one comparison.
     std::vector<std::pair<double, std::vector<Joints>>> free_strokes;
     std::vector<Joints> path;
+    // The stroke's TCP poses are fixed by the cut pose too: where a flange body collides along
+    // it, no IK branch can follow the stroke (decided once per pose, for all its branches).
+    // Such strokes count as followed in the message, whether or not IK would have failed first.
+    std::vector<signed char> stroke_blocked(poses.size(), -1);  // -1: not yet tested
+    auto blocked = [&](const Candidate& c) {
+      signed char& b = stroke_blocked[c.pose];
+      if (b < 0) {
+        b = 0;
+        for (size_t i = 0; i < waypoints.size() && !b; ++i) {
+          if (static_cast<int>(i) == cut_index) continue;
+          Eigen::Isometry3d base_from_tcp = c.base_from_tcp;
+          base_from_tcp.translation() += c.base_from_tcp.linear() * waypoints[i];
+          b = flange_bodies.Collides(base_from_tcp * tcp_from_flange);
+        }
+      }
+      return b == 1;
+    };
     for (Candidate& candidate : candidates) {
+      if (blocked(candidate)) {
+        ++strokes_followed;
+        continue;
+      }
       if (deadline.Expired()) return Fail(motion, CutMotionOutcome::kDeadline, what + ": deadline");
       const StrokeResult stroke =
           FollowStroke(candidate, waypoints, cut_index, mirrored, tcp_from_flange, robot.limits,
