@@ -4,9 +4,12 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "absl/strings/str_cat.h"
 
@@ -124,6 +127,7 @@ struct Candidate {
   Joints q;
   double clearance_m = 0;  // Clearance(q), computed once its stroke is known to be free
   Eigen::Isometry3d base_from_tcp;
+  int pose = 0;  // index of the sampled cut pose
 };
 
 double MaxJointChange(const Joints& a, const Joints& b) { return (a - b).cwiseAbs().maxCoeff(); }
@@ -155,8 +159,11 @@ enum class StrokeResult { kFree, kNoIk, kCollides };
 // Follows the stroke from the cut configuration outward in both directions, each step on the IK
 // solution nearest the previous configuration, checking each configuration as it goes (IK costs
 // more than a check, so a collision stops the walk early). kNoIk on a missing solution or a jump.
+// With a `mirrored` stroke (retract = approach reversed, IsMirrored) the walk out of the cut
+// toward the end retraces the walk toward the start step for step (same waypoints, same nearest
+// solutions), so only the first half is walked and copied.
 StrokeResult FollowStroke(const Candidate& start, const std::vector<Eigen::Vector3d>& waypoints,
-                          int cut_index, const Eigen::Isometry3d& tcp_from_flange,
+                          int cut_index, bool mirrored, const Eigen::Isometry3d& tcp_from_flange,
                           const JointLimits& limits, double max_jump, CollisionChecker& checker,
                           std::vector<Joints>* path) {
   // Cheap rejection first: the stroke's two ends, reached directly from the cut configuration
@@ -164,7 +171,7 @@ StrokeResult FollowStroke(const Candidate& start, const std::vector<Eigen::Vecto
   // only drops a candidate, it never admits a colliding one).
   const int last = static_cast<int>(waypoints.size()) - 1;
   for (int end : {0, last}) {
-    if (end == cut_index) continue;
+    if (end == cut_index || (mirrored && end == last)) continue;
     const double allowed = max_jump * std::abs(end - cut_index);
     const auto q =
         NearestSolution(start, waypoints[end], tcp_from_flange, limits, start.q, allowed);
@@ -172,6 +179,7 @@ StrokeResult FollowStroke(const Candidate& start, const std::vector<Eigen::Vecto
   }
   path->assign(waypoints.size(), start.q);
   for (int direction : {1, -1}) {
+    if (mirrored && direction == 1) continue;
     Joints previous = start.q;
     for (int i = cut_index + direction; i >= 0 && i <= last; i += direction) {
       const auto q =
@@ -182,23 +190,132 @@ StrokeResult FollowStroke(const Candidate& start, const std::vector<Eigen::Vecto
       (*path)[i] = previous;
     }
   }
+  if (mirrored) {
+    for (int j = 1; cut_index + j <= last; ++j) (*path)[cut_index + j] = (*path)[cut_index - j];
+  }
   return StrokeResult::kFree;
 }
 
-// Min clearance over `path` (whose configurations are free) if it stays above `must_beat` and
-// every motion between consecutive configurations is free; nullopt otherwise (it cannot win).
+// Min clearance over `path` (whose configurations are free; path[cut_index]'s clearance is
+// `cut_clearance`) if it stays above `must_beat` and every motion between consecutive
+// configurations is free; nullopt otherwise (it cannot win). A mirrored path's second half
+// repeats its first (the same configurations, the same motions reversed): only the first half and
+// the cut are evaluated.
 std::optional<double> EvaluatePath(CollisionChecker& checker, const std::vector<Joints>& path,
+                                   int cut_index, bool mirrored, double cut_clearance,
                                    double must_beat, double max_step_m) {
-  double clearance = std::numeric_limits<double>::infinity();
-  for (const Joints& q : path) {
-    clearance = std::min(clearance, checker.Clearance(q));
+  const size_t end = mirrored ? static_cast<size_t>(cut_index) + 1 : path.size();
+  double clearance = cut_clearance;
+  if (!(clearance > must_beat)) return std::nullopt;
+  for (size_t i = 0; i < end; ++i) {
+    if (static_cast<int>(i) == cut_index) continue;
+    clearance = std::min(clearance, checker.Clearance(path[i]));
     if (!(clearance > must_beat)) return std::nullopt;
   }
-  for (size_t i = 1; i < path.size(); ++i) {
+  for (size_t i = 1; i < end; ++i) {
     if (!checker.IsMotionFree(path[i - 1], path[i], max_step_m)) return std::nullopt;
   }
   return clearance;
 }
+
+// True if the stroke returns the way it came: waypoints[cut_index + j] == waypoints[cut_index - j]
+// for every j, and it ends where it started (the secateur's approach and retract).
+bool IsMirrored(const std::vector<Eigen::Vector3d>& waypoints, int cut_index) {
+  const int last = static_cast<int>(waypoints.size()) - 1;
+  if (cut_index <= 0 || last != 2 * cut_index) return false;
+  for (int j = 1; j <= cut_index; ++j) {
+    if (waypoints[cut_index + j] != waypoints[cut_index - j]) return false;
+  }
+  return true;
+}
+
+// Same obstacles in the same order (so a checker built on one serves the other).
+bool SameObstacles(const CollisionScene& a, const CollisionScene& b) {
+  if (a.obstacles.size() != b.obstacles.size()) return false;
+  for (size_t i = 0; i < a.obstacles.size(); ++i) {
+    const Obstacle& x = a.obstacles[i];
+    const Obstacle& y = b.obstacles[i];
+    if (x.kind != y.kind || x.owner_id != y.owner_id || x.capsule.a != y.capsule.a ||
+        x.capsule.b != y.capsule.b || x.capsule.radius != y.capsule.radius ||
+        x.margin_m != y.margin_m) {
+      return false;
+    }
+  }
+  return true;
+}
+
+// The bodies fixed to the flange (wrist 3 and the tool, DH frame 6) sit where the TCP pose puts
+// them, whatever the IK branch: a TCP pose where one of them overlaps an obstacle has no free
+// configuration, and its IK and checks can be skipped. In clutter almost every sampled cut pose
+// is such a pose (>99% of the IK solutions at the cut collided on seeds 1110-1117).
+class FlangeBodies {
+ public:
+  explicit FlangeBodies(const RobotModel& robot) {
+    const Eigen::Vector3d tcp = robot.tool.flange_from_tcp.translation();
+    for (const LinkBody& body : robot.BodiesWithTool()) {
+      if (body.frame != 6) continue;
+      for (const Capsule& c : body.capsules) {
+        capsules_.push_back(c);
+        reach_m_ = std::max(reach_m_, std::max((c.a - tcp).norm(), (c.b - tcp).norm()) + c.radius);
+      }
+    }
+    // The tool's capsules (added last) are the likeliest to touch the vine: test them first.
+    std::reverse(capsules_.begin(), capsules_.end());
+  }
+
+  // Keeps the obstacles of `scene` that a flange body can touch while the TCP is within
+  // `tcp_travel_m` of `tcp_point`.
+  void Select(const CollisionScene& scene, const Eigen::Vector3d& tcp_point, double tcp_travel_m) {
+    near_.clear();
+    for (const Obstacle& o : scene.obstacles) {
+      const double radius = o.capsule.radius + o.margin_m;
+      if (PointSegmentDistance(tcp_point, o.capsule.a, o.capsule.b) - radius <=
+          reach_m_ + tcp_travel_m) {
+        near_.push_back({o.capsule.a, o.capsule.b, 0.5 * (o.capsule.a + o.capsule.b), radius,
+                         0.5 * (o.capsule.b - o.capsule.a).norm() + radius});
+      }
+    }
+    planes_ = scene.planes;
+  }
+
+  // True if a flange body overlaps a selected obstacle or a plane by more than kToleranceM at
+  // `base_from_flange` (the TCP within the travel of the selected point). Exact, in double: a checker that works
+  // in float (the primitive checker's ~1e-6 m) rejects every such pose too.
+  bool Collides(const Eigen::Isometry3d& base_from_flange) const {
+    for (const Capsule& c : capsules_) {
+      const Eigen::Vector3d a = base_from_flange * c.a, b = base_from_flange * c.b;
+      const Eigen::Vector3d centre = 0.5 * (a + b);
+      const double bound = 0.5 * (b - a).norm() + c.radius;
+      for (const HalfSpace& h : planes_) {
+        if (std::max(h.normal.dot(a), h.normal.dot(b)) + c.radius + h.margin_m >
+            h.offset + kToleranceM) {
+          return true;
+        }
+      }
+      for (const NearObstacle& o : near_) {
+        // Bounding spheres apart: the capsules are too (cheaper than the segment distance).
+        const double apart = bound + o.bound;
+        if ((centre - o.centre).squaredNorm() > apart * apart) continue;
+        if (SegmentSegmentDistance(a, b, o.a, o.b) < c.radius + o.radius - kToleranceM) {
+          return true;
+        }
+      }
+    }
+    return false;
+  }
+
+ private:
+  static constexpr double kToleranceM = 1e-5;
+  std::vector<Capsule> capsules_;  // flange frame
+  double reach_m_ = 0;             // farthest flange-body surface point from the TCP
+  struct NearObstacle {
+    Eigen::Vector3d a, b, centre;
+    double radius;  // with the margin
+    double bound;   // bounding sphere about `centre`
+  };
+  std::vector<NearObstacle> near_;
+  std::vector<HalfSpace> planes_;
+};
 
 // Cut configurations closer than this in every joint are one choice, not two.
 constexpr double kDistinctRad = 0.5;
@@ -235,10 +352,16 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
   int cut_index = 0;
   const std::vector<Eigen::Vector3d> waypoints =
       StrokeWaypoints(StrokeOf(robot.tool), options, &cut_index);
+  const bool mirrored = IsMirrored(waypoints, cut_index);
+  double stroke_travel_m = 0;  // farthest stroke waypoint from the cut
+  for (const Eigen::Vector3d& w : waypoints) stroke_travel_m = std::max(stroke_travel_m, w.norm());
   const int slides = options.max_slide_m > 0
                          ? static_cast<int>(options.max_slide_m / options.slide_step_m + 1e-9)
                          : 0;
 
+  FlangeBodies flange_bodies(robot);
+  std::unique_ptr<CollisionChecker> checker;
+  CollisionScene checker_scene;  // the scene `checker` was built on
   bool reachable = false;
   int free_at_cut = 0, strokes_followed = 0;  // over all slides, for the message
   // Strokes followed includes those stopped by a collision (IK did not fail first).
@@ -252,22 +375,44 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
     }
     const Eigen::Vector3d point_in_base = base_from_platform * point;
     const Eigen::Vector3d direction_in_base = base_from_platform.linear() * direction;
-    const CollisionScene local =
+    // Building a checker costs more than the checks at one slide. It is built only when some
+    // cut pose survives the flange bodies' test, and consecutive slides often free the same
+    // capsules of the cut cane: an unchanged scene keeps its checker.
+    CollisionScene local =
         scene.WithoutCaneNear(cut.cane_id, point_in_base, options.cut_cane_free_radius_m);
-    std::unique_ptr<CollisionChecker> checker = make_checker(robot, local);
-
-    std::vector<Candidate> candidates;
-    for (const Eigen::Isometry3d& pose :
-         SampleCutPoses(point_in_base, direction_in_base, options)) {
+    flange_bodies.Select(local, point_in_base, stroke_travel_m);
+    // Every IK solution at every sampled pose, checked in one batch (AreFree checks several
+    // configurations at once), in sampling order.
+    std::vector<Candidate> solutions;
+    const std::vector<Eigen::Isometry3d> poses =
+        SampleCutPoses(point_in_base, direction_in_base, options);
+    for (int pose_index = 0; pose_index < static_cast<int>(poses.size()); ++pose_index) {
+      const Eigen::Isometry3d& pose = poses[pose_index];
       if (deadline.Expired()) return Fail(motion, CutMotionOutcome::kDeadline, what + ": deadline");
-      const IkSolutions ik = InverseKinematics(pose * tcp_from_flange, robot.limits);
+      const Eigen::Isometry3d base_from_flange = pose * tcp_from_flange;
+      // Reachability still needs the IK of a blocked pose, but only until one pose is reachable.
+      const bool blocked = flange_bodies.Collides(base_from_flange);
+      if (blocked && reachable) continue;
+      const IkSolutions ik = InverseKinematics(base_from_flange, robot.limits);
       reachable = reachable || ik.count > 0;
-      for (int i = 0; i < ik.count; ++i) {
-        if (!checker->IsFree(ik.q[i])) continue;
-        ++free_at_cut;
-        candidates.push_back({ik.q[i], 0.0, pose});
-      }
+      if (blocked) continue;
+      for (int i = 0; i < ik.count; ++i) solutions.push_back({ik.q[i], 0.0, pose, pose_index});
     }
+    if (solutions.empty()) continue;
+    if (checker == nullptr || !SameObstacles(local, checker_scene)) {
+      checker = make_checker(robot, local);
+      checker_scene = std::move(local);
+    }
+    std::vector<Joints> qs;
+    qs.reserve(solutions.size());
+    for (const Candidate& c : solutions) qs.push_back(c.q);
+    std::unique_ptr<bool[]> free(new bool[qs.size()]);
+    checker->AreFree(qs, std::span<bool>(free.get(), qs.size()));
+    std::vector<Candidate> candidates;
+    for (size_t i = 0; i < solutions.size(); ++i) {
+      if (free[i]) candidates.push_back(solutions[i]);
+    }
+    free_at_cut += static_cast<int>(candidates.size());
     // Boolean checks first, exact clearance only for strokes that are free: in clutter most
     // strokes collide, and Clearance costs several IsFree. A path's clearance is at most its cut
     // configuration's, which bounds the search once enough paths are found. The best
@@ -279,19 +424,51 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
     auto bar = [&] {
       return found.size() < keep ? -std::numeric_limits<double>::infinity() : found.back().first;
     };
+    // Free strokes are evaluated by decreasing clearance of their cut configuration (the bound
+    // on their path's clearance), so the bar rises early and the rest stop at one comparison.
+    std::vector<std::pair<double, std::vector<Joints>>> free_strokes;
     std::vector<Joints> path;
+    // The stroke's TCP poses are fixed by the cut pose too: where a flange body collides along
+    // it, no IK branch can follow the stroke (decided once per pose, for all its branches).
+    // Such strokes count as followed in the message, whether or not IK would have failed first.
+    std::vector<signed char> stroke_blocked(poses.size(), -1);  // -1: not yet tested
+    auto blocked = [&](const Candidate& c) {
+      signed char& b = stroke_blocked[c.pose];
+      if (b < 0) {
+        b = 0;
+        for (size_t i = 0; i < waypoints.size() && !b; ++i) {
+          if (static_cast<int>(i) == cut_index) continue;
+          Eigen::Isometry3d base_from_tcp = c.base_from_tcp;
+          base_from_tcp.translation() += c.base_from_tcp.linear() * waypoints[i];
+          b = flange_bodies.Collides(base_from_tcp * tcp_from_flange);
+        }
+      }
+      return b == 1;
+    };
     for (Candidate& candidate : candidates) {
+      if (blocked(candidate)) {
+        ++strokes_followed;
+        continue;
+      }
       if (deadline.Expired()) return Fail(motion, CutMotionOutcome::kDeadline, what + ": deadline");
       const StrokeResult stroke =
-          FollowStroke(candidate, waypoints, cut_index, tcp_from_flange, robot.limits,
+          FollowStroke(candidate, waypoints, cut_index, mirrored, tcp_from_flange, robot.limits,
                        options.max_joint_jump_rad, *checker, &path);
       if (stroke == StrokeResult::kNoIk) continue;
       ++strokes_followed;
       if (stroke == StrokeResult::kCollides) continue;
       candidate.clearance_m = checker->Clearance(candidate.q);
-      if (candidate.clearance_m <= bar()) continue;
-      const std::optional<double> clearance =
-          EvaluatePath(*checker, path, bar(), options.max_step_m);
+      // Exact (double): a batched float check may pass a configuration within ~1e-5 m of contact.
+      if (!(candidate.clearance_m > 0)) continue;
+      free_strokes.emplace_back(candidate.clearance_m, path);
+    }
+    std::stable_sort(free_strokes.begin(), free_strokes.end(),
+                     [](const auto& a, const auto& b) { return a.first > b.first; });
+    for (auto& [cut_clearance, path] : free_strokes) {
+      if (deadline.Expired()) return Fail(motion, CutMotionOutcome::kDeadline, what + ": deadline");
+      if (cut_clearance <= bar()) break;  // sorted: no later stroke can beat the bar either
+      const std::optional<double> clearance = EvaluatePath(
+          *checker, path, cut_index, mirrored, cut_clearance, bar(), options.max_step_m);
       if (!clearance.has_value()) continue;
       // A path whose cut configuration is near a better one adds no choice: keep the better.
       const Joints& q = path[cut_index];

@@ -1,10 +1,109 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "workers/plan/safety_margins.h"
 
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+#include <vector>
+
 #include "gtest/gtest.h"
+#include "sim/vine_generator.h"
+#include "workers/plan/collision_checker.h"
+#include "workers/plan/tool.h"
 
 namespace vb::plan {
 namespace {
+
+// The first implementation of InflateMargins, kept as the reference the fast one must reproduce:
+// every obstacle against every arm capsule at every protected configuration, culled only by
+// bounding spheres.
+MarginSummary ReferenceInflateMargins(const RobotModel& robot,
+                                      std::span<const ProtectedMotion> motions,
+                                      const MarginOptions& options, CollisionScene* scene) {
+  struct PlacedCapsule {
+    Eigen::Vector3d a, b, centre;
+    double radius = 0.0;
+    double bound = 0.0;
+  };
+  struct Pose {
+    std::vector<PlacedCapsule> bodies;
+    const ProtectedMotion* motion = nullptr;
+  };
+  const std::vector<LinkBody> bodies = robot.BodiesWithTool();
+  auto place = [&](const Joints& q, const ProtectedMotion* motion) {
+    const auto frames = LinkFrames(q);
+    Pose pose;
+    pose.motion = motion;
+    for (const LinkBody& body : bodies) {
+      for (const Capsule& c : body.capsules) {
+        PlacedCapsule p;
+        p.a = frames[body.frame] * c.a;
+        p.b = frames[body.frame] * c.b;
+        p.centre = 0.5 * (p.a + p.b);
+        p.radius = c.radius;
+        p.bound = 0.5 * (p.b - p.a).norm() + c.radius;
+        pose.bodies.push_back(p);
+      }
+    }
+    return pose;
+  };
+  auto ignored = [](const Obstacle& o, const ProtectedMotion& m) {
+    return m.ignored_cane.value != 0 && o.kind == ObstacleKind::kCane &&
+           o.owner_id == m.ignored_cane.value &&
+           PointSegmentDistance(m.ignored_point_in_base, o.capsule.a, o.capsule.b) <=
+               m.ignored_radius_m;
+  };
+  const JointLevers lever_m = JointLeverArms(robot);
+  std::vector<Pose> poses;
+  for (const ProtectedMotion& motion : motions) {
+    for (size_t i = 0; i < motion.path.size(); ++i) {
+      poses.push_back(place(motion.path[i], &motion));
+      if (i + 1 == motion.path.size()) break;
+      const Joints& a = motion.path[i];
+      const Joints& b = motion.path[i + 1];
+      const int steps = MotionSteps(a, b, options.max_step_m, lever_m);
+      for (int s = 1; s < steps; ++s) poses.push_back(place(a + (b - a) * (double(s) / steps), &motion));
+    }
+  }
+  const double reach = options.max_margin_m + options.slack_m;
+  std::vector<double> vine_margins;
+  for (Obstacle& o : scene->obstacles) {
+    const Eigen::Vector3d centre = 0.5 * (o.capsule.a + o.capsule.b);
+    const double bound = 0.5 * (o.capsule.b - o.capsule.a).norm() + o.capsule.radius;
+    double clearance = std::numeric_limits<double>::infinity();
+    for (const Pose& pose : poses) {
+      if (ignored(o, *pose.motion)) continue;
+      for (const PlacedCapsule& p : pose.bodies) {
+        if ((p.centre - centre).norm() - p.bound - bound > reach) continue;
+        const double d = SegmentSegmentDistance(p.a, p.b, o.capsule.a, o.capsule.b) - p.radius -
+                         o.capsule.radius;
+        clearance = std::min(clearance, d);
+      }
+    }
+    o.margin_m = std::clamp(clearance - options.slack_m, 0.0, options.max_margin_m);
+    if (o.kind != ObstacleKind::kPlatform) vine_margins.push_back(o.margin_m);
+  }
+  for (HalfSpace& plane : scene->planes) {
+    double clearance = std::numeric_limits<double>::infinity();
+    for (const Pose& pose : poses) {
+      for (const PlacedCapsule& p : pose.bodies) {
+        const double d = plane.offset - std::max(plane.normal.dot(p.a), plane.normal.dot(p.b)) -
+                         p.radius;
+        clearance = std::min(clearance, d);
+      }
+    }
+    plane.margin_m = std::clamp(clearance - options.slack_m, 0.0, options.max_margin_m);
+  }
+  MarginSummary summary;
+  summary.configurations = static_cast<int>(poses.size());
+  if (!vine_margins.empty()) {
+    std::sort(vine_margins.begin(), vine_margins.end());
+    summary.min_margin_m = vine_margins.front();
+    summary.median_margin_m = vine_margins[vine_margins.size() / 2];
+  }
+  return summary;
+}
 
 // A robot of one fixed body: a vertical capsule at the base origin, 0.1 m long, radius 0.05.
 // Where it is does not depend on q, so clearances are known in closed form.
@@ -76,6 +175,70 @@ TEST(SafetyMargins, PlanesKeepTheirDistance) {
   scene.planes[0].offset = 0.07;  // plane at z = -0.07: 0.02 m below the body
   InflateMargins(Post(), Still(), options, &scene);
   EXPECT_NEAR(scene.planes[0].margin_m, 0.02, 1e-12);
+}
+
+// Random protected motions on simulated vines (seeds 1100-1105): short joint paths around random
+// configurations, half of them allowed to touch a random cane near a random point of it, plus a
+// long motion (the home-to-start kind). The fast implementation must give every obstacle and
+// plane the reference's margin.
+TEST(SafetyMargins, MatchesTheReferenceOnSimulatedVines) {
+  const RobotModel robot = DefaultUr5(MillEndTool());
+  std::mt19937_64 rng(1100);
+  std::uniform_real_distribution<double> angle(-M_PI, M_PI), step(-0.15, 0.15);
+  int between = 0, obstacles = 0;
+  for (uint64_t seed = 1100; seed < 1106; ++seed) {
+    auto generated = sim::GenerateScene(seed, 0, sim::VineGeneratorOptions{});
+    ASSERT_TRUE(generated.ok()) << generated.status();
+    auto scene = CollisionScene::Build(generated->vine, DefaultPlatform(), robot);
+    ASSERT_TRUE(scene.ok()) << scene.status();
+    std::vector<const Obstacle*> canes;
+    for (const Obstacle& o : scene->obstacles)
+      if (o.kind == ObstacleKind::kCane) canes.push_back(&o);
+    ASSERT_FALSE(canes.empty());
+    std::vector<ProtectedMotion> motions;
+    for (int m = 0; m < 40; ++m) {
+      ProtectedMotion motion;
+      Joints q;
+      for (int j = 0; j < 6; ++j) q[j] = angle(rng);
+      for (int k = 0; k < 6; ++k) {
+        motion.path.push_back(q);
+        for (int j = 0; j < 6; ++j) q[j] += step(rng);
+      }
+      if (m % 2 == 1) {
+        const Obstacle& cane = *canes[rng() % canes.size()];
+        motion.ignored_cane = CaneId{cane.owner_id};
+        motion.ignored_point_in_base = cane.capsule.a;
+        motion.ignored_radius_m = 0.04;
+      }
+      motions.push_back(motion);
+    }
+    Joints home, away;
+    for (int j = 0; j < 6; ++j) home[j] = angle(rng), away[j] = angle(rng);
+    motions.push_back({{home, away}, CaneId{0}, Eigen::Vector3d::Zero(), 0.0});
+    for (const double max_margin_m : {0.03, 0.1}) {
+      MarginOptions options;
+      options.max_margin_m = max_margin_m;
+      CollisionScene fast = *scene, reference = *scene;
+      const MarginSummary fast_summary = InflateMargins(robot, motions, options, &fast);
+      const MarginSummary reference_summary =
+          ReferenceInflateMargins(robot, motions, options, &reference);
+      EXPECT_EQ(fast_summary.configurations, reference_summary.configurations);
+      EXPECT_NEAR(fast_summary.min_margin_m, reference_summary.min_margin_m, 1e-9);
+      EXPECT_NEAR(fast_summary.median_margin_m, reference_summary.median_margin_m, 1e-9);
+      ASSERT_EQ(fast.obstacles.size(), reference.obstacles.size());
+      for (size_t i = 0; i < fast.obstacles.size(); ++i) {
+        EXPECT_NEAR(fast.obstacles[i].margin_m, reference.obstacles[i].margin_m, 1e-9)
+            << "seed " << seed << " obstacle " << i;
+        const double m = reference.obstacles[i].margin_m;
+        between += m > 0 && m < max_margin_m;
+        ++obstacles;
+      }
+      for (size_t i = 0; i < fast.planes.size(); ++i)
+        EXPECT_NEAR(fast.planes[i].margin_m, reference.planes[i].margin_m, 1e-9);
+    }
+  }
+  // The scenes must exercise partial margins, not only 0 and the maximum.
+  EXPECT_GT(between, obstacles / 50) << between << " of " << obstacles;
 }
 
 TEST(SafetyMargins, OptionsRejectBadValues) {
