@@ -20,6 +20,24 @@ namespace {
 // The bicubic interpolator reads a 4x4 neighbourhood; keep clear of the border.
 constexpr double kMarginPx = 2.0;
 
+// Projects platform point p through `projector` with the corrections of a camera: rotation by the
+// angle-axis `w` in the camera frame (x_cam' = R(w) (R x + t), the centre stays), focal length
+// scaled by 1 + s[0], principal point moved by (s[1], s[2]) pixels. False behind the camera.
+template <typename T>
+bool ProjectCorrected(const Projector& projector, const T* w, const T* s, const T* p, T* u, T* v) {
+  T pc[3];
+  for (int i = 0; i < 3; ++i) {
+    pc[i] = projector.r[3 * i] * p[0] + projector.r[3 * i + 1] * p[1] +
+            projector.r[3 * i + 2] * p[2] + projector.t[i];
+  }
+  T rotated[3];
+  ceres::AngleAxisRotatePoint(w, pc, rotated);
+  if (!projector.FromCameraScaled(rotated, T(1.0) + s[0], u, v)) return false;
+  *u += s[1];
+  *v += s[2];
+  return true;
+}
+
 // CentrelineCost for a camera whose rotation is corrected by the angle-axis `w` (applied in the
 // camera frame: x_cam' = R(w) (R x + t), which keeps the camera centre where it is), whose
 // focal length is scaled by 1 + s[0] and whose principal point moves by (s[1], s[2]) pixels.
@@ -29,17 +47,8 @@ struct CorrectedCentrelineCost {
       : projector(projector), interpolator(interpolator), inv_sd(inv_sd) {}
   template <typename T>
   bool operator()(const T* w, const T* s, const T* p, T* residual) const {
-    T pc[3];
-    for (int i = 0; i < 3; ++i) {
-      pc[i] = projector.r[3 * i] * p[0] + projector.r[3 * i + 1] * p[1] +
-              projector.r[3 * i + 2] * p[2] + projector.t[i];
-    }
-    T rotated[3];
-    ceres::AngleAxisRotatePoint(w, pc, rotated);
     T u, v;
-    if (!projector.FromCameraScaled(rotated, T(1.0) + s[0], &u, &v)) return false;
-    u += s[1];
-    v += s[2];
+    if (!ProjectCorrected(projector, w, s, p, &u, &v)) return false;
     T d2;
     interpolator->Evaluate(v, u, &d2);
     residual[0] = sqrt(fmax(d2, T(0.0)) + T(1e-6)) * inv_sd;
@@ -100,17 +109,8 @@ struct TrellisLineCost {
       }
     }
     p[2] -= sag[0] * T(4.0 * f * (1.0 - f));
-    T pc[3];
-    for (int i = 0; i < 3; ++i) {
-      pc[i] = projector.r[3 * i] * p[0] + projector.r[3 * i + 1] * p[1] +
-              projector.r[3 * i + 2] * p[2] + projector.t[i];
-    }
-    T rotated[3];
-    ceres::AngleAxisRotatePoint(w, pc, rotated);
     T u, v;
-    if (!projector.FromCameraScaled(rotated, T(1.0) + s[0], &u, &v)) return false;
-    u += s[1];
-    v += s[2];
+    if (!ProjectCorrected(projector, w, s, p, &u, &v)) return false;
     const Eigen::Vector2d at(ValueOf(u), ValueOf(v));
     size_t best = 0;
     double best_d2 = 1e300;
