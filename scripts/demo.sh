@@ -2,8 +2,8 @@
 # SPDX-License-Identifier: Apache-2.0
 # The main job, as far as it is built: simulate a few stops along a row, capture each through the
 # simulated camera rig, check every bundle imports, reconstruct each vine, decide its pruning,
-# measure its phenomics and score the model and cuts against the simulator's ground truth. Grows
-# with every stage.
+# measure its phenomics, plan the arm's motions to its cuts and score the model and cuts against
+# the simulator's ground truth. Grows with every stage.
 # Usage: scripts/demo.sh path/to/vinebot [OUT_DIR]
 set -euo pipefail
 vinebot=${1:?usage: scripts/demo.sh path/to/vinebot [OUT_DIR]}
@@ -21,8 +21,11 @@ for vine in 0 1 2; do
   "$vinebot" reconstruct --bundle "$dir" --out "$dir/model.json" > "$dir/reconstruct.json"
   "$vinebot" decide --model "$dir/model.json" --out "$dir/cut_plan.json" > "$dir/decide.json"
   "$vinebot" phenomics --model "$dir/model.json" --plan "$dir/cut_plan.json" > "$dir/phenomics.json"
+  "$vinebot" plan --model "$dir/model.json" --cuts "$dir/cut_plan.json" \
+    --out "$dir/trajectory.json" > "$dir/plan.json" 2> "$dir/plan_notes.txt"
   "$vinebot" evaluate --model "$dir/model.json" --truth "$dir/ground_truth.json" > "$dir/metrics.json"
   echo "  vine $vine: $(tr -d ' \n' < "$dir/metrics.json" | cut -c1-160)"
+  echo "    plan: $(tr -d ' \n' < "$dir/plan.json" | cut -c1-160)"
 done
-echo "vinebot demo: bundles, model.json, cut_plan.json, phenomics.json and metrics.json per vine in $out."
-echo "Later stages (plan, cut) are not built yet."
+echo "vinebot demo: bundles, model.json, cut_plan.json, phenomics.json, trajectory.json and"
+echo "metrics.json per vine in $out. Later stages (cut, server) are not built yet."

@@ -112,10 +112,6 @@ std::string_view CutMotionReason(CutMotionOutcome outcome) {
   }
 }
 
-}  // namespace
-
-namespace {
-
 // The copy of `path` shifted by whole turns in the joints whose limits allow it that the arm can
 // reach from `from` without folding onto itself: IK gives each joint its turn nearest zero, but
 // the wrist links cannot pass through the forearm, so a wrist angle one turn away is often on the
