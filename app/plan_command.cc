@@ -38,12 +38,13 @@ absl::Status RunPlan(Flags& flags) {
   for (const UnplannedCut& u : result->trajectory.unplanned)
     unplanned.push_back({{"cut_id", u.cut_id.value}, {"reason", u.reason}});
   const plan::PlanStats& s = result->stats;
-  const nlohmann::json summary = {
-      {"out", out},
+  // In this order (planned cuts first), not sorted: the line is read by people and scripts.
+  const nlohmann::ordered_json summary = {
       {"cuts", s.cuts},
       {"planned", s.planned},
-      {"unplanned", unplanned},
       {"duration_s", result->trajectory.duration_s},
+      {"unplanned", unplanned},
+      {"out", out},
       {"checker", std::string(plan::CheckerKindName(setup.options.checker))},
       {"plan_s", s.total_s},
       {"checks", s.checks},

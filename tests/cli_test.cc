@@ -13,6 +13,7 @@
 
 #include "core/cut_plan.h"
 #include "core/json_io.h"
+#include "core/trajectory.h"
 #include "core/vine_model_json.h"
 #include "gtest/gtest.h"
 #include "sim/rig.h"
@@ -361,6 +362,53 @@ TEST(VinebotCli, EvaluatePrintsTheCutPointMetrics) {
   ASSERT_FALSE(json.is_discarded()) << run.output;
   EXPECT_EQ(json["cuts_missed_fraction"], 1.0);
   EXPECT_TRUE(json.contains("model_decide_error")) << run.output;
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace vb
+
+namespace vb {
+namespace {
+
+// vinebot plan end to end on a simulated ground truth and its decided cut plan: a valid
+// trajectory file whose cut segments and unplanned cuts account for every cut; bad input exits 2
+// naming the file or flag.
+TEST(VinebotCli, PlanWritesATrajectoryAccountingForEveryCut) {
+  const std::string dir = FreshDir("plan");
+  const std::string truth_path = WriteSimTruth(dir, 4242);
+  ASSERT_EQ(Vinebot("decide --model " + truth_path + " --out " + dir + "/cuts.json").exit_code, 0);
+  const RunResult run = Vinebot("plan --model " + truth_path + " --cuts " + dir +
+                                "/cuts.json --out " + dir + "/trajectory.json");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_NE(run.output.find("\"planned\""), std::string::npos) << run.output;
+  const auto trajectory = ReadTrajectory(dir + "/trajectory.json");
+  ASSERT_TRUE(trajectory.ok()) << trajectory.status();
+  const auto plan = ReadCutPlan(dir + "/cuts.json");
+  ASSERT_TRUE(plan.ok()) << plan.status();
+  size_t cut_segments = 0;
+  for (const TrajectorySegment& s : trajectory->segments) cut_segments += s.kind == SegmentKind::kCut;
+  EXPECT_EQ(cut_segments + trajectory->unplanned.size(), plan->cuts.size());
+  EXPECT_GT(cut_segments, 0u);
+  EXPECT_EQ(trajectory->tool.name, "secateur");
+
+  // A cut plan naming a cane the model lacks, a missing file, an unknown tool.
+  std::ofstream(dir + "/bad.json")
+      << R"({"format":"vinebot.cut_plan.v1","policy":{},"keep":[],"spurs":[],"cuts":[)"
+      << R"({"id":1,"cane_id":999,"point":[0,0.8,1],"direction":[1,0,0],"diameter_m":0.01,)"
+      << R"("reason":"remove"}]})";
+  RunResult bad = Vinebot("plan --model " + truth_path + " --cuts " + dir + "/bad.json --out " +
+                          dir + "/t.json");
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_NE(bad.output.find("bad.json"), std::string::npos) << bad.output;
+  bad = Vinebot("plan --model " + dir + "/none.json --cuts " + dir + "/cuts.json --out " + dir +
+                "/t.json");
+  EXPECT_NE(bad.exit_code, 0) << bad.output;
+  EXPECT_NE(bad.output.find("none.json"), std::string::npos) << bad.output;
+  bad = Vinebot("plan --model " + truth_path + " --cuts " + dir + "/cuts.json --out " + dir +
+                "/t.json --tool chainsaw");
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_NE(bad.output.find("--tool"), std::string::npos) << bad.output;
   std::filesystem::remove_all(dir);
 }
 
