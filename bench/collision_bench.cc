@@ -20,6 +20,7 @@
 #include "sim/vine_generator.h"
 #include "workers/plan/collision_checker.h"
 #include "workers/plan/primitive_checker.h"
+#include "workers/plan/simple_tool_test_util.h"
 
 namespace vb::plan {
 namespace {
@@ -27,17 +28,8 @@ namespace {
 constexpr int kVines = 8;
 constexpr int kConfigurations = 4096;
 
-ToolGeometry MillEnd() {
-  ToolGeometry tool;
-  tool.name = "mill_end";
-  tool.flange_from_tcp.translation() = Eigen::Vector3d(0, 0, 0.17);
-  tool.capsules = {{Eigen::Vector3d(0, 0, 0.0), Eigen::Vector3d(0, 0, 0.12), 0.035},
-                   {Eigen::Vector3d(0, 0, 0.12), Eigen::Vector3d(0, 0, 0.17), 0.006}};
-  return tool;
-}
-
 struct Fixture {
-  RobotModel robot = DefaultUr5(MillEnd());
+  RobotModel robot = DefaultUr5(SimpleMillEnd());
   std::vector<CollisionScene> scenes;
   std::vector<Joints> random;                  // uniform within the limits
   std::vector<std::vector<Joints>> free;       // per scene: free configurations only

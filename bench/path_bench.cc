@@ -27,6 +27,7 @@
 #include "workers/plan/cut_order.h"
 #include "workers/plan/fake_checker_test_util.h"
 #include "workers/plan/path_planner.h"
+#include "workers/plan/simple_tool_test_util.h"
 #include "workers/plan/time_parameterization.h"
 
 namespace vb::plan {
@@ -117,15 +118,6 @@ void BM_PlanPathFake(benchmark::State& state) {
 }
 BENCHMARK(BM_PlanPathFake)->Unit(benchmark::kMillisecond);
 
-ToolGeometry MillEnd() {
-  ToolGeometry tool;
-  tool.name = "mill_end";
-  tool.flange_from_tcp.translation() = Eigen::Vector3d(0, 0, 0.17);
-  tool.capsules = {{Eigen::Vector3d(0, 0, 0.0), Eigen::Vector3d(0, 0, 0.12), 0.035},
-                   {Eigen::Vector3d(0, 0, 0.12), Eigen::Vector3d(0, 0, 0.17), 0.006}};
-  return tool;
-}
-
 struct SceneWorld {
   std::unique_ptr<CollisionChecker> checker;
   std::vector<std::pair<Joints, Joints>> queries;
@@ -136,7 +128,7 @@ struct SceneWorld {
 // different components of the free space and are unsolvable).
 std::vector<SceneWorld> MakeSceneWorlds(double spread_rad) {
   std::vector<SceneWorld> worlds;
-  const RobotModel robot = DefaultUr5(MillEnd());
+  const RobotModel robot = DefaultUr5(SimpleMillEnd());
   for (uint64_t seed = 1100; seed < 1105; ++seed) {
     sim::VineGeneratorOptions options;
     options.neighbours = false;
@@ -169,7 +161,7 @@ std::vector<SceneWorld> MakeSceneWorlds(double spread_rad) {
 
 void BM_PlanPathScene(benchmark::State& state) {
   std::vector<SceneWorld> worlds = MakeSceneWorlds(0.1 * static_cast<double>(state.range(1)));
-  const JointLimits limits = DefaultUr5(MillEnd()).limits;
+  const JointLimits limits = DefaultUr5(SimpleMillEnd()).limits;
   PathOptions options;
   options.range_rad = 0.1 * static_cast<double>(state.range(0));
   std::vector<double> times, rrt_times;

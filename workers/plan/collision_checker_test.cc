@@ -8,19 +8,11 @@
 #include "sim/vine_generator.h"
 #include "workers/plan/fcl_checker.h"
 #include "workers/plan/primitive_checker.h"
+#include "workers/plan/simple_tool_test_util.h"
 #include "workers/plan/tool.h"
 
 namespace vb::plan {
 namespace {
-
-ToolGeometry MillEnd() {
-  ToolGeometry tool;
-  tool.name = "mill_end";
-  tool.flange_from_tcp.translation() = Eigen::Vector3d(0, 0, 0.17);
-  tool.capsules = {{Eigen::Vector3d(0, 0, 0.0), Eigen::Vector3d(0, 0, 0.12), 0.035},
-                   {Eigen::Vector3d(0, 0, 0.12), Eigen::Vector3d(0, 0, 0.17), 0.006}};
-  return tool;
-}
 
 CollisionScene VineScene(uint64_t seed, double margin_m = 0.0) {
   sim::VineGeneratorOptions options;
@@ -29,7 +21,7 @@ CollisionScene VineScene(uint64_t seed, double margin_m = 0.0) {
   EXPECT_TRUE(sim_scene.ok()) << sim_scene.status();
   SceneOptions scene_options;
   scene_options.default_margin_m = margin_m;
-  auto scene = CollisionScene::Build(sim_scene->vine, DefaultPlatform(), DefaultUr5(MillEnd()),
+  auto scene = CollisionScene::Build(sim_scene->vine, DefaultPlatform(), DefaultUr5(SimpleMillEnd()),
                                      scene_options);
   EXPECT_TRUE(scene.ok()) << scene.status();
   return *scene;
@@ -84,7 +76,7 @@ Joints Raised() {
 CollisionScene EmptyScene() { return CollisionScene(); }
 
 TEST(PrimitiveChecker, ClearanceMatchesBruteForceOnVines) {
-  const RobotModel robot = DefaultUr5(MillEnd());
+  const RobotModel robot = DefaultUr5(SimpleMillEnd());
   std::mt19937 rng(1104);
   for (uint64_t seed : {1104, 1105}) {
     const CollisionScene scene = VineScene(seed, 0.01);
@@ -103,7 +95,7 @@ TEST(PrimitiveChecker, ClearanceMatchesBruteForceOnVines) {
 }
 
 TEST(PrimitiveChecker, FoldedArmCollidesWithItself) {
-  const RobotModel robot = DefaultUr5(MillEnd());
+  const RobotModel robot = DefaultUr5(SimpleMillEnd());
   const CollisionScene scene = EmptyScene();
   PrimitiveChecker checker(robot, scene);
   EXPECT_TRUE(checker.IsFree(Raised()));
@@ -121,7 +113,7 @@ TEST(PrimitiveChecker, FoldedArmCollidesWithItself) {
 }
 
 TEST(PrimitiveChecker, GroundPlaneStopsTheArm) {
-  const RobotModel robot = DefaultUr5(MillEnd());
+  const RobotModel robot = DefaultUr5(SimpleMillEnd());
   auto with_planes = CollisionScene::Build(VineModel(), DefaultPlatform(), robot);
   ASSERT_TRUE(with_planes.ok());
   // Reach straight down: the flange ends ~0.9 m below the base, beyond the ground at -0.55 m.
@@ -141,7 +133,7 @@ TEST(PrimitiveChecker, GroundPlaneStopsTheArm) {
 }
 
 TEST(PrimitiveChecker, MarginsInflateObstacles) {
-  const RobotModel robot = DefaultUr5(MillEnd());
+  const RobotModel robot = DefaultUr5(SimpleMillEnd());
   const double arm_only = PrimitiveChecker(robot, EmptyScene()).Clearance(Raised());
   ASSERT_GT(arm_only, 0.006);
   // A 5 mm sphere 5 mm beyond the tool tip.
@@ -168,7 +160,7 @@ TEST(PrimitiveChecker, MarginsInflateObstacles) {
 }
 
 TEST(PrimitiveChecker, LongObstaclesAreSplitWithoutChangingThem) {
-  const RobotModel robot = DefaultUr5(MillEnd());
+  const RobotModel robot = DefaultUr5(SimpleMillEnd());
   // A 0.8 m post (7 pieces) past the tool tip, 0.02 m beside it.
   const Eigen::Isometry3d flange = ForwardKinematics(Raised());
   const Eigen::Vector3d tip = flange * Eigen::Vector3d(0, 0, 0.17);
@@ -189,7 +181,7 @@ TEST(PrimitiveChecker, LongObstaclesAreSplitWithoutChangingThem) {
 }
 
 TEST(PrimitiveChecker, BaseInsideAnObstacleIsNeverFree) {
-  const RobotModel robot = DefaultUr5(MillEnd());
+  const RobotModel robot = DefaultUr5(SimpleMillEnd());
   CollisionScene scene;
   Obstacle o;
   o.capsule = {Eigen::Vector3d(0.05, 0, 0.02), Eigen::Vector3d(0.05, 0, 0.02), 0.02};
@@ -200,7 +192,7 @@ TEST(PrimitiveChecker, BaseInsideAnObstacleIsNeverFree) {
 }
 
 TEST(PrimitiveChecker, NonFiniteConfigurationIsNeverFree) {
-  const RobotModel robot = DefaultUr5(MillEnd());
+  const RobotModel robot = DefaultUr5(SimpleMillEnd());
   PrimitiveChecker checker(robot, EmptyScene());
   Joints q = Raised();
   q[3] = std::nan("");
@@ -245,7 +237,7 @@ double MaxCapsuleTravel(const std::vector<LinkBody>& bodies, const Joints& q0, c
 }
 
 TEST(JointLeverArms, BoundTheTravelOfEveryCapsulePointPerStep) {
-  for (const ToolGeometry& tool : {MillEnd(), MillEndTool(), SecateurTool()}) {
+  for (const ToolGeometry& tool : {SimpleMillEnd(), MillEndTool(), SecateurTool()}) {
     const RobotModel robot = DefaultUr5(tool);
     const std::vector<LinkBody> bodies = robot.BodiesWithTool();
     const JointLevers lever = JointLeverArms(robot);
@@ -276,7 +268,7 @@ TEST(JointLeverArms, BoundTheTravelOfEveryCapsulePointPerStep) {
 }
 
 TEST(JointLeverArms, WristJointsMoveLessThanTheShoulder) {
-  const RobotModel robot = DefaultUr5(MillEnd());
+  const RobotModel robot = DefaultUr5(SimpleMillEnd());
   const JointLevers lever = JointLeverArms(robot);
   for (int i = 0; i < 6; ++i) {
     EXPECT_GT(lever[i], 0.0) << i;
@@ -315,7 +307,7 @@ TEST(ReachOfPoint, HoldsThePointInEveryConfiguration) {
 }
 
 TEST(CollisionChecker, MotionThroughAnObstacleIsNotFree) {
-  const RobotModel robot = DefaultUr5(MillEnd());
+  const RobotModel robot = DefaultUr5(SimpleMillEnd());
   Joints a = Raised(), b = Raised();
   a[0] = -0.6;
   b[0] = 0.6;
@@ -343,7 +335,7 @@ TEST(CollisionChecker, MotionThroughAnObstacleIsNotFree) {
 // Batched checks compute forward kinematics in float lanes: they may differ from IsFree only
 // within float rounding of contact.
 TEST(PrimitiveChecker, AreFreeAgreesWithIsFree) {
-  const RobotModel robot = DefaultUr5(MillEnd());
+  const RobotModel robot = DefaultUr5(SimpleMillEnd());
   std::mt19937 rng(1130);
   int total = 0, free = 0, disagree = 0;
   for (uint64_t seed : {1130, 1131}) {
@@ -371,7 +363,7 @@ TEST(PrimitiveChecker, AreFreeAgreesWithIsFree) {
 // The batched IsMotionFree against IsFree at every sample MotionSteps gives, on short motions
 // around random configurations (both outcomes occur).
 TEST(PrimitiveChecker, BatchedMotionAgreesWithSampledChecks) {
-  const RobotModel robot = DefaultUr5(MillEnd());
+  const RobotModel robot = DefaultUr5(SimpleMillEnd());
   std::mt19937 rng(1132);
   int motions = 0, free = 0;
   for (uint64_t seed : {1132, 1133}) {
@@ -402,7 +394,7 @@ TEST(PrimitiveChecker, BatchedMotionAgreesWithSampledChecks) {
 // of random configurations within the joint limits, and every disagreement lies within the
 // tessellation tolerance (meshes) or numerical noise (FCL primitives) of contact.
 TEST(CheckerAgreement, PrimitivesAndFclAgreeOnRandomConfigurations) {
-  const RobotModel robot = DefaultUr5(MillEnd());
+  const RobotModel robot = DefaultUr5(SimpleMillEnd());
   std::mt19937 rng(1110);
   int total = 0, free = 0, disagree_primitives = 0, disagree_mesh = 0;
   for (uint64_t seed : {1110, 1111, 1112}) {

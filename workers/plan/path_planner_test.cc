@@ -13,6 +13,7 @@
 #include "workers/plan/collision_scene.h"
 #include "workers/plan/fake_checker_test_util.h"
 #include "workers/plan/robot_model.h"
+#include "workers/plan/simple_tool_test_util.h"
 #include "workers/plan/time_parameterization.h"
 
 namespace vb::plan {
@@ -261,15 +262,6 @@ TEST(PathPlanner, EverySegmentPassesASampledChecker) {
   }
 }
 
-ToolGeometry MillEnd() {
-  ToolGeometry tool;
-  tool.name = "mill_end";
-  tool.flange_from_tcp.translation() = Eigen::Vector3d(0, 0, 0.17);
-  tool.capsules = {{Eigen::Vector3d(0, 0, 0.0), Eigen::Vector3d(0, 0, 0.12), 0.035},
-                   {Eigen::Vector3d(0, 0, 0.12), Eigen::Vector3d(0, 0, 0.17), 0.006}};
-  return tool;
-}
-
 // The primitive checker on a simulated vine (tuning seed): paths between random free
 // configurations near a working pose are found, and every segment passes the checker.
 TEST(PathPlanner, PlansOnASimulatedVineScene) {
@@ -277,7 +269,7 @@ TEST(PathPlanner, PlansOnASimulatedVineScene) {
   vine_options.neighbours = false;
   auto sim_scene = sim::GenerateScene(1100, 0, vine_options);
   ASSERT_TRUE(sim_scene.ok()) << sim_scene.status();
-  const RobotModel robot = DefaultUr5(MillEnd());
+  const RobotModel robot = DefaultUr5(SimpleMillEnd());
   auto scene = CollisionScene::Build(sim_scene->vine, DefaultPlatform(), robot);
   ASSERT_TRUE(scene.ok()) << scene.status();
   std::unique_ptr<CollisionChecker> checker = MakePrimitiveChecker(robot, *scene);

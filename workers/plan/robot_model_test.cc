@@ -5,18 +5,10 @@
 #include <random>
 
 #include "gtest/gtest.h"
+#include "workers/plan/simple_tool_test_util.h"
 
 namespace vb::plan {
 namespace {
-
-ToolGeometry TestTool() {
-  ToolGeometry tool;
-  tool.name = "mill_end";
-  tool.flange_from_tcp.translation() = Eigen::Vector3d(0, 0, 0.17);
-  tool.capsules = {{Eigen::Vector3d(0, 0, 0.0), Eigen::Vector3d(0, 0, 0.12), 0.035},
-                   {Eigen::Vector3d(0, 0, 0.12), Eigen::Vector3d(0, 0, 0.17), 0.006}};
-  return tool;
-}
 
 // Distance of p from the line through `origin` along unit `axis`, and its coordinate along it.
 std::pair<double, double> AxisCoordinates(const Eigen::Vector3d& p, const Eigen::Vector3d& origin,
@@ -43,7 +35,7 @@ int FrameOf(const RobotModel& robot, const std::string& name) {
 
 // The capsules run from joint axis to joint axis at the UR5's published offsets, at any q.
 TEST(DefaultUr5, CapsulesChainFromJointToJoint) {
-  const RobotModel robot = DefaultUr5(TestTool());
+  const RobotModel robot = DefaultUr5(SimpleMillEnd());
   std::mt19937 rng(1100);
   std::uniform_real_distribution<double> angle(-M_PI, M_PI);
   for (int trial = 0; trial < 20; ++trial) {
@@ -85,7 +77,7 @@ TEST(DefaultUr5, CapsulesChainFromJointToJoint) {
 
 // Consecutive bodies overlap: the chain of capsules has no gap anywhere.
 TEST(DefaultUr5, ConsecutiveBodiesTouch) {
-  const RobotModel robot = DefaultUr5(TestTool());
+  const RobotModel robot = DefaultUr5(SimpleMillEnd());
   const auto bodies = robot.BodiesWithTool();
   Joints q;
   q << 0.4, -1.1, 1.3, -0.7, 1.2, 0.3;
@@ -105,7 +97,7 @@ TEST(DefaultUr5, ConsecutiveBodiesTouch) {
 }
 
 TEST(DefaultUr5, LimitsMountAndRadii) {
-  const RobotModel robot = DefaultUr5(TestTool());
+  const RobotModel robot = DefaultUr5(SimpleMillEnd());
   ASSERT_TRUE(robot.Validate().ok()) << robot.Validate();
   EXPECT_DOUBLE_EQ(robot.limits.upper[2], M_PI);
   EXPECT_DOUBLE_EQ(robot.limits.lower[2], -M_PI);
@@ -124,7 +116,7 @@ TEST(DefaultUr5, LimitsMountAndRadii) {
 }
 
 TEST(DefaultUr5, ToolIsTheLastBodyAndSelfPairsSkipNeighbours) {
-  const RobotModel robot = DefaultUr5(TestTool());
+  const RobotModel robot = DefaultUr5(SimpleMillEnd());
   const auto bodies = robot.BodiesWithTool();
   ASSERT_EQ(bodies.size(), robot.links.size() + 1);
   EXPECT_EQ(bodies.back().frame, 6);
@@ -149,29 +141,29 @@ TEST(RobotModel, SelfPairsSkipPairsAtConstantDistance) {
     }
     return false;
   };
-  RobotModel straight = DefaultUr5(TestTool());
+  RobotModel straight = DefaultUr5(SimpleMillEnd());
   EXPECT_FALSE(has_pair(straight, "wrist_2", "mill_end"));
   EXPECT_TRUE(has_pair(straight, "forearm", "mill_end"));
   EXPECT_TRUE(has_pair(straight, "shoulder", "forearm"));
-  ToolGeometry bent = TestTool();
+  ToolGeometry bent = SimpleMillEnd();
   bent.capsules.push_back({Eigen::Vector3d(0, 0, 0.05), Eigen::Vector3d(0.1, 0, -0.03), 0.02});
   EXPECT_TRUE(has_pair(DefaultUr5(bent), "wrist_2", "mill_end"));
 }
 
 TEST(RobotModel, ValidateRejectsBadGeometry) {
-  RobotModel robot = DefaultUr5(TestTool());
+  RobotModel robot = DefaultUr5(SimpleMillEnd());
   robot.links[2].capsules[0].radius = -0.01;
   EXPECT_NE(robot.Validate().message().find("links[2]"), std::string::npos);
-  robot = DefaultUr5(TestTool());
+  robot = DefaultUr5(SimpleMillEnd());
   robot.links[1].frame = 7;
   EXPECT_NE(robot.Validate().message().find("frame"), std::string::npos);
-  robot = DefaultUr5(TestTool());
+  robot = DefaultUr5(SimpleMillEnd());
   robot.platform_from_arm_base.linear() *= 2.0;
   EXPECT_NE(robot.Validate().message().find("platform_from_arm_base"), std::string::npos);
-  robot = DefaultUr5(TestTool());
+  robot = DefaultUr5(SimpleMillEnd());
   robot.tool.capsules[0].a.x() = std::nan("");
   EXPECT_NE(robot.Validate().message().find("tool.capsules[0]"), std::string::npos);
-  robot = DefaultUr5(TestTool());
+  robot = DefaultUr5(SimpleMillEnd());
   robot.limits.lower[2] = 4.0;
   EXPECT_FALSE(robot.Validate().ok());
 }
