@@ -41,11 +41,9 @@ struct CheckerRecord {
   std::map<std::string, int> unplanned;  // reason -> cuts
 };
 
-// Keeps a timed loop's result observable so that the compiler cannot drop the loop.
-void Sink(int value) {
-  static volatile int sink = 0;
-  sink = value;
-}
+// Keeps a timed loop's result observable so that the compiler cannot drop the loop (what
+// benchmark::DoNotOptimize does; GCC and Clang).
+void Sink(int value) { asm volatile("" : : "r"(value) : "memory"); }
 
 Joints RandomJoints(const plan::JointLimits& limits, std::mt19937_64& rng) {
   std::uniform_real_distribution<double> u(0.0, 1.0);
