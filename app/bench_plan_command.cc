@@ -32,7 +32,7 @@ using plan::CheckerKind;
 using plan::Joints;
 
 struct CheckerRecord {
-  std::vector<double> path_s, solved_path_s, vine_s, checks_per_path, check_ns;
+  std::vector<double> path_s, solved_path_s, vine_s, checks_per_path;
   // Vine times on the vines the baselines also plan whole (for the speed-up).
   std::vector<double> baseline_vines_vine_s;
   int direct = 0;
@@ -91,7 +91,6 @@ nlohmann::json Summary(const CheckerRecord& r) {
           {"per_path_p95_s", Quantile(r.path_s, 0.95)},
           {"vine_median_s", Median(r.vine_s)},
           {"checks_per_path", Median(r.checks_per_path)},
-          {"check_ns", Median(r.check_ns)},
           {"success_rate", r.reachable > 0 ? double(r.planned) / r.reachable : 0.0},
           {"paths", r.path_s.size()},
           {"solved_path_median_s", Median(r.solved_path_s)},
@@ -149,6 +148,8 @@ absl::Status RunBenchPlan(Flags& flags) {
       continue;
     }
     cuts_per_vine.push_back(decision->plan.cuts.size());
+    // The vine's scene without margins: the dense re-check and the replayed path queries.
+    const auto base_scene = plan::CollisionScene::Build(scene.vine, setup.platform, setup.robot);
     std::vector<plan::PathRecord> queries;  // our planner's transits on this vine
     for (CheckerKind kind : kinds) {
       const bool baseline = kind != CheckerKind::kPrimitives;
@@ -184,11 +185,6 @@ absl::Status RunBenchPlan(Flags& flags) {
       r.planned += s.planned;
       r.passes = std::max(r.passes, s.passes);
       for (const UnplannedCut& u : result->trajectory.unplanned) ++r.unplanned[u.reason];
-      auto scene_or = plan::CollisionScene::Build(scene.vine, setup.platform, setup.robot);
-      if (scene_or.ok()) {
-        auto checker = plan::MakeChecker(kind, setup.robot, *scene_or);
-        r.check_ns.push_back(CheckNs(*checker, setup.robot.limits, seed));
-      }
       if (kind != CheckerKind::kPrimitives) continue;
       execution_s.push_back(result->trajectory.duration_s);
       double transit = 0, cutting = 0;
@@ -202,7 +198,7 @@ absl::Status RunBenchPlan(Flags& flags) {
       if (s.given_order_cost_s > 0) saving.push_back(1.0 - s.order_cost_s / s.given_order_cost_s);
       if (s.nearest_neighbour_cost_s > 0)
         saving_vs_nn.push_back(1.0 - s.order_cost_s / s.nearest_neighbour_cost_s);
-      if (verify && scene_or.ok()) {
+      if (verify && base_scene.ok()) {
         // Margins removed (the scene as built has none), 1 mm of travel between checks.
         const int64_t collisions = plan::CountTrajectoryCollisions(
             result->trajectory, result->cuts, scene.vine, setup.platform, setup.robot,
@@ -214,7 +210,6 @@ absl::Status RunBenchPlan(Flags& flags) {
     }
     if (queries.empty()) continue;
     // The same queries for every checker, on the vine's scene without margins.
-    auto base_scene = plan::CollisionScene::Build(scene.vine, setup.platform, setup.robot);
     if (!base_scene.ok()) continue;
     for (CheckerKind kind : kinds) {
       auto checker = plan::MakeChecker(kind, setup.robot, *base_scene);
