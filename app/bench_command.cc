@@ -13,6 +13,7 @@
 #include "app/decide_evaluation.h"
 #include "app/reconstruct_report.h"
 #include "core/model_metrics.h"
+#include "core/statistics.h"
 #include "core/status_macros.h"
 #include "sim/vine_generator.h"
 #include "workers/capture/sim_capture.h"
@@ -22,13 +23,9 @@
 namespace vb::app {
 namespace {
 
-double Median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
-}
-
-double Quantile(std::vector<double> v, double q) {
+// The nearest-rank quantile (core/statistics.h's Quantile interpolates; the p90 figures in
+// docs/benchmarks.md were measured with this one).
+double NearestRankQuantile(std::vector<double> v, double q) {
   if (v.empty()) return 0.0;
   std::sort(v.begin(), v.end());
   return v[std::min(v.size() - 1, static_cast<size_t>(q * (v.size() - 1) + 0.5))];
@@ -194,7 +191,7 @@ absl::Status RunBenchReconstruct(Flags& flags) {
     std::vector<double> v;
     for (const auto& t : timings) v.push_back(t.*field);
     stage_median[key] = Median(v);
-    stage_p90[key] = Quantile(v, 0.9);
+    stage_p90[key] = NearestRankQuantile(v, 0.9);
   };
   stage("segment_s", &reconstruct::StageTimings::segment_s);
   stage("structure_s", &reconstruct::StageTimings::structure_s);
