@@ -47,6 +47,10 @@ struct Post {
   double radius = 0.04;  // metres
 };
 
+// A cut closer than this to a cane's base removes the whole cane (the simulator's world and the
+// planner's view of the vine after cuts share the rule).
+inline constexpr double kMinCaneStubM = 0.001;
+
 struct VineModel {
   std::vector<Cane> canes;
   HeadModel head;

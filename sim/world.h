@@ -29,7 +29,7 @@ class SimWorld {
   const Scene& scene() const { return scene_; }
 
   // A cut leaving less than this much of a cane removes the whole cane.
-  static constexpr double kMinStubM = 0.001;
+  static constexpr double kMinStubM = kMinCaneStubM;
 
   // Severs cane `cane_id` at the point of its axis nearest `point_in_platform`.
   // NOT_FOUND if the cane does not exist (or already fell); INVALID_ARGUMENT if the point is

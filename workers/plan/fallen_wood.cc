@@ -21,7 +21,7 @@ VineModel WithoutFallenWood(const VineModel& model, std::span<const Cut> cuts) {
   std::unordered_set<int64_t> fallen;
   for (const auto& [cane_id, s] : cut_at) {
     const Cane& cane = model.canes[*model.IndexOf(CaneId{cane_id})];
-    if (s < kMinStubM) fallen.insert(cane_id);
+    if (s < kMinCaneStubM) fallen.insert(cane_id);
     for (CaneId child : model.ChildrenOf(cane.id)) {
       const Cane& c = model.canes[*model.IndexOf(child)];
       if (cane.polyline.Project(c.polyline.points.front()) > s) fallen.insert(child.value);

@@ -12,14 +12,11 @@
 
 namespace vb::plan {
 
-// A cut closer than this to its cane's base removes the whole cane.
-inline constexpr double kMinStubM = 0.001;
-
 // `model` after `cuts` (points on their canes' axes, platform frame). A cut cane keeps the part of
 // its polyline from its base to the point of its axis nearest the cut; a child whose base projects
 // onto its parent's axis beyond the cut falls with all its descendants, as does the whole cut cane
-// when the cut is within kMinStubM of its base. Children of the trunk (canes from the head) never
-// fall with a cut of another cane. Cuts on canes absent from `model` are ignored. The result
+// when the cut is within kMinCaneStubM (core/vine_model.h) of its base. Children of the trunk
+// (canes from the head) never fall with a cut of another cane. Cuts on canes absent from `model` are ignored. The result
 // passes VineModel::Validate() if `model` does.
 VineModel WithoutFallenWood(const VineModel& model, std::span<const Cut> cuts);
 
