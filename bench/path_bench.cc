@@ -25,6 +25,7 @@
 #include "sim/vine_generator.h"
 #include "workers/plan/collision_checker.h"
 #include "workers/plan/cut_order.h"
+#include "workers/plan/cut_order_test_util.h"
 #include "workers/plan/fake_checker_test_util.h"
 #include "workers/plan/path_planner.h"
 #include "workers/plan/simple_tool_test_util.h"
@@ -34,20 +35,6 @@ namespace vb::plan {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-Eigen::MatrixXd MoveTimeCosts(int n, uint32_t seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(-2.0, 2.0);
-  std::vector<Joints> q(n + 1);
-  for (Joints& x : q) {
-    for (int i = 0; i < 6; ++i) x[i] = u(rng);
-  }
-  Eigen::MatrixXd c(n + 1, n + 1);
-  for (int i = 0; i <= n; ++i) {
-    for (int j = 0; j <= n; ++j) c(i, j) = MoveTimeS(q[i], q[j], JointLimits());
-  }
-  return c;
-}
 
 void BM_HeldKarp(benchmark::State& state) {
   const Eigen::MatrixXd c = MoveTimeCosts(static_cast<int>(state.range(0)), 1100);

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "workers/plan/cut_order.h"
+#include "workers/plan/cut_order_test_util.h"
 
 #include <algorithm>
 #include <cmath>
@@ -21,21 +22,6 @@ Eigen::MatrixXd RandomCosts(int n, uint32_t seed) {
   Eigen::MatrixXd c(n + 1, n + 1);
   for (int i = 0; i <= n; ++i) {
     for (int j = 0; j <= n; ++j) c(i, j) = i == j ? 0.0 : u(rng);
-  }
-  return c;
-}
-
-// Move times between random arm configurations, as the planner uses them.
-Eigen::MatrixXd MoveTimeCosts(int n, uint32_t seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(-2.0, 2.0);
-  std::vector<Joints> q(n + 1);
-  for (Joints& x : q) {
-    for (int i = 0; i < 6; ++i) x[i] = u(rng);
-  }
-  Eigen::MatrixXd c(n + 1, n + 1);
-  for (int i = 0; i <= n; ++i) {
-    for (int j = 0; j <= n; ++j) c(i, j) = MoveTimeS(q[i], q[j], JointLimits());
   }
   return c;
 }
