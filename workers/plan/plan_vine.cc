@@ -190,9 +190,9 @@ struct Planning {
   }
 };
 
-// One pass on the vine as `model` leaves it: cut motions for `todo` (indices into plan.cuts),
+// One pass on the vine as `model` leaves it: cut motions for `pending` (indices into plan.cuts),
 // margins, order, paths. Appends legs; returns the cuts to try again on the vine after them.
-absl::StatusOr<std::vector<int>> PlanPass(const VineModel& model, const std::vector<int>& todo,
+absl::StatusOr<std::vector<int>> PlanPass(const VineModel& model, const std::vector<int>& pending,
                                           bool last_pass, Planning& p) {
   PlanStats& stats = p.result.stats;
   const PlanOptions& options = p.options;
@@ -204,14 +204,14 @@ absl::StatusOr<std::vector<int>> PlanPass(const VineModel& model, const std::vec
   // Cut motions.
   t = std::chrono::steady_clock::now();
   std::vector<Cut> cuts;
-  std::vector<int> todo_here;
-  for (int i : todo) {
+  std::vector<int> pending_here;
+  for (int i : pending) {
     if (!model.IndexOf(p.plan.cuts[i].cane_id)) {
       p.Unplanned(p.plan.cuts[i].id, "cane_fell_with_an_earlier_cut");
       continue;
     }
     cuts.push_back(p.plan.cuts[i]);
-    todo_here.push_back(i);
+    pending_here.push_back(i);
   }
   const CheckerFactory make_checker = [&](const RobotModel& r, const CollisionScene& s) {
     return MakeChecker(options.checker, r, s);
@@ -225,7 +225,7 @@ absl::StatusOr<std::vector<int>> PlanPass(const VineModel& model, const std::vec
     if (outcome == CutMotionOutcome::kPlanned) {
       planned.push_back(static_cast<int>(k));
     } else if (outcome == CutMotionOutcome::kNoCollisionFreeMotion && !last_pass) {
-      retry.push_back(todo_here[k]);
+      retry.push_back(pending_here[k]);
     } else {
       if (outcome == CutMotionOutcome::kUnreachable) ++stats.unreachable;
       p.Unplanned(cuts[k].id, CutMotionReason(outcome));
@@ -359,12 +359,12 @@ absl::StatusOr<PlanResult> PlanVine(const VineModel& model, const CutPlan& plan,
 
   Planning p{plan, robot, platform, options, deadline, result, {}, nullptr, nullptr, nullptr};
   p.self_checker = MakeChecker(options.checker, robot, CollisionScene{});
-  std::vector<int> todo(plan.cuts.size());
-  for (size_t i = 0; i < todo.size(); ++i) todo[i] = static_cast<int>(i);
+  std::vector<int> pending(plan.cuts.size());
+  for (size_t i = 0; i < pending.size(); ++i) pending[i] = static_cast<int>(i);
   VineModel now = model;
-  for (int pass = 0; pass < options.max_passes && !todo.empty(); ++pass) {
-    VB_ASSIGN_OR_RETURN(todo, PlanPass(now, todo, pass + 1 == options.max_passes, p));
-    if (!todo.empty()) {
+  for (int pass = 0; pass < options.max_passes && !pending.empty(); ++pass) {
+    VB_ASSIGN_OR_RETURN(pending, PlanPass(now, pending, pass + 1 == options.max_passes, p));
+    if (!pending.empty()) {
       std::vector<Cut> made;
       for (const Leg& leg : p.legs) made.push_back(leg.cut);
       now = WithoutFallenWood(model, made);

@@ -121,7 +121,7 @@ Obstacle Ball(double x, double radius, ObstacleKind kind = ObstacleKind::kHead, 
   return o;
 }
 
-std::vector<ProtectedMotion> Still() { return {{{Joints::Zero()}, CaneId{0}, {}, 0.0}}; }
+std::vector<ProtectedMotion> Still() { return {{{Joints::Zero()}, CaneId{0}, Eigen::Vector3d::Zero(), 0.0}}; }
 
 TEST(SafetyMargins, FarObstaclesGetTheMaximum) {
   CollisionScene scene;
