@@ -35,7 +35,8 @@ struct CheckerRecord {
   std::vector<double> path_s, solved_path_s, vine_s, checks_per_path;
   // Vine times on the vines the baselines also plan whole (for the speed-up).
   std::vector<double> baseline_vines_vine_s;
-  int direct = 0;
+  int direct = 0, without_margins = 0;
+  std::vector<double> median_margin_m;  // per vine, first pass (MarginSummary)
   std::map<std::string, std::vector<double>> stage_s;  // per vine
   int reachable = 0, planned = 0, passes = 0;
   std::map<std::string, int> unplanned;  // reason -> cuts
@@ -97,6 +98,8 @@ nlohmann::json Summary(const CheckerRecord& r) {
           {"solved_path_p95_s", Quantile(r.solved_path_s, 0.95)},
           {"direct_path_fraction", r.path_s.empty() ? 0.0 : double(r.direct) / r.path_s.size()},
           {"max_passes_used", r.passes},
+          {"paths_without_margins", r.without_margins},
+          {"median_margin_m", Median(r.median_margin_m)},
           {"unplanned_reasons", r.unplanned}};
 }
 
@@ -179,9 +182,11 @@ absl::Status RunBenchPlan(Flags& flags) {
         r.path_s.push_back(p.planning_s);
         if (p.outcome == plan::PathOutcome::kSolved) r.solved_path_s.push_back(p.planning_s);
         if (p.direct) ++r.direct;
+        if (p.without_margins) ++r.without_margins;
         r.checks_per_path.push_back(static_cast<double>(p.checks));
       }
       r.reachable += s.cuts - s.unreachable;
+      r.median_margin_m.push_back(s.margins.median_margin_m);
       r.planned += s.planned;
       r.passes = std::max(r.passes, s.passes);
       for (const UnplannedCut& u : result->trajectory.unplanned) ++r.unplanned[u.reason];
@@ -219,7 +224,7 @@ absl::Status RunBenchPlan(Flags& flags) {
       Replay& replay = replays[kind];
       replay.check_ns.push_back(CheckNs(*checker, setup.robot.limits, seed));
       for (const plan::PathRecord& q : queries) {
-        const plan::PathResult path = planner.Plan(q.start, q.goal, Deadline::Infinite());
+        const plan::PathResult path = planner.PlanToAny(q.start, q.goals, Deadline::Infinite());
         replay.path_s.push_back(path.planning_s);
         replay.checks.push_back(static_cast<double>(path.checks));
         replay.solved += path.outcome == plan::PathOutcome::kSolved;

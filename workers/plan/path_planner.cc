@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <exception>
+#include <limits>
 #include <mutex>
 #include <random>
 
@@ -204,31 +205,69 @@ PathPlanner::PathPlanner(CollisionChecker& checker, const JointLimits& limits,
 PathPlanner::~PathPlanner() = default;
 
 PathResult PathPlanner::Plan(const Joints& start, const Joints& goal, const Deadline& deadline) {
+  return PlanToAny(start, std::span<const Joints>(&goal, 1), deadline);
+}
+
+PathResult PathPlanner::PlanToAny(const Joints& start, std::span<const Joints> goals,
+                                  const Deadline& deadline) {
   const Clock::time_point t0 = Clock::now();
   const int64_t checks0 = checker_.checks();
   PathResult result;
   auto finish = [&](PathOutcome outcome, std::string message) {
     result.outcome = outcome;
     result.message = std::move(message);
-    if (outcome != PathOutcome::kSolved) result.waypoints.clear();
+    if (outcome != PathOutcome::kSolved) {
+      result.waypoints.clear();
+      result.goal_index = -1;
+    }
     result.checks = checker_.checks() - checks0;
     result.planning_s = SecondsSince(t0);
     return result;
   };
 
   if (!setup_status_.ok()) return finish(PathOutcome::kInvalidInput, std::string(setup_status_.message()));
+  if (goals.empty()) return finish(PathOutcome::kInvalidInput, "goals: empty");
   if (!start.allFinite()) return finish(PathOutcome::kInvalidInput, "start: non-finite joint value");
-  if (!goal.allFinite()) return finish(PathOutcome::kInvalidInput, "goal: non-finite joint value");
+  for (size_t g = 0; g < goals.size(); ++g) {
+    if (!goals[g].allFinite()) {
+      return finish(PathOutcome::kInvalidInput,
+                    goals.size() == 1 ? std::string("goal: non-finite joint value")
+                                      : absl::StrCat("goals[", g, "]: non-finite joint value"));
+    }
+  }
   if (!limits_.Contains(start)) return finish(PathOutcome::kOutsideLimits, "start: outside the joint limits");
-  if (!limits_.Contains(goal)) return finish(PathOutcome::kOutsideLimits, "goal: outside the joint limits");
-  if (!checker_.IsFree(start)) return finish(PathOutcome::kStartInCollision, "start: in collision");
-  if (!checker_.IsFree(goal)) return finish(PathOutcome::kGoalInCollision, "goal: in collision");
+  // The goals that can be reached at all; the first goal's reason when none can.
+  std::vector<int> usable;
+  PathOutcome first_outcome = PathOutcome::kSolved;
+  std::string first_message;
+  for (size_t g = 0; g < goals.size(); ++g) {
+    const std::string name = goals.size() == 1 ? "goal" : absl::StrCat("goals[", g, "]");
+    if (!limits_.Contains(goals[g])) {
+      if (g == 0) first_outcome = PathOutcome::kOutsideLimits, first_message = name + ": outside the joint limits";
+      continue;
+    }
+    if (g == 0 && !checker_.IsFree(start)) {
+      return finish(PathOutcome::kStartInCollision, "start: in collision");
+    }
+    if (!checker_.IsFree(goals[g])) {
+      if (g == 0) first_outcome = PathOutcome::kGoalInCollision, first_message = name + ": in collision";
+      continue;
+    }
+    usable.push_back(static_cast<int>(g));
+  }
+  if (usable.empty()) return finish(first_outcome, first_message);
+  if (usable.front() != 0 && !checker_.IsFree(start)) {
+    return finish(PathOutcome::kStartInCollision, "start: in collision");
+  }
 
-  if (NearlyEqual(start, goal) ||
-      (options_.try_direct_first && checker_.IsMotionFree(start, goal, options_.max_step_m))) {
-    result.waypoints = {start, goal};
-    result.direct = true;
-    return finish(PathOutcome::kSolved, "");
+  for (int g : usable) {
+    if (NearlyEqual(start, goals[g]) ||
+        (options_.try_direct_first && checker_.IsMotionFree(start, goals[g], options_.max_step_m))) {
+      result.waypoints = {start, goals[g]};
+      result.direct = true;
+      result.goal_index = g;
+      return finish(PathOutcome::kSolved, "");
+    }
   }
   if (deadline.Expired()) {
     return finish(PathOutcome::kNoPathWithinDeadline, "deadline expired before RRT-Connect");
@@ -244,11 +283,16 @@ PathResult PathPlanner::Plan(const Joints& start, const Joints& goal, const Dead
     o.planner->clear();  // drops both trees and the sampler (re-allocated, seeded, in solve)
     o.pdef->clearSolutionPaths();
     o.pdef->clearStartStates();
+    // Reversed roles: RRT-Connect roots its start tree at every start state before the first
+    // iteration, but adds goal states one at a time as its goal tree grows, so a walled-in first
+    // goal would hide the others. The path is reversed below.
+    for (int g : usable) {
+      FromJoints(goals[g], o.goal);
+      o.pdef->addStartState(o.goal);  // copied
+    }
     FromJoints(start, o.start);
-    FromJoints(goal, o.goal);
-    o.pdef->addStartState(o.start);
     auto goal_region = std::make_shared<ob::GoalState>(o.si);
-    goal_region->setState(o.goal);
+    goal_region->setState(o.start);
     goal_region->setThreshold(1e-9);
     o.pdef->setGoal(goal_region);
     o.seed = OmplSeed(options_.seed);
@@ -261,7 +305,7 @@ PathResult PathPlanner::Plan(const Joints& start, const Joints& goal, const Dead
                                  " s (", status.asString(), ")"));
     }
     const auto* path = o.pdef->getSolutionPath()->as<og::PathGeometric>();
-    for (std::size_t k = 0; k < path->getStateCount(); ++k) {
+    for (std::size_t k = path->getStateCount(); k-- > 0;) {
       const Joints q = ToJoints(path->getState(k));
       if (result.waypoints.empty() || !NearlyEqual(result.waypoints.back(), q)) {
         result.waypoints.push_back(q);
@@ -270,13 +314,21 @@ PathResult PathPlanner::Plan(const Joints& start, const Joints& goal, const Dead
   } catch (const std::exception& e) {  // ompl::Exception and allocation failures
     return finish(PathOutcome::kNoPathWithinDeadline, absl::StrCat("OMPL: ", e.what()));
   }
-  // RRT-Connect's path runs between exactly our start and goal states (copied), but make the
-  // ends bit-exact so callers can chain paths.
   if (result.waypoints.size() < 2) {
     return finish(PathOutcome::kNoPathWithinDeadline, "RRT-Connect returned a degenerate path");
   }
+  // The path ends at a copy of one of the goals: find which (the nearest; copies are exact), and
+  // make the ends bit-exact so callers can chain paths.
+  double best = std::numeric_limits<double>::infinity();
+  for (int g : usable) {
+    const double d = (goals[g] - result.waypoints.back()).cwiseAbs().maxCoeff();
+    if (d < best) best = d, result.goal_index = g;
+  }
+  if (best > 1e-9) {
+    return finish(PathOutcome::kNoPathWithinDeadline, "RRT-Connect's path ends at no goal");
+  }
   result.waypoints.front() = start;
-  result.waypoints.back() = goal;
+  result.waypoints.back() = goals[result.goal_index];
   ShortcutPath(checker_, limits_, options_.max_step_m, options_.shortcut_rounds, options_.seed,
                deadline, result.waypoints);
   return finish(PathOutcome::kSolved, "");

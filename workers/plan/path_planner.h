@@ -19,6 +19,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -62,6 +63,7 @@ struct PathResult {
   int64_t checks = 0;               // configuration checks spent (checker.checks() delta)
   double planning_s = 0.0;          // wall time of the call
   bool direct = false;              // the straight segment start -> goal was free
+  int goal_index = -1;              // on kSolved, which goal the path ends at (PlanToAny)
 };
 
 // A planning context bound to one checker and one set of limits and options: holds OMPL's state
@@ -82,6 +84,18 @@ class PathPlanner {
   // execution time of the path, MoveTimeS summed over segments). Never throws, never runs past
   // the bound by more than one collision check batch.
   PathResult Plan(const Joints& start, const Joints& goal, const Deadline& deadline);
+
+  // A path from start to any one of `goals` (e.g. a cut's alternative cut motions), in one query:
+  // goals outside the limits or in collision are skipped; the straight segments to the others
+  // are tried in the given order (the first free one wins); then ONE RRT-Connect run, within the
+  // same time limit as Plan(), grows a tree from every remaining goal at once (the goals are
+  // OMPL's start states and `start` its goal, so all of them are roots from the first iteration;
+  // the path is reversed). So a set of goals that cannot be reached costs one time limit, not one
+  // per goal. result.goal_index names the goal reached. Empty `goals` or a non-finite one:
+  // kInvalidInput; when every goal is skipped, the first goal's outcome (kOutsideLimits or
+  // kGoalInCollision). Plan(start, goal) is PlanToAny(start, {goal}).
+  PathResult PlanToAny(const Joints& start, std::span<const Joints> goals,
+                       const Deadline& deadline);
 
   const PathOptions& options() const { return options_; }
 

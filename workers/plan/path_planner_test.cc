@@ -7,6 +7,8 @@
 #include <limits>
 #include <memory>
 #include <random>
+#include <string>
+#include <vector>
 
 #include "gtest/gtest.h"
 #include "sim/vine_generator.h"
@@ -325,6 +327,111 @@ TEST(ShortcutPath, KeepsAPathThatCannotBeShortened) {
   for (size_t k = 1; k < w.size(); ++k) EXPECT_TRUE(checker.IsMotionFree(w[k - 1], w[k], 0.01));
   EXPECT_LE(PathTimeS(w, JointLimits()), before + 1e-12);
   EXPECT_GE(w.size(), 3u);
+}
+
+TEST(PlanToAny, TakesTheFirstFreeStraightSegment) {
+  JointBallChecker checker;
+  checker.AddBall(J(0), 1.0);
+  PathPlanner planner(checker, JointLimits(), PathOptions());
+  const Joints start = J(-2);
+  const std::vector<Joints> goals = {J(2), J(-2, 1.5), J(-2, -1.5)};  // the first is behind the ball
+  const PathResult r = planner.PlanToAny(start, goals, Deadline::Infinite());
+  ExpectValidPath(checker, JointLimits(), r, start, goals[1]);
+  EXPECT_TRUE(r.direct);
+  EXPECT_EQ(r.goal_index, 1);
+}
+
+TEST(PlanToAny, ReachesAFreeGoalWhenTheFirstIsWalledIn) {
+  // RRT-Connect adds OMPL goal states one at a time as its goal tree grows; a walled-in first
+  // goal never grows it, so the second goal must be a root from the start (reversed roles).
+  JointBallChecker checker;
+  checker.AddBall(J(0), 1.0);
+  checker.AddShell(J(2.5, 2.5), 0.3, 0.6);
+  PathOptions options;
+  options.time_limit_s = 5.0;
+  PathPlanner planner(checker, JointLimits(), options);
+  const Joints start = J(-2, 0.1);
+  const std::vector<Joints> goals = {J(2.5, 2.5), J(2, -0.1, 0.2)};
+  const PathResult r = planner.PlanToAny(start, goals, Deadline::Infinite());
+  ExpectValidPath(checker, JointLimits(), r, start, goals[1]);
+  EXPECT_FALSE(r.direct);
+  EXPECT_EQ(r.goal_index, 1);
+  // The same query with the goals swapped reaches the same goal, and Plan() to the walled-in
+  // goal alone fails.
+  const std::vector<Joints> swapped = {goals[1], goals[0]};
+  const PathResult s = planner.PlanToAny(start, swapped, Deadline::Infinite());
+  ASSERT_EQ(s.outcome, PathOutcome::kSolved) << s.message;
+  EXPECT_EQ(s.goal_index, 0);
+  PathOptions short_limit = options;
+  short_limit.time_limit_s = 0.1;
+  PathPlanner short_planner(checker, JointLimits(), short_limit);
+  EXPECT_EQ(short_planner.Plan(start, goals[0], Deadline::Infinite()).outcome,
+            PathOutcome::kNoPathWithinDeadline);
+}
+
+TEST(PlanToAny, SameSeedSamePath) {
+  JointBallChecker checker;
+  checker.AddBall(J(0), 1.0);
+  checker.AddBall(J(0, 2), 0.8);
+  PathPlanner planner(checker, JointLimits(), PathOptions());
+  const Joints start = J(-2, 0.3);
+  const std::vector<Joints> goals = {J(2, -0.3, 0.1), J(2, 0.5, -0.2), J(1.8, 0.2, 0.4)};
+  const PathResult a = planner.PlanToAny(start, goals, Deadline::Infinite());
+  const PathResult b = planner.PlanToAny(start, goals, Deadline::Infinite());
+  ASSERT_EQ(a.outcome, PathOutcome::kSolved) << a.message;
+  EXPECT_FALSE(a.direct);
+  EXPECT_EQ(a.waypoints, b.waypoints);
+  EXPECT_EQ(a.goal_index, b.goal_index);
+  ExpectValidPath(checker, JointLimits(), a, start, goals[a.goal_index]);
+}
+
+TEST(PlanToAny, EnclosedGoalsFailInOneTimeLimit) {
+  JointBallChecker checker;
+  checker.AddShell(J(2), 0.3, 0.6);
+  checker.AddShell(J(-2, 2), 0.3, 0.6);
+  PathOptions options;
+  options.time_limit_s = 0.2;
+  PathPlanner planner(checker, JointLimits(), options);
+  const std::vector<Joints> goals = {J(2), J(-2, 2)};
+  const PathResult r = planner.PlanToAny(J(0, -2), goals, Deadline::Infinite());
+  EXPECT_EQ(r.outcome, PathOutcome::kNoPathWithinDeadline) << r.message;
+  EXPECT_EQ(r.goal_index, -1);
+  EXPECT_TRUE(r.waypoints.empty());
+  EXPECT_LT(r.planning_s, 10.0);  // generous: a hang, not speed, is what this catches
+}
+
+TEST(PlanToAny, SkipsGoalsInCollisionOrOutsideTheLimits) {
+  JointBallChecker checker;
+  checker.AddBall(J(0), 1.0);
+  PathPlanner planner(checker, JointLimits(), PathOptions());
+  const Joints start = J(-2);
+  const Joints in_collision = J(0.5), outside = J(10), free = J(-2, 1);
+  const std::vector<Joints> goals = {in_collision, outside, free};
+  const PathResult r = planner.PlanToAny(start, goals, Deadline::Infinite());
+  ExpectValidPath(checker, JointLimits(), r, start, free);
+  EXPECT_EQ(r.goal_index, 2);
+  // None usable: the first goal's outcome names it.
+  const std::vector<Joints> bad_first = {in_collision, outside};
+  const PathResult a = planner.PlanToAny(start, bad_first, Deadline::Infinite());
+  EXPECT_EQ(a.outcome, PathOutcome::kGoalInCollision);
+  EXPECT_NE(a.message.find("goals[0]"), std::string::npos) << a.message;
+  const std::vector<Joints> outside_first = {outside, in_collision};
+  EXPECT_EQ(planner.PlanToAny(start, outside_first, Deadline::Infinite()).outcome,
+            PathOutcome::kOutsideLimits);
+}
+
+TEST(PlanToAny, RejectsNoGoalsAndNonFiniteGoals) {
+  JointBallChecker checker;
+  PathPlanner planner(checker, JointLimits(), PathOptions());
+  const PathResult empty = planner.PlanToAny(J(0), {}, Deadline::Infinite());
+  EXPECT_EQ(empty.outcome, PathOutcome::kInvalidInput);
+  EXPECT_NE(empty.message.find("goals"), std::string::npos);
+  Joints bad = J(1);
+  bad[3] = std::numeric_limits<double>::quiet_NaN();
+  const std::vector<Joints> goals = {J(1), bad};
+  const PathResult r = planner.PlanToAny(J(0), goals, Deadline::Infinite());
+  EXPECT_EQ(r.outcome, PathOutcome::kInvalidInput);
+  EXPECT_NE(r.message.find("goals[1]"), std::string::npos) << r.message;
 }
 
 }  // namespace

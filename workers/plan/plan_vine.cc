@@ -173,16 +173,47 @@ struct Planning {
   // The last pass's inflated scene, its checker and its path planner (for the way home).
   std::unique_ptr<CollisionChecker> checker;
   std::unique_ptr<PathPlanner> planner;
+  // The same pass's scene without margins; its checker and planner are built at the first
+  // transit that needs them (options.margin_fallback).
+  std::optional<CollisionScene> plain_scene;
+  std::unique_ptr<CollisionChecker> plain_checker;
+  std::unique_ptr<PathPlanner> plain_planner;
   std::unique_ptr<CollisionChecker> self_checker;  // the arm alone (ShiftedForReach)
 
   const Joints& At() const { return legs.empty() ? options.home : legs.back().motion.path.back(); }
 
-  std::optional<std::vector<Joints>> Path(const Joints& goal, CutId to) {
-    PathResult path = planner->Plan(At(), goal, deadline);
-    result.stats.paths.push_back(
-        {to, path.outcome, path.planning_s, path.checks, path.direct, At(), goal});
+  void UsePassScenes(const CollisionScene& plain, const CollisionScene& inflated) {
+    planner.reset();
+    checker = MakeChecker(options.checker, robot, inflated);
+    planner = std::make_unique<PathPlanner>(*checker, robot.limits, options.path);
+    plain_planner.reset();
+    plain_checker.reset();
+    plain_scene = plain;
+  }
+
+  // A transit from where the arm is to any of `goals` (one query, PlanToAny): in the inflated
+  // scene, then, if no path is found there, in the scene without margins. Every query is
+  // recorded. Returns the waypoints and the index of the goal reached.
+  std::optional<std::pair<std::vector<Joints>, int>> Path(std::vector<Joints> goals, CutId to) {
+    PathResult path = planner->PlanToAny(At(), goals, deadline);
+    Record(path, to, goals, false);
+    if (path.outcome == PathOutcome::kNoPathWithinDeadline && options.margin_fallback &&
+        plain_scene && !deadline.Expired()) {
+      if (!plain_planner) {
+        plain_checker = MakeChecker(options.checker, robot, *plain_scene);
+        plain_planner = std::make_unique<PathPlanner>(*plain_checker, robot.limits, options.path);
+      }
+      path = plain_planner->PlanToAny(At(), goals, deadline);
+      Record(path, to, goals, true);
+    }
     if (path.outcome != PathOutcome::kSolved) return std::nullopt;
-    return std::move(path.waypoints);
+    return std::make_pair(std::move(path.waypoints), path.goal_index);
+  }
+
+  void Record(const PathResult& path, CutId to, const std::vector<Joints>& goals, bool plain) {
+    PathRecord record{to, path.outcome, path.planning_s, path.checks, path.direct, plain, At(),
+                      goals[std::max(path.goal_index, 0)], goals};
+    result.stats.paths.push_back(std::move(record));
   }
 
   void Unplanned(CutId id, std::string_view reason) {
@@ -258,9 +289,7 @@ absl::StatusOr<std::vector<int>> PlanPass(const VineModel& model, const std::vec
   CollisionScene inflated = scene;
   const MarginSummary margins = InflateMargins(p.robot, protect, options.margins, &inflated);
   if (stats.passes == 1) stats.margins = margins;
-  p.planner.reset();
-  p.checker = MakeChecker(options.checker, p.robot, inflated);
-  p.planner = std::make_unique<PathPlanner>(*p.checker, p.robot.limits, options.path);
+  p.UsePassScenes(scene, inflated);
   stats.margins_s += Seconds(t);
 
   // Order: node 0 is where the arm is, node j the j-th planned cut (entered at its motion's first
@@ -290,6 +319,8 @@ absl::StatusOr<std::vector<int>> PlanPass(const VineModel& model, const std::vec
 
   // Paths: a cut whose transit fails is given up, and the next one is joined to the last reached.
   t = std::chrono::steady_clock::now();
+  const size_t legs_before = p.legs.size();
+  std::vector<int> unreached;  // into plan.cuts: no transit found, to try in the next pass
   for (int node : order.order) {
     const int k = planned[node - 1];
     // The motion (or alternative) nearest in move time first: all are collision-free, and the
@@ -305,16 +336,20 @@ absl::StatusOr<std::vector<int>> PlanPass(const VineModel& model, const std::vec
       return MoveTimeS(p.At(), a.front(), p.robot.limits) <
              MoveTimeS(p.At(), b.front(), p.robot.limits);
     });
-    for (std::vector<Joints>& choice : choices) {
-      transit = p.Path(choice.front(), cuts[k].id);
-      if (!transit) continue;
-      motions[k].path = std::move(choice);
-      break;
-    }
-    if (!transit) {
-      p.Unplanned(cuts[k].id, PathReason(stats.paths.back().outcome));
+    // All of them in one query: a cut none of them can be reached at costs one time limit.
+    std::vector<Joints> goals;
+    for (const std::vector<Joints>& choice : choices) goals.push_back(choice.front());
+    auto reached = p.Path(std::move(goals), cuts[k].id);
+    if (!reached) {
+      const PathOutcome outcome = stats.paths.back().outcome;
+      if (options.retry_unreached && !last_pass && outcome == PathOutcome::kNoPathWithinDeadline)
+        unreached.push_back(pending_here[k]);
+      else
+        p.Unplanned(cuts[k].id, PathReason(outcome));
       continue;
     }
+    transit = std::move(reached->first);
+    motions[k].path = std::move(choices[reached->second]);
     Cut made = cuts[k];
     made.point = motions[k].cut_point_in_platform;
     if (motions[k].slid_m > 0)
@@ -323,6 +358,15 @@ absl::StatusOr<std::vector<int>> PlanPass(const VineModel& model, const std::vec
     p.legs.push_back({std::move(*transit), std::move(motions[k]), made});
   }
   stats.paths_s += Seconds(t);
+  // The next pass sees the vine without the wood of this pass's cuts; with no cut made, it would
+  // see this pass's vine again and fail the same way.
+  if (p.legs.size() == legs_before) {
+    for (int i : retry) p.Unplanned(p.plan.cuts[i].id, "no_collision_free_cut_motion");
+    for (int i : unreached) p.Unplanned(p.plan.cuts[i].id, "no_path_within_deadline");
+    return std::vector<int>{};
+  }
+  retry.insert(retry.end(), unreached.begin(), unreached.end());
+  std::sort(retry.begin(), retry.end());
   return retry;
 }
 
@@ -357,7 +401,7 @@ absl::StatusOr<PlanResult> PlanVine(const VineModel& model, const CutPlan& plan,
   }
   VB_RETURN_IF_ERROR(deadline.Check("plan"));
 
-  Planning p{plan, robot, platform, options, deadline, result, {}, nullptr, nullptr, nullptr};
+  Planning p{plan, robot, platform, options, deadline, result};
   p.self_checker = MakeChecker(options.checker, robot, CollisionScene{});
   std::vector<int> pending(plan.cuts.size());
   for (size_t i = 0; i < pending.size(); ++i) pending[i] = static_cast<int>(i);
@@ -376,9 +420,9 @@ absl::StatusOr<PlanResult> PlanVine(const VineModel& model, const CutPlan& plan,
   auto t = std::chrono::steady_clock::now();
   std::vector<Joints> home_path;
   while (options.return_home && !p.legs.empty()) {
-    auto path = p.Path(options.home, CutId{0});
+    auto path = p.Path({options.home}, CutId{0});
     if (path) {
-      home_path = std::move(*path);
+      home_path = std::move(path->first);
       break;
     }
     const CutId id = p.legs.back().cut.id;

@@ -63,6 +63,14 @@ struct PlanOptions {
     o.time_limit_s = 0.1;
     return o;
   }();
+  // A transit that finds no path in the scene inflated by the margins is planned again in the
+  // scene without them (still collision-free): the margins are a preference (Botterill et al.
+  // 2017 section 3.4), and inflating them up to every chosen cut motion can close the corridor
+  // between two cuts. false: such a cut is given up.
+  bool margin_fallback = true;
+  // A cut that no transit reaches (walled in by wood) is tried again in the next pass, on the vine
+  // without the wood of the cuts made before it, as cuts with no collision-free motion are.
+  bool retry_unreached = true;
   // Where the arm starts and ends: folded clear of the cameras' view (DefaultHome()).
   Joints home = Joints::Zero();
   bool return_home = true;
@@ -85,7 +93,11 @@ struct PathRecord {
   double planning_s = 0.0;
   int64_t checks = 0;
   bool direct = false;        // the straight line was free
-  Joints start = Joints::Zero(), goal = Joints::Zero();  // the query (for baselines to replay)
+  bool without_margins = false;  // planned in the scene without margins (margin_fallback)
+  // The query (for baselines to replay): one start, the goals of one PlanToAny (a cut's
+  // alternative motions), goal the one reached (the first when none was).
+  Joints start = Joints::Zero(), goal = Joints::Zero();
+  std::vector<Joints> goals;
 };
 
 struct PlanStats {

@@ -172,5 +172,46 @@ TEST(PlanVine, AnExpiredDeadlineNeverHangs) {
   }
 }
 
+TEST(PlanVine, TransitsTheMarginsCloseArePlannedWithoutThem) {
+  // Margins ten times the default close most corridors between the cuts: with the fallback, a
+  // transit that finds no path in the inflated scene is planned again without margins (and the
+  // trajectory still touches nothing); without it, its cut is given up.
+  const RobotModel robot = DefaultUr5(SecateurTool());
+  const PlatformGeometry platform = DefaultPlatform();
+  PlanOptions fallback = Options();
+  fallback.margins.max_margin_m = 0.3;
+  PlanOptions no_fallback = fallback;
+  no_fallback.margin_fallback = false;
+  int planned_with = 0, planned_without = 0, solved_without_margins = 0;
+  for (uint64_t seed : {1105, 1106}) {
+    const Stop stop = SimStop(seed);
+    auto a = PlanVine(stop.model, stop.plan, robot, platform, fallback);
+    auto b = PlanVine(stop.model, stop.plan, robot, platform, no_fallback);
+    ASSERT_TRUE(a.ok()) << a.status();
+    ASSERT_TRUE(b.ok()) << b.status();
+    planned_with += static_cast<int>(a->cuts.size());
+    planned_without += static_cast<int>(b->cuts.size());
+    const std::vector<PathRecord>& paths = a->stats.paths;
+    for (size_t i = 0; i < paths.size(); ++i) {
+      if (!paths[i].without_margins) continue;
+      // Only right after the same query failed in the inflated scene.
+      ASSERT_GT(i, 0u);
+      EXPECT_FALSE(paths[i - 1].without_margins);
+      EXPECT_EQ(paths[i - 1].outcome, PathOutcome::kNoPathWithinDeadline);
+      EXPECT_EQ(paths[i - 1].to_cut, paths[i].to_cut);
+      EXPECT_EQ(paths[i - 1].goals, paths[i].goals);
+      solved_without_margins += paths[i].outcome == PathOutcome::kSolved;
+    }
+    for (const PathRecord& path : b->stats.paths) EXPECT_FALSE(path.without_margins);
+    EXPECT_EQ(CountTrajectoryCollisions(a->trajectory, a->cuts, stop.model, platform, robot,
+                                        CheckerKind::kPrimitives, 0.002,
+                                        Options().cut_motion.cut_cane_free_radius_m),
+              0)
+        << "seed " << seed;
+  }
+  EXPECT_GT(solved_without_margins, 0);
+  EXPECT_GT(planned_with, planned_without);
+}
+
 }  // namespace
 }  // namespace vb::plan
