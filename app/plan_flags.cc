@@ -28,6 +28,10 @@ absl::StatusOr<PlanSetup> ParsePlanSetup(Flags& flags) {
   VB_ASSIGN_OR_RETURN(o.path.time_limit_s, flags.Double("path-time-limit-s", o.path.time_limit_s));
   VB_ASSIGN_OR_RETURN(o.path.range_rad, flags.Double("path-range-rad", o.path.range_rad));
   VB_ASSIGN_OR_RETURN(const int64_t rounds, flags.Int("shortcut-rounds", o.path.shortcut_rounds));
+  VB_ASSIGN_OR_RETURN(const int64_t max_states,
+                      flags.Int("path-max-tree-states", o.path.max_tree_states));
+  VB_ASSIGN_OR_RETURN(o.margin_fallback, flags.Bool("margin-fallback", o.margin_fallback));
+  VB_ASSIGN_OR_RETURN(o.retry_unreached, flags.Bool("retry-unreached", o.retry_unreached));
   VB_ASSIGN_OR_RETURN(const int64_t passes, flags.Int("max-passes", o.max_passes));
   VB_ASSIGN_OR_RETURN(cut.sweep_m, flags.Double("sweep-m", cut.sweep_m));
   VB_ASSIGN_OR_RETURN(cut.max_slide_m, flags.Double("max-slide-m", cut.max_slide_m));
@@ -35,6 +39,9 @@ absl::StatusOr<PlanSetup> ParsePlanSetup(Flags& flags) {
                       flags.Double("max-tilt-deg", cut.max_tilt_rad * 180 / M_PI));
   VB_ASSIGN_OR_RETURN(const int64_t tilt_steps, flags.Int("tilt-steps", cut.tilt_steps));
   o.path.shortcut_rounds = static_cast<int>(rounds);
+  if (max_states < 0 || max_states > 100000000)
+    return absl::InvalidArgumentError("--path-max-tree-states must be in [0, 1e8]");
+  o.path.max_tree_states = static_cast<int>(max_states);
   o.max_passes = static_cast<int>(passes);
   cut.max_tilt_rad = tilt_deg * M_PI / 180;
   cut.tilt_steps = static_cast<int>(tilt_steps);

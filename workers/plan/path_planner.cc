@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <exception>
 #include <limits>
 #include <mutex>
@@ -130,6 +131,9 @@ absl::Status PathOptions::Validate() const {
   if (!(time_limit_s > 0.0)) {
     return absl::InvalidArgumentError("path options: time_limit_s: must be > 0");
   }
+  if (max_tree_states < 0) {
+    return absl::InvalidArgumentError("path options: max_tree_states: must be >= 0");
+  }
   if (shortcut_rounds < 0) {
     return absl::InvalidArgumentError("path options: shortcut_rounds: must be >= 0");
   }
@@ -148,11 +152,19 @@ std::string_view PathOutcomeName(PathOutcome outcome) {
   return "unknown";
 }
 
+// RRT-Connect with its trees' sizes visible.
+class TreeSizeRRTConnect : public og::RRTConnect {
+ public:
+  using og::RRTConnect::RRTConnect;
+  size_t StartTreeSize() const { return tStart_ ? tStart_->size() : 0; }
+  size_t GoalTreeSize() const { return tGoal_ ? tGoal_->size() : 0; }
+};
+
 struct PathPlanner::Ompl {
   std::shared_ptr<ob::RealVectorStateSpace> space;
   ob::SpaceInformationPtr si;
   ob::ProblemDefinitionPtr pdef;
-  std::shared_ptr<og::RRTConnect> planner;
+  std::shared_ptr<TreeSizeRRTConnect> planner;
   std::uint_fast32_t seed = 1;  // read by the sampler allocator at every solve
   ob::State* start = nullptr;
   ob::State* goal = nullptr;
@@ -192,7 +204,7 @@ PathPlanner::PathPlanner(CollisionChecker& checker, const JointLimits& limits,
     ompl->pdef = std::make_shared<ob::ProblemDefinition>(ompl->si);
     ompl->start = ompl->si->allocState();
     ompl->goal = ompl->si->allocState();
-    ompl->planner = std::make_shared<og::RRTConnect>(ompl->si);
+    ompl->planner = std::make_shared<TreeSizeRRTConnect>(ompl->si);
     if (options_.range_rad > 0.0) ompl->planner->setRange(options_.range_rad);
     ompl->planner->setProblemDefinition(ompl->pdef);
     ompl->planner->setNearestNeighbors<ompl::NearestNeighborsLinear>();  // also runs setup()
@@ -296,8 +308,13 @@ PathResult PathPlanner::PlanToAny(const Joints& start, std::span<const Joints> g
     goal_region->setThreshold(1e-9);
     o.pdef->setGoal(goal_region);
     o.seed = OmplSeed(options_.seed);
-    const ob::PlannerTerminationCondition ptc(
-        [&end, &deadline] { return Clock::now() >= end || deadline.Cancelled(); });
+    const size_t max_states =
+        options_.max_tree_states > 0 ? static_cast<size_t>(options_.max_tree_states) : SIZE_MAX;
+    const TreeSizeRRTConnect& rrt = *o.planner;
+    const ob::PlannerTerminationCondition ptc([&end, &deadline, &rrt, max_states] {
+      return rrt.StartTreeSize() + rrt.GoalTreeSize() >= max_states || Clock::now() >= end ||
+             deadline.Cancelled();
+    });
     const ob::PlannerStatus status = o.planner->solve(ptc);
     if (status != ob::PlannerStatus::EXACT_SOLUTION || !o.pdef->hasExactSolution()) {
       return finish(PathOutcome::kNoPathWithinDeadline,

@@ -35,12 +35,16 @@ struct PathOptions {
   double max_step_m = 0.01;       // motion-check resolution: max travel of any arm point, m
   double range_rad = 1.0;         // RRT-Connect step (joint-space length); 0 = OMPL's default
   double time_limit_s = 1.0;      // planning time per call (also bounded by the deadline)
+  // RRT-Connect gives up once its trees hold this many states together (0 = no bound): a bound
+  // in work, not time: a query stopped by it costs the same and ends the same whatever the
+  // machine's load (one stopped by time_limit_s does not).
+  int max_tree_states = 0;
   int shortcut_rounds = 60;       // random shortcut attempts after RRT-Connect (0 = none)
   uint64_t seed = 1;              // seeds RRT-Connect's samples and the shortcuts
   bool try_direct_first = true;   // check the straight segment before running RRT-Connect
 
   // INVALID_ARGUMENT naming the field: max_step_m <= 0 or non-finite, range_rad < 0,
-  // time_limit_s <= 0 or NaN, shortcut_rounds < 0.
+  // time_limit_s <= 0 or NaN, max_tree_states < 0, shortcut_rounds < 0.
   absl::Status Validate() const;
 };
 

@@ -168,6 +168,25 @@ TEST(PathPlanner, EnclosedGoalFailsWithinTheTimeLimit) {
   EXPECT_LT(r.planning_s, 10.0);
 }
 
+TEST(PathPlanner, TreeStateBoundStopsAnEnclosedGoal) {
+  JointBallChecker checker;
+  checker.AddShell(J(2), 0.5, 0.8);
+  PathOptions options;
+  options.time_limit_s = 60.0;  // the bound on states, not the time limit, must stop it
+  options.max_tree_states = 300;
+  const PathResult r = PlanPath(checker, JointLimits(), J(-2), J(2), options, Deadline::Infinite());
+  EXPECT_EQ(r.outcome, PathOutcome::kNoPathWithinDeadline) << r.message;
+  EXPECT_LT(r.planning_s, 30.0);  // generous: reaching the time limit is what this catches
+  // The same query stops at the same work: a bound in states, not time, is reproducible.
+  const PathResult again = PlanPath(checker, JointLimits(), J(-2), J(2), options, Deadline::Infinite());
+  EXPECT_EQ(again.checks, r.checks);
+  // A reachable goal behind an obstacle is still found within the bound.
+  JointBallChecker ball;
+  ball.AddBall(J(0), 1.0);
+  const PathResult ok = PlanPath(ball, JointLimits(), J(-2, 0.1), J(2, -0.1), options, Deadline::Infinite());
+  ExpectValidPath(ball, JointLimits(), ok, J(-2, 0.1), J(2, -0.1));
+}
+
 TEST(PathPlanner, CancelledDeadlineStopsAtOnce) {
   JointBallChecker checker;
   checker.AddBall(J(0), 1.0);
@@ -213,6 +232,9 @@ TEST(PathPlanner, BadOptionsAndLimitsAreRejected) {
   options = PathOptions();
   options.shortcut_rounds = -1;
   EXPECT_FALSE(options.Validate().ok());
+  options = PathOptions();
+  options.max_tree_states = -1;
+  EXPECT_NE(options.Validate().message().find("max_tree_states"), std::string::npos);
   JointLimits limits;
   limits.max_velocity[2] = -1;
   r = PlanPath(checker, limits, J(0), J(1), PathOptions(), Deadline::Infinite());

@@ -198,7 +198,7 @@ struct Planning {
     PathResult path = planner->PlanToAny(At(), goals, deadline);
     Record(path, to, goals, false);
     if (path.outcome == PathOutcome::kNoPathWithinDeadline && options.margin_fallback &&
-        plain_scene && !deadline.Expired()) {
+        options.margins.max_margin_m > 0 && plain_scene && !deadline.Expired()) {
       if (!plain_planner) {
         plain_checker = MakeChecker(options.checker, robot, *plain_scene);
         plain_planner = std::make_unique<PathPlanner>(*plain_checker, robot.limits, options.path);
