@@ -6,12 +6,14 @@
 //      (cut_motion.h);
 //   3. adaptive safety margins around the chosen cut motions (safety_margins.h);
 //   4. the order of the cuts: exact Held-Karp on estimated move times (cut_order.h);
-//   5. RRT-Connect paths between consecutive cut motions in the inflated scene, shortcut
-//      (path_planner.h); a cut whose path fails is dropped and the next one is joined to the last
-//      cut reached;
-//   6. passes: cuts with no collision-free cut motion are tried again on the vine as the cuts
-//      made so far leave it (their wood has fallen, fallen_wood.h), after those cuts, up to
-//      max_passes times -- near the head the canes that block a cut are mostly canes that go;
+//   5. paths between consecutive cut motions in the inflated scene, one query per cut to all of
+//      its alternative motions (PathPlanner::PlanToAny: straight segments, then RRT-Connect,
+//      shortcut); a query that fails there is run again in the scene without margins
+//      (margin_fallback); a cut no path reaches waits for the next pass (retry_unreached), or is
+//      dropped in the last one, and the next cut is joined to the last cut reached;
+//   6. passes: cuts with no collision-free cut motion or no path are tried again on the vine as
+//      the cuts made so far leave it (their wood has fallen, fallen_wood.h), after those cuts, up
+//      to max_passes times -- near the head the canes that block a cut are mostly canes that go;
 //   7. time parameterisation within the joint velocity and acceleration limits
 //      (time_parameterization.h), home -> cuts -> home.
 // Every cut ends planned or with its reason in Trajectory::unplanned. Thread-safe (pure function).
@@ -55,9 +57,9 @@ struct PlanOptions {
     return o;
   }();
   MarginOptions margins;
-  // Paths between cuts. A path that RRT-Connect does not find in 0.1 s is usually not there (the
-  // goal is walled in: 1 s finds 1 more of 11 on tuning seeds); the cut's alternative motions
-  // are tried next.
+  // Paths between cuts, one query per cut to all its alternative motions. A path that
+  // RRT-Connect does not find in 0.1 s is usually not there (the goals are walled in: 1 s found
+  // none of 14 more on tuning seeds 1110-1129).
   PathOptions path = [] {
     PathOptions o;
     o.time_limit_s = 0.1;
