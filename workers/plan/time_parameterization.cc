@@ -86,9 +86,7 @@ Joints MoveStateAt(const Joints& a, const Joints& b, const JointLimits& limits, 
   return a + s * (b - a);
 }
 
-namespace {
-
-absl::Status CheckInput(std::span<const Joints> waypoints, const JointLimits& limits,
+absl::Status ValidateTimingInput(std::span<const Joints> waypoints, const JointLimits& limits,
                         double start_time_s, double sample_dt_s) {
   if (waypoints.empty()) return absl::InvalidArgumentError("time parameterisation: waypoints: empty");
   for (size_t k = 0; k < waypoints.size(); ++k) {
@@ -109,13 +107,11 @@ absl::Status CheckInput(std::span<const Joints> waypoints, const JointLimits& li
   return absl::OkStatus();
 }
 
-}  // namespace
-
 absl::StatusOr<std::vector<TimedJoints>> TimeParameterize(std::span<const Joints> waypoints,
                                                           const JointLimits& limits,
                                                           double start_time_s,
                                                           double sample_dt_s) {
-  if (absl::Status s = CheckInput(waypoints, limits, start_time_s, sample_dt_s); !s.ok()) return s;
+  if (absl::Status s = ValidateTimingInput(waypoints, limits, start_time_s, sample_dt_s); !s.ok()) return s;
   std::vector<Profile> profiles;
   profiles.reserve(waypoints.size());
   double expected = 1.0;
@@ -154,7 +150,7 @@ absl::StatusOr<std::vector<TimedJoints>> TimeParameterizeStroke(std::span<const 
                                                                 const JointLimits& limits,
                                                                 double start_time_s,
                                                                 double sample_dt_s) {
-  if (absl::Status s = CheckInput(waypoints, limits, start_time_s, sample_dt_s); !s.ok()) return s;
+  if (absl::Status s = ValidateTimingInput(waypoints, limits, start_time_s, sample_dt_s); !s.ok()) return s;
   // Arc length fraction of each segment, then the parameter's limits: on segment i, joint j moves
   // d_ij per unit of the parameter's fraction f_i, so ds/dt <= vmax_j f_i / d_ij (and likewise
   // for the acceleration).

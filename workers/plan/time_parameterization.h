@@ -31,6 +31,12 @@ double MoveTimeS(const Joints& a, const Joints& b, const JointLimits& limits);
 // Sum of MoveTimeS over consecutive waypoints (0 for fewer than two).
 double PathTimeS(std::span<const Joints> waypoints, const JointLimits& limits);
 
+// The input checks of the functions below (and of blend.h): INVALID_ARGUMENT naming the field for
+// no waypoints, a non-finite joint value, invalid limits, non-finite start_time_s or
+// sample_dt_s <= 0.
+absl::Status ValidateTimingInput(std::span<const Joints> waypoints, const JointLimits& limits,
+                                 double start_time_s, double sample_dt_s);
+
 // Samples of the timed path: for each segment, samples every `sample_dt_s` from its start, plus
 // every waypoint exactly (the first at start_time_s, the last at start_time_s + PathTimeS).
 // Times are strictly increasing: a waypoint equal to the one before it (a zero-length segment)
