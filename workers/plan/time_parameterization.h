@@ -47,12 +47,22 @@ absl::StatusOr<std::vector<TimedJoints>> TimeParameterize(std::span<const Joints
                                                           double start_time_s,
                                                           double sample_dt_s);
 
-// One profile over the whole polyline instead of a stop at every waypoint: the path parameter
-// runs along the joint-space arc length with one synchronised trapezoid whose speed and
-// acceleration keep every joint within its limits on every segment. Corners are passed without
-// stopping, where the joint velocity turns instantly; that suits dense, nearly straight paths such
-// as a cut stroke (Cartesian steps of 5 mm), not transits. Same samples and errors as
-// TimeParameterize.
+// A dense polyline (a cut stroke) timed along its joint-space arc length without stopping at its
+// waypoints: on segment k the path speed keeps every joint within speed_fraction[k] times its
+// velocity limit, the path accelerates within the acceleration limits along the segment's own
+// direction, and the arm is at rest at both ends and at every waypoint index in `stops`. It is
+// the fastest such profile (forward and backward passes over the waypoint speeds, then a
+// trapezoid per segment). Corners are passed at speed, where the joint velocity turns instantly;
+// that suits dense, nearly straight paths such as a cut stroke (Cartesian steps of 5 mm), not
+// transits. Samples: every waypoint at its time and a grid of sample_dt_s per segment, strictly
+// increasing (repeated waypoints merged). Errors as TimeParameterize, and INVALID_ARGUMENT for
+// speed_fraction without one value in (0, 1] per segment or a stop index out of range.
+absl::StatusOr<std::vector<TimedJoints>> TimeParameterizeAlongPath(
+    std::span<const Joints> waypoints, const JointLimits& limits,
+    std::span<const double> speed_fraction, std::span<const int> stops, double start_time_s,
+    double sample_dt_s);
+
+// TimeParameterizeAlongPath at the full limits on every segment, stopping at the ends only.
 absl::StatusOr<std::vector<TimedJoints>> TimeParameterizeStroke(std::span<const Joints> waypoints,
                                                                 const JointLimits& limits,
                                                                 double start_time_s,
