@@ -101,17 +101,48 @@ Run Solve(std::span<const Joints> w, const JointLimits& limits, std::span<const 
     return worst;
   };
   std::vector<double> factor;
-  for (int round = 0; round < 30; ++round) {
+  bool feasible = false;
+  for (int round = 0; round < 30 && !feasible; ++round) {
     r.Derive(limits);
-    if (ratios(factor) <= 1.0 + 1e-12) return r;
+    feasible = ratios(factor) <= 1.0 + 1e-12;
+    if (feasible) break;
     for (int k = 0; k < m; ++k)
       if (factor[k] > 1.0) r.T[k] *= std::sqrt(factor[k]) * (1.0 + 1e-9);
   }
-  r.Derive(limits);
-  const double worst = ratios(factor);
-  if (worst > 1.0 && std::isfinite(worst)) {
-    for (double& t : r.T) t *= std::sqrt(worst) * (1.0 + 1e-9);
+  if (!feasible) {
     r.Derive(limits);
+    const double worst = ratios(factor);
+    if (worst > 1.0 && std::isfinite(worst)) {
+      for (double& t : r.T) t *= std::sqrt(worst) * (1.0 + 1e-9);
+      r.Derive(limits);
+    }
+  }
+  // Coordinate descent: shorten each segment as far as the constraints allow (bisection between
+  // its velocity bound and its current, feasible, duration), a few sweeps.
+  const std::vector<double> lower = [&] {
+    std::vector<double> l(m, 0.0);
+    for (int k = 0; k < m; ++k)
+      for (int j = 0; j < 6; ++j)
+        l[k] = std::max(l[k], std::abs(w[k + 1][j] - w[k][j]) / limits.max_velocity[j]);
+    return l;
+  }();
+  for (int sweep = 0; sweep < 8 && m > 1; ++sweep) {
+    double saved = 0.0;
+    for (int k = 0; k < m; ++k) {
+      const double r_before = r.T[k];
+      double lo = lower[k], hi = r_before;
+      if (!(hi > lo * (1.0 + 1e-9))) continue;
+      for (int it = 0; it < 24; ++it) {
+        const double mid = 0.5 * (lo + hi);
+        r.T[k] = mid;
+        r.Derive(limits);
+        (ratios(factor) <= 1.0 + 1e-12 ? hi : lo) = mid;
+      }
+      saved += r_before - hi;
+      r.T[k] = hi;
+    }
+    r.Derive(limits);
+    if (saved < 1e-4 * r.duration) break;
   }
   return r;
 }
