@@ -223,9 +223,15 @@ absl::StatusOr<BlendedPath> TimeParameterizeBlended(std::span<const Joints> wayp
   std::vector<bool> stop(points, false);
   stop.front() = stop.back() = true;
   std::vector<double> max_dev(points, kInf);
-  std::vector<int> shrinks(points, 0);
+  // Bisection on the size (deviation) of each blend that collided: between the largest size
+  // found free (ok) and the smallest found colliding (bad); a blend out of steps keeps its
+  // largest free size, and stops if that collides too (the neighbouring blends change the
+  // segments' speeds, so a size found free may not stay free).
+  std::vector<int> steps(points, 0);
+  std::vector<double> ok(points, 0.0), bad(points, kInf);
+  std::vector<bool> last_try(points, false);
   const int64_t checks_before = checker != nullptr ? checker->checks() : 0;
-  // Every round either shrinks a blend or stops at a via, so this ends.
+  // Every round takes a bisection step, settles a blend or stops at a via, so this ends.
   for (;;) {
     const std::vector<Run> runs = Layout(w, limits, stop, max_dev);
     // Samples on each run's own grid, the run's end (a stop) exactly.
@@ -266,23 +272,44 @@ absl::StatusOr<BlendedPath> TimeParameterizeBlended(std::span<const Joints> wayp
       }
       via_base += run.n();
     }
-    if (colliding.empty()) break;
-    // Shrink each colliding blend (or stop there); deviations are read from the current layout.
+    // Deviations are read from the current layout.
     via_base = 0;
     std::vector<double> deviation(points, 0.0);
     for (const Run& run : runs) {
       for (int k = 1; k < run.n(); ++k) deviation[via_base + k] = run.Deviation(k);
       via_base += run.n();
     }
-    for (int g : colliding) {
-      if (shrinks[g] >= options.max_shrinks || !(deviation[g] > 1e-9)) {
-        stop[g] = true;
-      } else {
-        max_dev[g] = 0.5 * deviation[g];
-        ++shrinks[g];
-        ++out.shrinks;
+    std::vector<bool> collides(points, false);
+    for (int g : colliding) collides[g] = true;
+    bool changed = false;
+    for (int g = 1; g + 1 < points; ++g) {
+      if (stop[g]) continue;
+      if (collides[g]) {
+        changed = true;
+        bad[g] = std::min(bad[g], deviation[g]);
+        if (last_try[g] || !(deviation[g] > 1e-9)) {
+          stop[g] = true;
+        } else if (steps[g] >= options.max_shrinks) {
+          if (ok[g] > 0) {
+            max_dev[g] = ok[g];
+            last_try[g] = true;
+          } else {
+            stop[g] = true;
+          }
+        } else {
+          max_dev[g] = 0.5 * (ok[g] + bad[g]);
+          ++steps[g];
+          ++out.shrinks;
+        }
+      } else if (std::isfinite(bad[g]) && !last_try[g] && steps[g] < options.max_shrinks) {
+        // Free after a collision: try a larger blend, halfway to the smallest colliding one.
+        ok[g] = std::max(ok[g], deviation[g]);
+        max_dev[g] = 0.5 * (ok[g] + bad[g]);
+        ++steps[g];
+        changed = true;
       }
     }
+    if (!changed) break;
   }
   for (int k = 1; k + 1 < points; ++k) out.stops += stop[k] ? 1 : 0;
   if (checker != nullptr) out.checks = checker->checks() - checks_before;

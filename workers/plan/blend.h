@@ -17,9 +17,10 @@
 // gives exactly the rest-to-rest trapezoid of MoveTimeS.
 //
 // Collisions: with a checker, the chords between successive output samples that overlap a blend
-// are checked with IsMotionFree; a colliding blend has its deviation from the via point halved
-// (slower neighbouring segments) up to max_shrinks times, then the arm stops at that via point
-// (the already-checked path). A run whose blended timing would be slower than stopping at each of
+// are checked with IsMotionFree; a colliding blend is made smaller (its deviation from the via
+// point bounded, which slows the neighbouring segments) by bisection between the largest size
+// found free and the smallest found colliding, starting with half its size, for max_shrinks
+// steps; if no smaller size was free the arm stops at that via point (the already-checked path). A run whose blended timing would be slower than stopping at each of
 // its waypoints is stopped at each of them. Thread-safe (pure functions; the checker is used by
 // the calling thread only).
 #pragma once
@@ -37,7 +38,7 @@ namespace vb::plan {
 
 struct BlendOptions {
   double max_step_m = 0.005;  // IsMotionFree resolution on the chords of the blends
-  int max_shrinks = 5;        // halvings of a colliding blend before the arm stops at its via
+  int max_shrinks = 5;        // bisection steps on a colliding blend's size (the first halves it)
   // INVALID_ARGUMENT naming the field.
   absl::Status Validate() const;
 };
@@ -47,7 +48,7 @@ struct BlendedPath {
   double duration_s = 0.0;
   int vias = 0;                      // interior waypoints (after merging repeated ones)
   int stops = 0;                     // interior waypoints where the arm stops
-  int shrinks = 0;                   // blend halvings after a collision
+  int shrinks = 0;                   // bisection steps down after a collision
   int64_t checks = 0;                // checker->checks() spent on blends
 };
 
