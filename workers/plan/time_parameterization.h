@@ -1,11 +1,13 @@
 // SPDX-License-Identifier: Apache-2.0
-// Timing of piecewise-linear joint paths: the arm stops at every waypoint and moves along each
-// straight joint-space segment with one synchronised trapezoidal (or, for short moves,
+// Timing of piecewise-linear joint paths. Rest to rest: the arm stops at every waypoint and moves
+// along each straight joint-space segment with one synchronised trapezoidal (or, for short moves,
 // triangular) velocity profile, so that it follows the collision-checked segments exactly. All
 // joints share the path parameter s(t) in [0, 1], q(t) = a + s(t) (b - a); s accelerates at
 // A = min_i amax_i / |d_i|, cruises at V = min_i vmax_i / |d_i| and decelerates at A, so every joint
 // stays within its velocity and acceleration limits and the slowest joint saturates. This is the
 // fastest rest-to-rest motion that stays on the segment. (URScript movej moves the same way.)
+// Dense strokes: one profile along the arc length (TimeParameterizeAlongPath). Transits that do
+// not stop at their waypoints: blend.h.
 // Thread-safe (pure functions).
 #pragma once
 
