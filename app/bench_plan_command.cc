@@ -141,6 +141,7 @@ absl::Status RunBenchPlan(Flags& flags) {
   std::vector<double> execution_s, saving, saving_vs_nn, cuts_per_vine, transit_s, cut_s,
       planned_per_vine;
   int verified = 0, verified_free = 0, failures = 0;
+  int blend_vias = 0, blend_stops = 0, blend_shrinks = 0;  // transit timing, our checker
   for (int64_t v = 0; v < vines; ++v) {
     const uint64_t seed = static_cast<uint64_t>(seed_base + v);
     VB_ASSIGN_OR_RETURN(const sim::Scene scene, sim::GenerateScene(seed, 1));
@@ -200,6 +201,9 @@ absl::Status RunBenchPlan(Flags& flags) {
       transit_s.push_back(transit);
       cut_s.push_back(cutting);
       planned_per_vine.push_back(s.planned);
+      blend_vias += s.blend_vias;
+      blend_stops += s.blend_stops;
+      blend_shrinks += s.blend_shrinks;
       if (s.given_order_cost_s > 0) saving.push_back(1.0 - s.order_cost_s / s.given_order_cost_s);
       if (s.nearest_neighbour_cost_s > 0)
         saving_vs_nn.push_back(1.0 - s.order_cost_s / s.nearest_neighbour_cost_s);
@@ -269,6 +273,11 @@ absl::Status RunBenchPlan(Flags& flags) {
   out["transit_s_per_vine_median"] = Median(transit_s);
   out["cut_stroke_s_per_vine_median"] = Median(cut_s);
   out["planned_cuts_per_vine_median"] = Median(planned_per_vine);
+  // Interior transit waypoints, those where the arm stops (every blend size collided), and the
+  // bisection steps that made colliding blends smaller (all vines).
+  out["transit_vias"] = blend_vias;
+  out["transit_via_stops"] = blend_stops;
+  out["transit_blend_shrinks"] = blend_shrinks;
   out["order_saving_fraction"] = Median(saving);
   out["order_saving_vs_nearest_neighbour_fraction"] = Median(saving_vs_nn);
   if (verify) {

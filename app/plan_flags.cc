@@ -38,6 +38,10 @@ absl::StatusOr<PlanSetup> ParsePlanSetup(Flags& flags) {
   VB_ASSIGN_OR_RETURN(const double tilt_deg,
                       flags.Double("max-tilt-deg", cut.max_tilt_rad * 180 / M_PI));
   VB_ASSIGN_OR_RETURN(const int64_t tilt_steps, flags.Int("tilt-steps", cut.tilt_steps));
+  // Every joint's acceleration limit (default URScript movej's 1.4 rad/s^2): for what-if runs.
+  VB_ASSIGN_OR_RETURN(const double acceleration,
+                      flags.Double("joint-acceleration", plan::JointLimits().max_acceleration[0]));
+  VB_ASSIGN_OR_RETURN(o.blend_transits, flags.Bool("blend-transits", o.blend_transits));
   o.path.shortcut_rounds = static_cast<int>(rounds);
   if (max_states < 0 || max_states > 100000000)
     return absl::InvalidArgumentError("--path-max-tree-states must be in [0, 1e8]");
@@ -53,6 +57,9 @@ absl::StatusOr<PlanSetup> ParsePlanSetup(Flags& flags) {
     return absl::InvalidArgumentError(
         absl::StrCat("--tool: unknown tool '", tool, "' (expected secateur or mill_end)"));
   }
+  if (!(acceleration > 0) || !std::isfinite(acceleration))
+    return absl::InvalidArgumentError("--joint-acceleration: must be finite and > 0 (rad/s^2)");
+  setup.robot.limits.max_acceleration = plan::Joints::Constant(acceleration);
   setup.platform = plan::DefaultPlatform();
   VB_ASSIGN_OR_RETURN(o.checker, ParseCheckerKind(checker));
   o.home = plan::DefaultHome();

@@ -9,9 +9,11 @@
 
 #include "absl/strings/str_cat.h"
 #include "core/status_macros.h"
+#include "workers/plan/blend.h"
 #include "workers/plan/cut_order.h"
 #include "workers/plan/fallen_wood.h"
 #include "workers/plan/time_parameterization.h"
+#include "workers/plan/tool.h"
 
 namespace vb::plan {
 
@@ -55,6 +57,9 @@ absl::Status PlanOptions::Validate() const {
     return absl::InvalidArgumentError("options.cut_speed_fraction must be in (0, 1]");
   if (!(sample_dt_s > 0) || !std::isfinite(sample_dt_s))
     return absl::InvalidArgumentError("options.sample_dt_s must be finite and > 0");
+  if (!(cut_feed_margin_m >= 0) || !std::isfinite(cut_feed_margin_m))
+    return absl::InvalidArgumentError("options.cut_feed_margin_m must be finite and >= 0");
+  VB_RETURN_IF_ERROR(prefixed("blend", blend.Validate()));
   return absl::OkStatus();
 }
 
@@ -64,15 +69,9 @@ double Seconds(std::chrono::steady_clock::time_point since) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
 }
 
-// Appends `waypoints` timed from the end of the trajectory so far as one segment: a transit at
-// rest at each of its few waypoints, a cut stroke (dense Cartesian steps) in one profile.
-absl::Status AppendSegment(SegmentKind kind, CutId cut_id, std::span<const Joints> waypoints,
-                           const JointLimits& limits, double sample_dt_s, Trajectory* out) {
-  const double start_s = out->duration_s;
-  VB_ASSIGN_OR_RETURN(const std::vector<TimedJoints> timed,
-                      kind == SegmentKind::kCut
-                          ? TimeParameterizeStroke(waypoints, limits, start_s, sample_dt_s)
-                          : TimeParameterize(waypoints, limits, start_s, sample_dt_s));
+// Appends timed samples to the trajectory as one segment.
+void AppendSegment(SegmentKind kind, CutId cut_id, const std::vector<TimedJoints>& timed,
+                   Trajectory* out) {
   TrajectorySegment segment;
   segment.kind = kind;
   segment.cut_id = cut_id;
@@ -84,6 +83,60 @@ absl::Status AppendSegment(SegmentKind kind, CutId cut_id, std::span<const Joint
   }
   if (!segment.points.empty()) out->duration_s = segment.points.back().t;
   out->segments.push_back(std::move(segment));
+}
+
+// A transit from rest to rest, blended through its waypoints where the blends are free in
+// `checker` (the scene it was planned in), or stopping at each of them.
+absl::Status AppendTransit(std::span<const Joints> waypoints, CollisionChecker* checker,
+                           const PlanOptions& options, const JointLimits& limits, PlanStats& stats,
+                           Trajectory* out) {
+  if (!options.blend_transits) {
+    VB_ASSIGN_OR_RETURN(const std::vector<TimedJoints> timed,
+                        TimeParameterize(waypoints, limits, out->duration_s, options.sample_dt_s));
+    AppendSegment(SegmentKind::kTransit, CutId{0}, timed, out);
+    return absl::OkStatus();
+  }
+  BlendOptions blend = options.blend;
+  blend.max_step_m = options.path.max_step_m;
+  VB_ASSIGN_OR_RETURN(const BlendedPath path,
+                      TimeParameterizeBlended(waypoints, limits, checker, blend, out->duration_s,
+                                              options.sample_dt_s));
+  stats.blend_vias += path.vias;
+  stats.blend_stops += path.stops;
+  stats.blend_shrinks += path.shrinks;
+  stats.checks += path.checks;
+  AppendSegment(SegmentKind::kTransit, CutId{0}, path.samples, out);
+  return absl::OkStatus();
+}
+
+// A cut stroke, at rest at its ends. Mill end: the part of the sweep whose TCP is within the
+// cane's radius plus cut_feed_margin_m of the cut point is in wood and moves at the feed rate
+// (cut_speed_fraction of the velocity limits), the rest in free air at the full limits. Secateur:
+// the jaws close with the arm at rest at the cut; approach and retract move at the full limits.
+absl::Status AppendStroke(const CutMotion& motion, const Cut& cut, const RobotModel& robot,
+                          const PlanOptions& options, Trajectory* out) {
+  const std::vector<Joints>& path = motion.path;
+  std::vector<double> fraction(path.empty() ? 0 : path.size() - 1, 1.0);
+  std::vector<int> stops;
+  const bool at_cut = motion.cut_index >= 0 && static_cast<size_t>(motion.cut_index) < path.size();
+  if (StrokeOf(robot.tool) == CutStroke::kApproachCloseRetract) {
+    if (at_cut) stops.push_back(motion.cut_index);
+  } else {
+    auto tcp = [&](const Joints& q) {
+      return Eigen::Vector3d((ForwardKinematics(q) * robot.tool.flange_from_tcp).translation());
+    };
+    const double contact_m = 0.5 * cut.diameter_m + options.cut_feed_margin_m;
+    const Eigen::Vector3d cut_point = tcp(path[at_cut ? motion.cut_index : 0]);
+    std::vector<bool> in_wood(path.size());
+    for (size_t k = 0; k < path.size(); ++k)
+      in_wood[k] = !at_cut || (tcp(path[k]) - cut_point).norm() <= contact_m;
+    for (size_t k = 0; k < fraction.size(); ++k)
+      if (in_wood[k] || in_wood[k + 1]) fraction[k] = options.cut_speed_fraction;
+  }
+  VB_ASSIGN_OR_RETURN(const std::vector<TimedJoints> timed,
+                      TimeParameterizeAlongPath(path, robot.limits, fraction, stops,
+                                                out->duration_s, options.sample_dt_s));
+  AppendSegment(SegmentKind::kCut, cut.id, timed, out);
   return absl::OkStatus();
 }
 
@@ -159,6 +212,7 @@ struct Leg {
   std::vector<Joints> transit;
   CutMotion motion;
   Cut cut;  // as made (a slid cut's point is where the tool cuts)
+  std::shared_ptr<CollisionChecker> checker;  // the transit's scene (blends are checked in it)
 };
 
 // What the passes share.
@@ -171,12 +225,12 @@ struct Planning {
   PlanResult& result;
   std::vector<Leg> legs;
   // The last pass's inflated scene, its checker and its path planner (for the way home).
-  std::unique_ptr<CollisionChecker> checker;
+  std::shared_ptr<CollisionChecker> checker;
   std::unique_ptr<PathPlanner> planner;
   // The same pass's scene without margins; its checker and planner are built at the first
   // transit that needs them (options.margin_fallback).
   std::optional<CollisionScene> plain_scene;
-  std::unique_ptr<CollisionChecker> plain_checker;
+  std::shared_ptr<CollisionChecker> plain_checker;
   std::unique_ptr<PathPlanner> plain_planner;
   std::unique_ptr<CollisionChecker> self_checker;  // the arm alone (ShiftedForReach)
 
@@ -193,10 +247,16 @@ struct Planning {
 
   // A transit from where the arm is to any of `goals` (one query, PlanToAny): in the inflated
   // scene, then, if no path is found there, in the scene without margins. Every query is
-  // recorded. Returns the waypoints and the index of the goal reached.
-  std::optional<std::pair<std::vector<Joints>, int>> Path(std::vector<Joints> goals, CutId to) {
+  // recorded.
+  struct Reached {
+    std::vector<Joints> waypoints;
+    int goal_index = 0;
+    std::shared_ptr<CollisionChecker> checker;  // of the scene the path was found in
+  };
+  std::optional<Reached> Path(std::vector<Joints> goals, CutId to) {
     PathResult path = planner->PlanToAny(At(), goals, deadline);
     Record(path, to, goals, false);
+    std::shared_ptr<CollisionChecker> used = checker;
     if (path.outcome == PathOutcome::kNoPathWithinDeadline && options.margin_fallback &&
         options.margins.max_margin_m > 0 && plain_scene && !deadline.Expired()) {
       if (!plain_planner) {
@@ -205,9 +265,10 @@ struct Planning {
       }
       path = plain_planner->PlanToAny(At(), goals, deadline);
       Record(path, to, goals, true);
+      used = plain_checker;
     }
     if (path.outcome != PathOutcome::kSolved) return std::nullopt;
-    return std::make_pair(std::move(path.waypoints), path.goal_index);
+    return Reached{std::move(path.waypoints), path.goal_index, std::move(used)};
   }
 
   void Record(const PathResult& path, CutId to, const std::vector<Joints>& goals, bool plain) {
@@ -325,7 +386,6 @@ absl::StatusOr<std::vector<int>> PlanPass(const VineModel& model, const std::vec
     const int k = planned[node - 1];
     // The motion (or alternative) nearest in move time first: all are collision-free, and the
     // arm's execution time is mostly transits; the next one when no path reaches it.
-    std::optional<std::vector<Joints>> transit;
     std::vector<std::vector<Joints>> choices = {std::move(motions[k].path)};
     for (auto& alternative : motions[k].alternatives) choices.push_back(std::move(alternative));
     for (std::vector<Joints>& choice : choices) {
@@ -348,14 +408,14 @@ absl::StatusOr<std::vector<int>> PlanPass(const VineModel& model, const std::vec
         p.Unplanned(cuts[k].id, PathReason(outcome));
       continue;
     }
-    transit = std::move(reached->first);
-    motions[k].path = std::move(choices[reached->second]);
+    motions[k].path = std::move(choices[reached->goal_index]);
     Cut made = cuts[k];
     made.point = motions[k].cut_point_in_platform;
     if (motions[k].slid_m > 0)
       stats.notes.push_back(absl::StrCat("cut ", made.id.value, ": slid ", motions[k].slid_m,
                                          " m outward along cane ", made.cane_id.value));
-    p.legs.push_back({std::move(*transit), std::move(motions[k]), made});
+    p.legs.push_back(
+        {std::move(reached->waypoints), std::move(motions[k]), made, std::move(reached->checker)});
   }
   stats.paths_s += Seconds(t);
   // The next pass sees the vine without the wood of this pass's cuts; with no cut made, it would
@@ -419,10 +479,12 @@ absl::StatusOr<PlanResult> PlanVine(const VineModel& model, const CutPlan& plan,
   // home from the one before it (the arm never ends a vine stranded among the canes).
   auto t = std::chrono::steady_clock::now();
   std::vector<Joints> home_path;
+  std::shared_ptr<CollisionChecker> home_checker;  // of the scene the way home was found in
   while (options.return_home && !p.legs.empty()) {
     auto path = p.Path({options.home}, CutId{0});
     if (path) {
-      home_path = std::move(path->first);
+      home_path = std::move(path->waypoints);
+      home_checker = std::move(path->checker);
       break;
     }
     const CutId id = p.legs.back().cut.id;
@@ -433,22 +495,19 @@ absl::StatusOr<PlanResult> PlanVine(const VineModel& model, const CutPlan& plan,
   }
   stats.paths_s += Seconds(t);
 
-  // Timing: home -> (transit, cut)* -> home, each segment at rest at its ends.
+  // Timing: home -> (transit, cut)* -> home; every transit and stroke starts and ends at rest
+  // (a stroke is approached from rest, and each segment can be executed on its own).
   t = std::chrono::steady_clock::now();
   Trajectory& trajectory = result.trajectory;
-  JointLimits cut_limits = robot.limits;
-  cut_limits.max_velocity *= options.cut_speed_fraction;
-  cut_limits.max_acceleration *= options.cut_speed_fraction;
   for (const Leg& leg : p.legs) {
-    VB_RETURN_IF_ERROR(AppendSegment(SegmentKind::kTransit, CutId{0}, leg.transit, robot.limits,
-                                     options.sample_dt_s, &trajectory));
-    VB_RETURN_IF_ERROR(AppendSegment(SegmentKind::kCut, leg.cut.id, leg.motion.path, cut_limits,
-                                     options.sample_dt_s, &trajectory));
+    VB_RETURN_IF_ERROR(AppendTransit(leg.transit, leg.checker.get(), options, robot.limits, stats,
+                                     &trajectory));
+    VB_RETURN_IF_ERROR(AppendStroke(leg.motion, leg.cut, robot, options, &trajectory));
     result.cuts.push_back(leg.cut);
   }
   if (!home_path.empty()) {
-    VB_RETURN_IF_ERROR(AppendSegment(SegmentKind::kTransit, CutId{0}, home_path, robot.limits,
-                                     options.sample_dt_s, &trajectory));
+    VB_RETURN_IF_ERROR(
+        AppendTransit(home_path, home_checker.get(), options, robot.limits, stats, &trajectory));
   }
   stats.timing_s = Seconds(t);
   stats.planned = static_cast<int>(result.cuts.size());

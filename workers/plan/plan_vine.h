@@ -14,8 +14,9 @@
 //   6. passes: cuts with no collision-free cut motion or no path are tried again on the vine as
 //      the cuts made so far leave it (their wood has fallen, fallen_wood.h), after those cuts, up
 //      to max_passes times -- near the head the canes that block a cut are mostly canes that go;
-//   7. time parameterisation within the joint velocity and acceleration limits
-//      (time_parameterization.h), home -> cuts -> home.
+//   7. time parameterisation within the joint velocity and acceleration limits, home -> cuts ->
+//      home: transits blended through their waypoints where the blends are free (blend.h),
+//      strokes along their dense path, slow only in wood (time_parameterization.h).
 // Every cut ends planned or with its reason in Trajectory::unplanned. Thread-safe (pure function).
 #pragma once
 
@@ -29,6 +30,7 @@
 #include "core/deadline.h"
 #include "core/trajectory.h"
 #include "core/vine_model.h"
+#include "workers/plan/blend.h"
 #include "workers/plan/collision_checker.h"
 #include "workers/plan/collision_scene.h"
 #include "workers/plan/cut_motion.h"
@@ -80,9 +82,17 @@ struct PlanOptions {
   Joints home = Joints::Zero();
   bool return_home = true;
   int max_passes = 3;          // 1: every cut motion is planned on the uncut vine
-  // Cut strokes move at this fraction of the joint velocity and acceleration limits: the tool
-  // must not be driven through wood at transit speed (an estimate, not a measured feed rate).
+  // The part of a mill-end sweep in wood moves at this fraction of the joint velocity limits:
+  // the tool must not be driven through wood at transit speed (an estimate, not a measured feed
+  // rate). In wood: TCP within the cane's radius plus cut_feed_margin_m of the cut point (covers
+  // the bit's radius and the model's error). The rest of a stroke, and a secateur's approach and
+  // retract (its jaws close with the arm at rest at the cut), move at the full limits.
   double cut_speed_fraction = 0.25;
+  double cut_feed_margin_m = 0.02;
+  // Transits pass their interior waypoints on blends (blend.h) checked in the scene the transit
+  // was planned in (margins included), at path.max_step_m; false: the arm stops at each.
+  bool blend_transits = true;
+  BlendOptions blend;          // its max_step_m is replaced by path.max_step_m
   double sample_dt_s = 0.05;   // trajectory samples at most this far apart (waypoints always kept)
   // INVALID_ARGUMENT naming the field ("options.path.time_limit_s: ...").
   absl::Status Validate() const;
@@ -111,6 +121,9 @@ struct PlanStats {
   int cuts = 0, planned = 0, unreachable = 0;
   int passes = 0;                         // passes that planned at least one cut
   int64_t checks = 0;                     // configuration checks in the whole plan
+  // Transit timing: interior waypoints, those where the arm stops (a blend collided at every
+  // size) and blend halvings.
+  int blend_vias = 0, blend_stops = 0, blend_shrinks = 0;
   std::vector<PathRecord> paths;
   MarginSummary margins;
   // Estimated move time (s) of the transits in the chosen order, the given order and the

@@ -73,19 +73,72 @@ TEST(PlanVine, PlansSimulatedVinesWithoutTouchingThem) {
   EXPECT_GT(planned, 0);
 }
 
-TEST(PlanVine, TimingStaysWithinTheJointLimits) {
-  const RobotModel robot = DefaultUr5(MillEndTool());
-  const Stop stop = SimStop(1103);
-  auto result = PlanVine(stop.model, stop.plan, robot, DefaultPlatform(), Options());
-  ASSERT_TRUE(result.ok()) << result.status();
-  for (const TrajectorySegment& s : result->trajectory.segments) {
+// Finite differences of every segment: velocity within the limits, at rest at both ends, times
+// strictly increasing; on transits (blended, piecewise constant acceleration) the second
+// divided differences, weighted means of the acceleration, within the acceleration limits too.
+void ExpectTimingWithinLimits(const Trajectory& t, const JointLimits& limits) {
+  for (const TrajectorySegment& s : t.segments) {
+    ASSERT_GE(s.points.size(), 2u);
     for (size_t p = 1; p < s.points.size(); ++p) {
       const double dt = s.points[p].t - s.points[p - 1].t;
       ASSERT_GT(dt, 0.0);
       const Joints v = (At(s.points[p]) - At(s.points[p - 1])) / dt;
-      for (int j = 0; j < 6; ++j) EXPECT_LE(std::abs(v[j]), robot.limits.max_velocity[j] * 1.001);
+      for (int j = 0; j < 6; ++j) EXPECT_LE(std::abs(v[j]), limits.max_velocity[j] * 1.001);
+      if (s.kind != SegmentKind::kTransit || p + 1 == s.points.size()) continue;
+      const double dt2 = s.points[p + 1].t - s.points[p].t;
+      const Joints a = 2.0 * ((At(s.points[p + 1]) - At(s.points[p])) / dt2 - v) / (dt + dt2);
+      for (int j = 0; j < 6; ++j) EXPECT_LE(std::abs(a[j]), limits.max_acceleration[j] * 1.001);
+    }
+    for (size_t p : {size_t{1}, s.points.size() - 1}) {
+      const double dt = s.points[p].t - s.points[p - 1].t;
+      const Joints step = (At(s.points[p]) - At(s.points[p - 1])).cwiseAbs();
+      for (int j = 0; j < 6; ++j)
+        EXPECT_LE(step[j], 0.5 * limits.max_acceleration[j] * dt * dt * 1.001 + 1e-12);
     }
   }
+}
+
+TEST(PlanVine, TimingStaysWithinTheJointLimits) {
+  for (const bool secateur : {false, true}) {
+    const RobotModel robot = DefaultUr5(secateur ? SecateurTool() : MillEndTool());
+    const Stop stop = SimStop(secateur ? 1104 : 1103);
+    auto result = PlanVine(stop.model, stop.plan, robot, DefaultPlatform(), Options());
+    ASSERT_TRUE(result.ok()) << result.status();
+    ASSERT_FALSE(result->cuts.empty());
+    ExpectTimingWithinLimits(result->trajectory, robot.limits);
+    // Transits were blended through their interior waypoints (a few may stop).
+    const PlanStats& stats = result->stats;
+    EXPECT_GT(stats.blend_vias, 0);
+    EXPECT_LT(stats.blend_stops, stats.blend_vias);
+  }
+}
+
+TEST(PlanVine, SecateurStopsAtTheCut) {
+  const RobotModel robot = DefaultUr5(SecateurTool());
+  const Stop stop = SimStop(1104);
+  auto result = PlanVine(stop.model, stop.plan, robot, DefaultPlatform(), Options());
+  ASSERT_TRUE(result.ok()) << result.status();
+  int cuts = 0;
+  for (const TrajectorySegment& s : result->trajectory.segments) {
+    if (s.kind != SegmentKind::kCut) continue;
+    ++cuts;
+    // The configuration farthest (in joint space) from the stroke's start is the cut, where the
+    // approach turns into the retract; the arm is at rest there: both neighbouring steps are no
+    // longer than an acceleration from rest allows.
+    size_t far = 0;
+    for (size_t p = 0; p < s.points.size(); ++p)
+      if ((At(s.points[p]) - At(s.points[0])).norm() > (At(s.points[far]) - At(s.points[0])).norm())
+        far = p;
+    ASSERT_GT(far, 0u);
+    ASSERT_LT(far + 1, s.points.size());
+    for (size_t p : {far, far + 1}) {
+      const double dt = s.points[p].t - s.points[p - 1].t;
+      const Joints step = (At(s.points[p]) - At(s.points[p - 1])).cwiseAbs();
+      for (int j = 0; j < 6; ++j)
+        EXPECT_LE(step[j], 0.5 * robot.limits.max_acceleration[j] * dt * dt * 1.001 + 1e-12);
+    }
+  }
+  EXPECT_GT(cuts, 0);
 }
 
 TEST(PlanVine, NoCutsGiveAnEmptyTrajectory) {

@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "absl/strings/str_cat.h"
+#include "core/status_macros.h"
 
 namespace vb::plan {
 namespace {
@@ -86,9 +87,7 @@ Joints MoveStateAt(const Joints& a, const Joints& b, const JointLimits& limits, 
   return a + s * (b - a);
 }
 
-namespace {
-
-absl::Status CheckInput(std::span<const Joints> waypoints, const JointLimits& limits,
+absl::Status ValidateTimingInput(std::span<const Joints> waypoints, const JointLimits& limits,
                         double start_time_s, double sample_dt_s) {
   if (waypoints.empty()) return absl::InvalidArgumentError("time parameterisation: waypoints: empty");
   for (size_t k = 0; k < waypoints.size(); ++k) {
@@ -109,13 +108,11 @@ absl::Status CheckInput(std::span<const Joints> waypoints, const JointLimits& li
   return absl::OkStatus();
 }
 
-}  // namespace
-
 absl::StatusOr<std::vector<TimedJoints>> TimeParameterize(std::span<const Joints> waypoints,
                                                           const JointLimits& limits,
                                                           double start_time_s,
                                                           double sample_dt_s) {
-  if (absl::Status s = CheckInput(waypoints, limits, start_time_s, sample_dt_s); !s.ok()) return s;
+  if (absl::Status s = ValidateTimingInput(waypoints, limits, start_time_s, sample_dt_s); !s.ok()) return s;
   std::vector<Profile> profiles;
   profiles.reserve(waypoints.size());
   double expected = 1.0;
@@ -150,62 +147,118 @@ absl::StatusOr<std::vector<TimedJoints>> TimeParameterize(std::span<const Joints
   return samples;
 }
 
+absl::StatusOr<std::vector<TimedJoints>> TimeParameterizeAlongPath(
+    std::span<const Joints> waypoints, const JointLimits& limits,
+    std::span<const double> speed_fraction, std::span<const int> stops, double start_time_s,
+    double sample_dt_s) {
+  VB_RETURN_IF_ERROR(ValidateTimingInput(waypoints, limits, start_time_s, sample_dt_s));
+  const size_t n = waypoints.size() - 1;
+  if (speed_fraction.size() != n) {
+    return absl::InvalidArgumentError(absl::StrCat("time parameterisation: speed_fraction: ",
+                                                   speed_fraction.size(), " values for ", n,
+                                                   " segments"));
+  }
+  for (size_t k = 0; k < n; ++k) {
+    if (!(speed_fraction[k] > 0.0) || !(speed_fraction[k] <= 1.0)) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("time parameterisation: speed_fraction[", k, "]: must be in (0, 1]"));
+    }
+  }
+  // Per segment: length, and the path speed and acceleration that keep every joint in its limits.
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  std::vector<double> length(n, 0.0), v_max(n, kInf), a_max(n, kInf);
+  for (size_t k = 0; k < n; ++k) {
+    const Joints d = waypoints[k + 1] - waypoints[k];
+    if (!(d.cwiseAbs().maxCoeff() > kZeroMoveRad)) continue;  // merged with its start
+    length[k] = d.norm();
+    for (int j = 0; j < 6; ++j) {
+      if (!(std::abs(d[j]) > kZeroMoveRad)) continue;
+      v_max[k] = std::min(v_max[k], limits.max_velocity[j] * length[k] / std::abs(d[j]));
+      a_max[k] = std::min(a_max[k], limits.max_acceleration[j] * length[k] / std::abs(d[j]));
+    }
+    v_max[k] *= speed_fraction[k];
+  }
+  // Path speed at each waypoint: 0 at the ends and stops, within both neighbours' caps, then
+  // reachable from the previous waypoint (forward) and able to stop in time (backward).
+  std::vector<double> v(n + 1, kInf);
+  v[0] = v[n] = 0.0;
+  for (int k : stops) {
+    if (k < 0 || static_cast<size_t>(k) > n) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("time parameterisation: stops: index ", k, " outside [0, ", n, "]"));
+    }
+    v[k] = 0.0;
+  }
+  for (size_t k = 0; k < n; ++k) {
+    v[k] = std::min(v[k], v_max[k]);
+    v[k + 1] = std::min(v[k + 1], v_max[k]);
+  }
+  for (size_t k = 0; k < n; ++k) {
+    if (length[k] > 0) v[k + 1] = std::min(v[k + 1], std::sqrt(v[k] * v[k] + 2 * a_max[k] * length[k]));
+    else v[k + 1] = std::min(v[k + 1], v[k]);
+  }
+  for (size_t k = n; k-- > 0;) {
+    if (length[k] > 0) v[k] = std::min(v[k], std::sqrt(v[k + 1] * v[k + 1] + 2 * a_max[k] * length[k]));
+    else v[k] = std::min(v[k], v[k + 1]);
+  }
+  // One trapezoid per segment from v[k] to v[k + 1], peak within the cap.
+  struct Piece {
+    double v0 = 0, peak = 0, accel = 0, t_up = 0, t_cruise = 0, t_down = 0, d_up = 0;
+    double Total() const { return t_up + t_cruise + t_down; }
+    double DistanceAt(double t) const {
+      if (t <= t_up) return v0 * t + 0.5 * accel * t * t;
+      if (t <= t_up + t_cruise) return d_up + peak * (t - t_up);
+      const double u = t - t_up - t_cruise;
+      return d_up + peak * t_cruise + peak * u - 0.5 * accel * u * u;
+    }
+  };
+  std::vector<Piece> pieces(n);
+  double total_t = 0.0;
+  for (size_t k = 0; k < n; ++k) {
+    if (!(length[k] > 0)) continue;
+    Piece& p = pieces[k];
+    const double a = a_max[k], v0 = v[k], v1 = v[k + 1];
+    p.v0 = v0;
+    p.accel = a;
+    p.peak = std::max({std::min(v_max[k], std::sqrt(a * length[k] + 0.5 * (v0 * v0 + v1 * v1))),
+                       v0, v1});
+    p.t_up = (p.peak - v0) / a;
+    p.t_down = (p.peak - v1) / a;
+    p.d_up = 0.5 * (p.peak * p.peak - v0 * v0) / a;
+    const double d_down = 0.5 * (p.peak * p.peak - v1 * v1) / a;
+    p.t_cruise = std::max(0.0, length[k] - p.d_up - d_down) / p.peak;
+    total_t += p.Total();
+  }
+  if (total_t / sample_dt_s + 2.0 * waypoints.size() > static_cast<double>(kMaxSamples)) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "time parameterisation: sample_dt_s: would give more than ", kMaxSamples, " samples"));
+  }
+  std::vector<TimedJoints> samples = {{start_time_s, waypoints[0]}};
+  double t0 = start_time_s;
+  for (size_t k = 0; k < n; ++k) {
+    const Piece& p = pieces[k];
+    const double t_k = p.Total();
+    if (!(length[k] > 0) || !(t_k > 0)) continue;
+    const Joints& a = waypoints[k];
+    const Joints d = waypoints[k + 1] - a;
+    for (int64_t j = 1;; ++j) {
+      const double tau = static_cast<double>(j) * sample_dt_s;
+      if (tau >= t_k - 1e-3 * sample_dt_s) break;
+      const double x = std::clamp(p.DistanceAt(tau) / length[k], 0.0, 1.0);
+      samples.push_back({t0 + tau, a + x * d});
+    }
+    t0 += t_k;
+    samples.push_back({t0, waypoints[k + 1]});
+  }
+  return samples;
+}
+
 absl::StatusOr<std::vector<TimedJoints>> TimeParameterizeStroke(std::span<const Joints> waypoints,
                                                                 const JointLimits& limits,
                                                                 double start_time_s,
                                                                 double sample_dt_s) {
-  if (absl::Status s = CheckInput(waypoints, limits, start_time_s, sample_dt_s); !s.ok()) return s;
-  // Arc length fraction of each segment, then the parameter's limits: on segment i, joint j moves
-  // d_ij per unit of the parameter's fraction f_i, so ds/dt <= vmax_j f_i / d_ij (and likewise
-  // for the acceleration).
-  std::vector<double> start_fraction = {0.0};
-  double total = 0.0;
-  for (size_t k = 1; k < waypoints.size(); ++k) total += (waypoints[k] - waypoints[k - 1]).norm();
-  if (!(total > kZeroMoveRad)) return std::vector<TimedJoints>{{start_time_s, waypoints[0]}};
-  double v = std::numeric_limits<double>::infinity(), acc = v;
-  for (size_t k = 1; k < waypoints.size(); ++k) {
-    const Joints d = waypoints[k] - waypoints[k - 1];
-    const double f = d.norm() / total;
-    start_fraction.push_back(start_fraction.back() + f);
-    for (int j = 0; j < 6; ++j) {
-      if (!(std::abs(d[j]) > kZeroMoveRad)) continue;
-      v = std::min(v, limits.max_velocity[j] * f / std::abs(d[j]));
-      acc = std::min(acc, limits.max_acceleration[j] * f / std::abs(d[j]));
-    }
-  }
-  const Profile p = ProfileOf(v, acc);
-  if (p.t_total / sample_dt_s + waypoints.size() > static_cast<double>(kMaxSamples)) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        "time parameterisation: sample_dt_s: would give more than ", kMaxSamples, " samples"));
-  }
-  // The time at which the parameter reaches fraction x (the inverse of ParameterAt).
-  auto time_at = [&](double x) {
-    const double ramp_s = 0.5 * p.accel * p.t_ramp * p.t_ramp;
-    if (x <= ramp_s) return std::sqrt(2.0 * x / p.accel);
-    if (x <= 1.0 - ramp_s) return p.t_ramp + (x - ramp_s) / p.peak;
-    return p.t_total - std::sqrt(std::max(0.0, 2.0 * (1.0 - x) / p.accel));
-  };
-  auto position_at = [&](double x) {
-    const size_t k = std::min<size_t>(
-        waypoints.size() - 1,
-        std::upper_bound(start_fraction.begin(), start_fraction.end(), x) - start_fraction.begin());
-    const double f0 = start_fraction[k - 1], f1 = start_fraction[k];
-    const double u = f1 > f0 ? std::clamp((x - f0) / (f1 - f0), 0.0, 1.0) : 1.0;
-    return Joints(waypoints[k - 1] + u * (waypoints[k] - waypoints[k - 1]));
-  };
-  // Waypoint times and grid samples merged in time order, strictly increasing.
-  std::vector<TimedJoints> samples = {{start_time_s, waypoints[0]}};
-  double next_grid = sample_dt_s;
-  for (size_t k = 1; k < waypoints.size(); ++k) {
-    const double t_k = k + 1 == waypoints.size() ? p.t_total : time_at(start_fraction[k]);
-    for (; next_grid < t_k - 1e-3 * sample_dt_s; next_grid += sample_dt_s) {
-      // A grid time just before the previous waypoint's time has been passed already.
-      if (start_time_s + next_grid <= samples.back().t + 1e-3 * sample_dt_s) continue;
-      samples.push_back({start_time_s + next_grid, position_at(ParameterAt(p, next_grid))});
-    }
-    if (start_time_s + t_k > samples.back().t) samples.push_back({start_time_s + t_k, waypoints[k]});
-  }
-  return samples;
+  const std::vector<double> full(waypoints.empty() ? 0 : waypoints.size() - 1, 1.0);
+  return TimeParameterizeAlongPath(waypoints, limits, full, {}, start_time_s, sample_dt_s);
 }
 
 }  // namespace vb::plan

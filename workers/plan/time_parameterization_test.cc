@@ -163,6 +163,97 @@ TEST(TimeParameterize, BadInputIsRejected) {
   EXPECT_FALSE(TimeParameterize(w, limits, 0, 1e-9).ok());  // too many samples
 }
 
+// A straight stroke in and out again (the secateur's approach and retract), 12 steps each way.
+std::vector<Joints> InAndOut() {
+  std::vector<Joints> w;
+  for (int i = 0; i <= 12; ++i) w.push_back(J(0.01 * i, -0.004 * i, 0.5, 0.002 * i));
+  for (int i = 11; i >= 0; --i) w.push_back(w[i]);
+  return w;
+}
+
+TEST(TimeParameterizeAlongPath, StopsWhereAskedAndStaysWithinLimits) {
+  const std::vector<Joints> w = InAndOut();
+  const JointLimits limits;
+  const std::vector<double> full(w.size() - 1, 1.0);
+  const int stop[] = {12};
+  const double dt = 0.01;
+  auto samples = TimeParameterizeAlongPath(w, limits, full, stop, 1.0, dt);
+  ASSERT_TRUE(samples.ok()) << samples.status();
+  const auto& s = *samples;
+  // Rest to rest twice on a straight line: each half is MoveTimeS of its ends.
+  EXPECT_NEAR(s.back().t - 1.0, 2.0 * MoveTimeS(w.front(), w[12], limits), 1e-9);
+  bool at_stop = false;
+  for (size_t i = 1; i < s.size(); ++i) {
+    const double h = s[i].t - s[i - 1].t;
+    ASSERT_GT(h, 0.0);
+    const Joints v = (s[i].q - s[i - 1].q) / h;
+    for (int j = 0; j < 6; ++j) EXPECT_LE(std::abs(v[j]), limits.max_velocity[j] * (1 + 1e-9));
+    if (s[i].q == w[12]) at_stop = true;
+    if (i + 1 < s.size()) {
+      const double h2 = s[i + 1].t - s[i].t;
+      const Joints a = 2.0 * ((s[i + 1].q - s[i].q) / h2 - v) / (h + h2);
+      // The reversal is a stop, so no instant turn of the velocity anywhere on this line.
+      for (int j = 0; j < 6; ++j)
+        EXPECT_LE(std::abs(a[j]), limits.max_acceleration[j] * (1 + 1e-6)) << i << " " << j;
+    }
+  }
+  EXPECT_TRUE(at_stop);
+  // Without the stop the velocity turns instantly at the reversal: a second difference far
+  // beyond the limit (what a stop at the cut prevents).
+  auto turning = TimeParameterizeAlongPath(w, limits, full, {}, 1.0, dt);
+  ASSERT_TRUE(turning.ok());
+  double worst = 0;
+  for (size_t i = 1; i + 1 < turning->size(); ++i) {
+    const auto& t = *turning;
+    const double h1 = t[i].t - t[i - 1].t, h2 = t[i + 1].t - t[i].t;
+    const Joints a = 2.0 * ((t[i + 1].q - t[i].q) / h2 - (t[i].q - t[i - 1].q) / h1) / (h1 + h2);
+    worst = std::max(worst, a.cwiseAbs().maxCoeff() / 1.4);
+  }
+  EXPECT_GT(worst, 2.0);
+}
+
+TEST(TimeParameterizeAlongPath, SlowSegmentsKeepTheirSpeedFraction) {
+  std::vector<Joints> w;
+  for (int i = 0; i <= 20; ++i) w.push_back(J(0.02 * i, 0.01 * i));
+  JointLimits limits;
+  limits.max_velocity = Joints::Constant(0.5);
+  std::vector<double> fraction(20, 1.0);
+  for (int k = 8; k < 12; ++k) fraction[k] = 0.25;  // waypoints 8-12 in contact
+  auto samples = TimeParameterizeAlongPath(w, limits, fraction, {}, 0.0, 0.005);
+  ASSERT_TRUE(samples.ok());
+  const auto& s = *samples;
+  double fast = 0;
+  for (size_t i = 1; i < s.size(); ++i) {
+    const double v = std::abs(s[i].q[0] - s[i - 1].q[0]) / (s[i].t - s[i - 1].t);
+    EXPECT_LE(v, 0.5 * (1 + 1e-9));
+    const bool in_contact = s[i - 1].q[0] >= 0.16 - 1e-12 && s[i].q[0] <= 0.24 + 1e-12;
+    if (in_contact) EXPECT_LE(v, 0.125 * (1 + 1e-9)) << i;
+    else fast = std::max(fast, v);
+  }
+  EXPECT_GT(fast, 0.3);  // outside the contact the arm goes faster
+  auto all_slow = TimeParameterizeAlongPath(w, limits, std::vector<double>(20, 0.25), {}, 0.0, 0.005);
+  ASSERT_TRUE(all_slow.ok());
+  EXPECT_LT(s.back().t, all_slow->back().t);
+}
+
+TEST(TimeParameterizeAlongPath, RejectsBadSpeedFractionsAndStops) {
+  const std::vector<Joints> w = {J(0), J(1), J(2)};
+  const JointLimits limits;
+  const std::vector<double> one = {1.0};
+  EXPECT_NE(TimeParameterizeAlongPath(w, limits, one, {}, 0, 0.01).status().message().find(
+                "speed_fraction"),
+            std::string::npos);
+  const std::vector<double> zero = {1.0, 0.0};
+  EXPECT_NE(TimeParameterizeAlongPath(w, limits, zero, {}, 0, 0.01).status().message().find(
+                "speed_fraction[1]"),
+            std::string::npos);
+  const std::vector<double> ok = {1.0, 1.0};
+  const int bad_stop[] = {3};
+  EXPECT_NE(TimeParameterizeAlongPath(w, limits, ok, bad_stop, 0, 0.01).status().message().find(
+                "stops"),
+            std::string::npos);
+}
+
 }  // namespace
 }  // namespace vb::plan
 
