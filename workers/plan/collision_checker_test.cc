@@ -334,12 +334,45 @@ TEST(CollisionChecker, MotionThroughAnObstacleIsNotFree) {
 
 // Batched checks compute forward kinematics in float lanes: they may differ from IsFree only
 // within float rounding of contact.
-TEST(PrimitiveChecker, AreFreeAgreesWithIsFree) {
+// The batched checks run AVX2 code where the CPU has it and the baseline SIMD code elsewhere;
+// both are tested on every machine that can run them (kBaseline always).
+enum class Simd { kDetected, kBaseline };
+
+class PrimitiveCheckerSimd : public ::testing::TestWithParam<Simd> {
+ protected:
+  void Select(PrimitiveChecker& checker) const {
+    if (GetParam() == Simd::kBaseline) {
+      checker.UseBaselineSimd();
+      EXPECT_FALSE(checker.uses_avx2());
+    }
+  }
+};
+
+INSTANTIATE_TEST_SUITE_P(Isa, PrimitiveCheckerSimd,
+                         ::testing::Values(Simd::kDetected, Simd::kBaseline),
+                         [](const auto& info) {
+                           return info.param == Simd::kBaseline ? "Baseline" : "Detected";
+                         });
+
+TEST(PrimitiveChecker, UsesAvx2ExactlyWhenTheCpuHasIt) {
+  PrimitiveChecker checker(DefaultUr5(SimpleMillEnd()), EmptyScene());
+#if defined(__x86_64__)
+  EXPECT_EQ(checker.uses_avx2(),
+            __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma"));
+#else
+  EXPECT_FALSE(checker.uses_avx2());
+#endif
+  checker.UseBaselineSimd();
+  EXPECT_FALSE(checker.uses_avx2());
+}
+
+TEST_P(PrimitiveCheckerSimd, AreFreeAgreesWithIsFree) {
   const RobotModel robot = DefaultUr5(SimpleMillEnd());
   std::mt19937 rng(1130);
   int total = 0, free = 0, disagree = 0;
   for (uint64_t seed : {1130, 1131}) {
     PrimitiveChecker checker(robot, VineScene(seed, seed == 1131 ? 0.02 : 0.0));
+    Select(checker);
     std::vector<Joints> qs;
     for (int k = 0; k < 2003; ++k) qs.push_back(RandomJoints(rng, robot.limits));
     std::unique_ptr<bool[]> flags(new bool[qs.size()]);
@@ -362,12 +395,13 @@ TEST(PrimitiveChecker, AreFreeAgreesWithIsFree) {
 
 // The batched IsMotionFree against IsFree at every sample MotionSteps gives, on short motions
 // around random configurations (both outcomes occur).
-TEST(PrimitiveChecker, BatchedMotionAgreesWithSampledChecks) {
+TEST_P(PrimitiveCheckerSimd, BatchedMotionAgreesWithSampledChecks) {
   const RobotModel robot = DefaultUr5(SimpleMillEnd());
   std::mt19937 rng(1132);
   int motions = 0, free = 0;
   for (uint64_t seed : {1132, 1133}) {
     PrimitiveChecker checker(robot, VineScene(seed));
+    Select(checker);
     for (int trial = 0; trial < 300; ++trial) {
       const Joints a = RandomJoints(rng, robot.limits);
       const Joints b = a + (RandomJoints(rng, robot.limits) - a) * 0.1;

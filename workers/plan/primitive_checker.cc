@@ -380,6 +380,7 @@ PrimitiveChecker::PrimitiveChecker(const RobotModel& robot, const CollisionScene
     m.top.push_back(MakeBoxSet(node_boxes, g * kLeaf, std::min(n_nodes, (g + 1) * kLeaf)));
   }
 
+  m.SelectLanes(/*allow_avx2=*/true);
   // The base never moves: decide once whether it touches anything.
   for (const ArmCapsule& c : m.fixed) {
     if (m.SegClearance(c.a, c.b, c.radius, std::numeric_limits<double>::infinity()) < 0) {

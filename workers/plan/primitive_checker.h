@@ -42,12 +42,20 @@ class PrimitiveChecker : public CollisionChecker {
   bool IsMotionFree(const Joints& a, const Joints& b, double max_step_m) override;
   double Clearance(const Joints& q) override;
 
+  // The batched checks (AreFree, IsMotionFree) run AVX2 + FMA code where the CPU has it (x86-64,
+  // detected at construction); UseBaselineSimd() switches this checker to the baseline code
+  // (SSE2 / NEON) that every machine runs, for tests and benchmarks.
+  void UseBaselineSimd();
+  bool uses_avx2() const;
+
   // Number of obstacle pieces, leaves and nodes (for benchmarks and tests).
   int pieces() const;
   int leaves() const;
 
- private:
+ // The state (primitive_checker_internal.h), named here for the checker's own translation units.
   struct Impl;
+
+ private:
   std::unique_ptr<Impl> impl_;
 };
 

@@ -162,13 +162,49 @@ unsigned PrimitiveChecker::Impl::CollidingLanes(const Joints* q, int count, bool
   return hit;
 }
 
+namespace {
+
+// The same code twice, every call inlined (flatten): once for the baseline ISA, once for
+// AVX2 + FMA (three-operand forms, fused multiply-adds; still 4 lanes). FMA changes the rounding
+// of the float tests by an ulp or so, far below the 1e-5 m the float lanes are allowed.
+__attribute__((flatten)) unsigned LanesBaseline(PrimitiveChecker::Impl& m, const Joints* q,
+                                                int count, bool coherent, bool stop_at_first) {
+  return m.CollidingLanes(q, count, coherent, stop_at_first);
+}
+
+#if defined(__x86_64__) && defined(__GNUC__)
+#define VB_PRIM_HAVE_AVX2 1
+__attribute__((target("avx2,fma"), flatten)) unsigned LanesAvx2(
+    PrimitiveChecker::Impl& m, const Joints* q, int count, bool coherent, bool stop_at_first) {
+  return m.CollidingLanes(q, count, coherent, stop_at_first);
+}
+#endif
+
+}  // namespace
+
+void PrimitiveChecker::Impl::SelectLanes(bool allow_avx2) {
+  colliding_lanes = &LanesBaseline;
+  lanes_avx2 = false;
+#if defined(VB_PRIM_HAVE_AVX2)
+  if (allow_avx2 && __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma")) {
+    colliding_lanes = &LanesAvx2;
+    lanes_avx2 = true;
+  }
+#else
+  (void)allow_avx2;
+#endif
+}
+
+void PrimitiveChecker::UseBaselineSimd() { impl_->SelectLanes(/*allow_avx2=*/false); }
+bool PrimitiveChecker::uses_avx2() const { return impl_->lanes_avx2; }
+
 void PrimitiveChecker::AreFree(std::span<const Joints> qs, std::span<bool> out) {
   const size_t n = std::min(qs.size(), out.size());
   checks_ += static_cast<int64_t>(n);
   // Arbitrary configurations: forward kinematics in lanes, the hierarchy walked per lane.
   for (size_t i = 0; i < n; i += 4) {
     const int count = static_cast<int>(std::min<size_t>(4, n - i));
-    const unsigned hit = impl_->CollidingLanes(&qs[i], count, /*coherent=*/false,
+    const unsigned hit = impl_->colliding_lanes(*impl_, &qs[i], count, /*coherent=*/false,
                                                /*stop_at_first=*/false);
     for (int l = 0; l < count; ++l) out[i + l] = !(hit >> l & 1u) && SaneJoints(qs[i + l]);
   }
@@ -182,7 +218,7 @@ bool PrimitiveChecker::IsMotionFree(const Joints& a, const Joints& b, double max
   // Corput order (coarse to fine) so that a colliding motion usually fails early.
   const Joints ends[2] = {a, b};
   checks_ += 2;
-  if (impl_->CollidingLanes(ends, 2, /*coherent=*/false, /*stop_at_first=*/true)) return false;
+  if (impl_->colliding_lanes(*impl_, ends, 2, /*coherent=*/false, /*stop_at_first=*/true)) return false;
   const int interior = n - 1;
   const int blocks = (interior + 3) / 4;
   int bits = 0;
@@ -197,7 +233,7 @@ bool PrimitiveChecker::IsMotionFree(const Joints& a, const Joints& b, double max
     const int count = std::min(4, n - first);
     for (int l = 0; l < count; ++l) q[l] = a + step * (first + l);
     checks_ += count;
-    if (impl_->CollidingLanes(q, count, /*coherent=*/true, /*stop_at_first=*/true)) return false;
+    if (impl_->colliding_lanes(*impl_, q, count, /*coherent=*/true, /*stop_at_first=*/true)) return false;
   }
   return true;
 }

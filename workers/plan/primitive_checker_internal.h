@@ -252,6 +252,14 @@ struct PrimitiveChecker::Impl {
   // obstacle hierarchy is walked once for all lanes; otherwise once per lane. `stop_at_first`:
   // return as soon as one lane is known to collide (the others are then unspecified).
   unsigned CollidingLanes(const Joints* q, int count, bool coherent, bool stop_at_first);
+
+  // CollidingLanes compiled for the running CPU: with AVX2 and FMA where it has them (x86-64,
+  // checked at run time; the library itself is built for the baseline ISA), else the baseline
+  // (SSE2 on x86-64, NEON on arm64). Set by the constructor (SelectLanes).
+  using LanesFn = unsigned (*)(Impl&, const Joints*, int, bool, bool);
+  LanesFn colliding_lanes = nullptr;
+  bool lanes_avx2 = false;
+  void SelectLanes(bool allow_avx2);
 };
 
 // Non-finite or absurd joint values are never free (the float lanes would wrap them silently).
