@@ -136,12 +136,23 @@ double CapsuleCapsuleGap(const Eigen::Vector3d& a0, const Eigen::Vector3d& a1, d
 
 using namespace prim;
 
-void PrimitiveChecker::Impl::Fk(const Joints& q, std::array<Frame, 7>& f) const {
+void PrimitiveChecker::Impl::Fk(const Joints& q, std::array<Frame, 7>& f,
+                                bool float_trig) const {
+  double c[6], sn[6];
+  if (float_trig) {
+    F4 s_lo, c_lo, s_hi, c_hi;
+    SinCos4(F4{float(q[0]), float(q[1]), float(q[2]), float(q[3])}, &s_lo, &c_lo);
+    SinCos4(F4{float(q[4]), float(q[5]), 0.f, 0.f}, &s_hi, &c_hi);
+    for (int i = 0; i < 4; ++i) c[i] = c_lo[i], sn[i] = s_lo[i];
+    for (int i = 0; i < 2; ++i) c[4 + i] = c_hi[i], sn[4 + i] = s_hi[i];
+  } else {
+    for (int i = 0; i < 6; ++i) c[i] = std::cos(q[i]), sn[i] = std::sin(q[i]);
+  }
   f[0] = Frame{Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(), Eigen::Vector3d::UnitZ(),
                Eigen::Vector3d::Zero()};
   // Standard DH, Rz(q) Tz(d) Tx(a) Rx(alpha), applied to the columns of the previous frame.
   for (int i = 0; i < 6; ++i) {
-    const double ct = std::cos(q[i]), st = std::sin(q[i]);
+    const double ct = c[i], st = sn[i];
     const Frame& in = f[i];
     Frame& out = f[i + 1];
     out.x = ct * in.x + st * in.y;
@@ -152,9 +163,9 @@ void PrimitiveChecker::Impl::Fk(const Joints& q, std::array<Frame, 7>& f) const 
   }
 }
 
-void PrimitiveChecker::Impl::Place(const Joints& q) {
+void PrimitiveChecker::Impl::Place(const Joints& q, bool float_trig) {
   std::array<Frame, 7> f;
-  Fk(q, f);
+  Fk(q, f, float_trig);
   for (size_t i = 0; i < all.size(); ++i) {
     const Frame& fr = f[all[i].frame];
     const Eigen::Vector3d& a = all[i].a;
@@ -192,7 +203,7 @@ bool PrimitiveChecker::Impl::SegHitsPlanes(size_t c, const Eigen::Vector3d& a, c
 
 bool PrimitiveChecker::Impl::Free(const Joints& q) {
   if (base_blocked) return false;
-  Place(q);
+  Place(q, /*float_trig=*/true);
   // `all` lists moving capsules first (distal first), then fixed ones; see the constructor.
   for (size_t i = 0; i < moving.size(); ++i) {
     if (SegHitsPlanes(i, world_a[i], world_b[i], all[i].radius)) return false;
@@ -245,7 +256,7 @@ double PrimitiveChecker::Impl::SegClearance(const Eigen::Vector3d& a, const Eige
 }
 
 double PrimitiveChecker::Impl::Clearance(const Joints& q) {
-  Place(q);
+  Place(q, /*float_trig=*/false);
   double best = std::numeric_limits<double>::infinity();
   for (size_t i = 0; i < all.size(); ++i) {
     best = SegClearance(world_a[i], world_b[i], all[i].radius, best);
@@ -255,6 +266,34 @@ double PrimitiveChecker::Impl::Clearance(const Joints& q) {
                                             world_b[j], all[j].radius));
   }
   return best;
+}
+
+namespace {
+
+// Free twice, every call inlined (flatten): for the baseline ISA and for AVX2 + FMA (see
+// SelectLanes in primitive_checker_batch.cc). FMA changes the double forward kinematics by an
+// ulp and the float tests by an ulp or so: far below the float rounding IsFree already accepts.
+__attribute__((flatten)) bool FreeBaseline(PrimitiveChecker::Impl& m, const Joints& q) {
+  return m.Free(q);
+}
+
+#if defined(__x86_64__) && defined(__GNUC__)
+#define VB_PRIM_HAVE_AVX2 1
+__attribute__((target("avx2,fma"), flatten)) bool FreeAvx2(PrimitiveChecker::Impl& m,
+                                                          const Joints& q) {
+  return m.Free(q);
+}
+#endif
+
+}  // namespace
+
+void PrimitiveChecker::Impl::SelectFree(bool allow_avx2) {
+  free_fn = &FreeBaseline;
+#if defined(VB_PRIM_HAVE_AVX2)
+  if (allow_avx2 && CpuHasAvx2Fma()) free_fn = &FreeAvx2;
+#else
+  (void)allow_avx2;
+#endif
 }
 
 PrimitiveChecker::PrimitiveChecker(const RobotModel& robot, const CollisionScene& scene)
@@ -381,6 +420,7 @@ PrimitiveChecker::PrimitiveChecker(const RobotModel& robot, const CollisionScene
   }
 
   m.SelectLanes(/*allow_avx2=*/true);
+  m.SelectFree(/*allow_avx2=*/true);
   // The base never moves: decide once whether it touches anything.
   for (const ArmCapsule& c : m.fixed) {
     if (m.SegClearance(c.a, c.b, c.radius, std::numeric_limits<double>::infinity()) < 0) {
@@ -393,7 +433,7 @@ PrimitiveChecker::~PrimitiveChecker() = default;
 
 bool PrimitiveChecker::IsFree(const Joints& q) {
   ++checks_;
-  return SaneJoints(q) && impl_->Free(q);
+  return SaneJoints(q) && impl_->free_fn(*impl_, q);
 }
 
 double PrimitiveChecker::Clearance(const Joints& q) {

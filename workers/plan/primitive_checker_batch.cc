@@ -186,7 +186,7 @@ void PrimitiveChecker::Impl::SelectLanes(bool allow_avx2) {
   colliding_lanes = &LanesBaseline;
   lanes_avx2 = false;
 #if defined(VB_PRIM_HAVE_AVX2)
-  if (allow_avx2 && __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma")) {
+  if (allow_avx2 && CpuHasAvx2Fma()) {
     colliding_lanes = &LanesAvx2;
     lanes_avx2 = true;
   }
@@ -195,7 +195,10 @@ void PrimitiveChecker::Impl::SelectLanes(bool allow_avx2) {
 #endif
 }
 
-void PrimitiveChecker::UseBaselineSimd() { impl_->SelectLanes(/*allow_avx2=*/false); }
+void PrimitiveChecker::UseBaselineSimd() {
+  impl_->SelectLanes(/*allow_avx2=*/false);
+  impl_->SelectFree(/*allow_avx2=*/false);
+}
 bool PrimitiveChecker::uses_avx2() const { return impl_->lanes_avx2; }
 
 void PrimitiveChecker::AreFree(std::span<const Joints> qs, std::span<bool> out) {

@@ -221,8 +221,10 @@ struct PrimitiveChecker::Impl {
   std::vector<Eigen::Vector3d> world_a, world_b;
 
   // One configuration, in double (primitive_checker.cc).
-  void Fk(const Joints& q, std::array<Frame, 7>& f) const;
-  void Place(const Joints& q);
+  // `float_trig`: sines and cosines from SinCos4 (error ~1e-7, for IsFree, whose obstacle tests
+  // are in float anyway) instead of libm's (for Clearance, exact in double).
+  void Fk(const Joints& q, std::array<Frame, 7>& f, bool float_trig) const;
+  void Place(const Joints& q, bool float_trig);
   bool SegHitsObstacles(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double r) const;
   bool SegHitsPlanes(size_t c, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                      double r) const;
@@ -258,9 +260,22 @@ struct PrimitiveChecker::Impl {
   // (SSE2 on x86-64, NEON on arm64). Set by the constructor (SelectLanes).
   using LanesFn = unsigned (*)(Impl&, const Joints*, int, bool, bool);
   LanesFn colliding_lanes = nullptr;
+  // Free compiled the same two ways (primitive_checker.cc, SelectFree).
+  using FreeFn = bool (*)(Impl&, const Joints&);
+  FreeFn free_fn = nullptr;
   bool lanes_avx2 = false;
   void SelectLanes(bool allow_avx2);
+  void SelectFree(bool allow_avx2);
 };
+
+// True on an x86-64 CPU with AVX2 and FMA (the checker's fast code paths).
+inline bool CpuHasAvx2Fma() {
+#if defined(__x86_64__) && defined(__GNUC__)
+  return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+#else
+  return false;
+#endif
+}
 
 // Non-finite or absurd joint values are never free (the float lanes would wrap them silently).
 inline bool SaneJoints(const Joints& q) { return q.allFinite() && !(q.array().abs() > 1e6).any(); }
