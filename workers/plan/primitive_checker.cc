@@ -325,7 +325,8 @@ PrimitiveChecker::PrimitiveChecker(const RobotModel& robot, const CollisionScene
   m.all = caps;
   m.world_a.resize(caps.size());
   m.world_b.resize(caps.size());
-  m.lanes_scratch.resize(caps.size());
+  m.lanes4.resize(caps.size());
+  m.lanes8.resize(caps.size());
   for (const ArmCapsule& c : caps) {
     const double len2 = (c.b - c.a).squaredNorm();
     m.cap_len2.push_back(static_cast<float>(len2));

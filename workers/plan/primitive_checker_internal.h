@@ -17,6 +17,11 @@ namespace vb::plan::prim {
 // obstacles, processed as two halves.
 typedef float F4 __attribute__((vector_size(16)));
 typedef int32_t I4 __attribute__((vector_size(16)));
+// Eight float lanes: only computed in code compiled for AVX2 (primitive_checker_batch.cc). The
+// alignment is explicit: without AVX, GCC would align them to 16 bytes only, and the AVX2 code
+// loads them with aligned 32-byte moves.
+typedef float F8 __attribute__((vector_size(32), aligned(32)));
+typedef int32_t I8 __attribute__((vector_size(32), aligned(32)));
 constexpr int kLeaf = 8;
 constexpr int kHalves = kLeaf / 4;
 // Padding lanes sit here with radius 0: never within reach of the arm.
@@ -180,10 +185,13 @@ struct Frame {
   Eigen::Vector3d x, y, z, p;
 };
 
-// Per capsule of PrimitiveChecker::Impl::all, across the lanes (configurations): start point,
-// axis, bounding box (inflated by kCoarseSlackM).
-struct PlacedLanes {
-  F4 p[3], d[3], lo[3], hi[3];
+// Per capsule of PrimitiveChecker::Impl::all, across 4 or 8 lanes (configurations): start
+// point, axis, bounding box (inflated by kCoarseSlackM), midpoint.
+struct PlacedLanes4 {
+  F4 p[3], d[3], lo[3], hi[3], mid[3];
+};
+struct alignas(32) PlacedLanes8 {
+  F8 p[3], d[3], lo[3], hi[3], mid[3];
 };
 
 }  // namespace vb::plan::prim
@@ -234,32 +242,25 @@ struct PrimitiveChecker::Impl {
   double Clearance(const Joints& q);
 
   // Batched checks (primitive_checker_batch.cc; VAMP's idea: configurations in SIMD lanes).
-  std::vector<prim::PlacedLanes> lanes_scratch;
   std::vector<float> leaf_lo, leaf_hi;  // leaf boxes, 3 floats per leaf
   // Leaf bounding capsules: q0 xyz, d xyz, |d|^2, 1/|d|^2 (0 for a sphere), radius + slack.
   std::vector<std::array<float, 9>> leaf_caps;
   std::vector<float> cap_half_reach;  // per capsule: half its length plus its radius
   std::vector<float> cap_len2, cap_inv_len2;  // per capsule of `all` (rigid: configuration-free)
+  // Scratch: the capsules of `all` placed in 4 or 8 lanes.
+  std::vector<prim::PlacedLanes4> lanes4;
+  std::vector<prim::PlacedLanes8> lanes8;
 
-  // Forward kinematics of q[0..count) (count <= 4) in float lanes into lanes_scratch.
-  void PlaceLanes(const Joints* q, int count);
-  // Capsule c of lane `lane`, splatted for SegVsSet.
-  prim::ArmSeg LaneSeg(size_t c, int lane) const;
-  // Lanes (of `lanes`) where capsule c touches an obstacle piece. The hierarchy is walked once
-  // with the union of the lanes' boxes (lanes should be nearby configurations); leaves are then
-  // tested per lane. With `stop_at_first`, returns after the first colliding lane.
-  unsigned CapsuleLanesHit(size_t c, unsigned lanes, bool stop_at_first) const;
-  // Lanes (of the first `count` configurations q[0..count), count <= 4) that are not free.
-  // `coherent`: the configurations are close together (consecutive samples of a motion), so the
-  // obstacle hierarchy is walked once for all lanes; otherwise once per lane. `stop_at_first`:
-  // return as soon as one lane is known to collide (the others are then unspecified).
-  unsigned CollidingLanes(const Joints* q, int count, bool coherent, bool stop_at_first);
-
-  // CollidingLanes compiled for the running CPU: with AVX2 and FMA where it has them (x86-64,
-  // checked at run time; the library itself is built for the baseline ISA), else the baseline
-  // (SSE2 on x86-64, NEON on arm64). Set by the constructor (SelectLanes).
+  // The lanes (of the first `count` configurations q[0..count), count <= lane_width) that are
+  // not free. `coherent`: the configurations are close together (consecutive samples of a
+  // motion), so the obstacle hierarchy is walked once for all lanes; otherwise once per lane.
+  // `stop_at_first`: return as soon as one lane is known to collide (the others are then
+  // unspecified). Compiled for the running CPU: 8 lanes with AVX2 and FMA where it has them
+  // (x86-64, checked at run time; the library itself is built for the baseline ISA), else 4 lanes
+  // of the baseline (SSE2 on x86-64, NEON on arm64). Set by the constructor (SelectLanes).
   using LanesFn = unsigned (*)(Impl&, const Joints*, int, bool, bool);
   LanesFn colliding_lanes = nullptr;
+  int lane_width = 4;
   // Free compiled the same two ways (primitive_checker.cc, SelectFree).
   using FreeFn = bool (*)(Impl&, const Joints&);
   FreeFn free_fn = nullptr;
