@@ -87,7 +87,7 @@ TEST(PrimitiveChecker, ClearanceMatchesBruteForceOnVines) {
       const double expected = ReferenceClearance(robot, scene, q);
       const double clearance = checker.Clearance(q);
       ASSERT_NEAR(clearance, expected, 1e-9) << "seed " << seed << " trial " << trial;
-      if (std::abs(expected) > 1e-5) {
+      if (std::abs(expected) > 2e-5) {
         ASSERT_EQ(checker.IsFree(q), expected > 0) << "seed " << seed << " trial " << trial;
       }
     }
@@ -384,7 +384,7 @@ TEST_P(PrimitiveCheckerSimd, AreFreeAgreesWithIsFree) {
       free += expected;
       if (flags[k] != expected) {
         ++disagree;
-        EXPECT_LT(std::abs(checker.Clearance(qs[k])), 1e-5) << "seed " << seed << " k " << k;
+        EXPECT_LT(std::abs(checker.Clearance(qs[k])), 2e-5) << "seed " << seed << " k " << k;
       }
     }
   }
@@ -411,7 +411,7 @@ TEST_P(PrimitiveCheckerSimd, BatchedMotionAgreesWithSampledChecks) {
       for (int k = 0; k <= n; ++k) {
         const Joints q = a + (b - a) * (double(k) / n);
         expected = expected && checker.IsFree(q);
-        near_contact = near_contact || std::abs(checker.Clearance(q)) < 1e-5;
+        near_contact = near_contact || std::abs(checker.Clearance(q)) < 2e-5;
       }
       ++motions;
       free += expected;
@@ -424,8 +424,51 @@ TEST_P(PrimitiveCheckerSimd, BatchedMotionAgreesWithSampledChecks) {
   EXPECT_LT(free, motions - motions / 10);
 }
 
+// Exact or conservative: configurations bisected (on the exact double Clearance) to within 1e-9 m
+// inside contact are never free, by IsFree, AreFree or IsMotionFree, whatever SIMD code runs,
+// although every test but Clearance is in float.
+TEST_P(PrimitiveCheckerSimd, NeverFreeInContact) {
+  const RobotModel robot = DefaultUr5(SimpleMillEnd());
+  std::mt19937 rng(1136);
+  int contacts = 0;
+  for (uint64_t seed : {1136, 1137}) {
+    PrimitiveChecker checker(robot, VineScene(seed, seed == 1137 ? 0.02 : 0.0));
+    Select(checker);
+    while (contacts < (seed == 1136 ? 150 : 300)) {
+      const Joints a = RandomJoints(rng, robot.limits);
+      const Joints b = RandomJoints(rng, robot.limits);
+      if (!(checker.Clearance(a) > 0) || !(checker.Clearance(b) < 0)) continue;
+      double lo = 0, hi = 1;  // Clearance(a + lo (b - a)) > 0 >= Clearance(a + hi (b - a))
+      Joints inside = b;
+      for (int k = 0; k < 60; ++k) {
+        const double mid = 0.5 * (lo + hi);
+        const Joints q = a + (b - a) * mid;
+        const double c = checker.Clearance(q);
+        if (c > 0) {
+          lo = mid;
+        } else {
+          hi = mid, inside = q;
+          if (c > -1e-9) break;
+        }
+      }
+      const double clearance = checker.Clearance(inside);
+      ASSERT_LE(clearance, 0.0);
+      if (clearance < -1e-6) continue;  // the boundary is not continuous here (a new contact)
+      ++contacts;
+      EXPECT_FALSE(checker.IsFree(inside)) << "seed " << seed << " clearance " << clearance;
+      std::vector<Joints> qs(9, inside);
+      bool out[9];
+      checker.AreFree(qs, out);
+      EXPECT_FALSE(out[0]) << "seed " << seed << " clearance " << clearance;
+      EXPECT_FALSE(checker.IsMotionFree(a, inside, 0.01)) << "seed " << seed;
+    }
+  }
+  EXPECT_EQ(contacts, 300);
+}
+
 // The AVX2 code (8 lanes) and the baseline code (4 lanes) give the same answers on motions of
-// every length (they differ only by float rounding, so only within 1e-5 m of contact).
+// every length (they differ only by float rounding, so only within 2e-5 m of contact: the 1e-5 m
+// padding of the float tests plus rounding).
 TEST(PrimitiveChecker, DetectedAndBaselineSimdAgreeOnMotions) {
   const RobotModel robot = DefaultUr5(SimpleMillEnd());
   std::mt19937 rng(1134);
@@ -453,7 +496,7 @@ TEST(PrimitiveChecker, DetectedAndBaselineSimdAgreeOnMotions) {
           for (int i = 0; i <= n; ++i) {
             closest = std::min(closest, std::abs(baseline.Clearance(a + (b - a) * (double(i) / n))));
           }
-          EXPECT_LT(closest, 1e-5) << "seed " << seed << " k " << k << " fraction " << fraction;
+          EXPECT_LT(closest, 2e-5) << "seed " << seed << " k " << k << " fraction " << fraction;
         }
       }
     }
@@ -486,7 +529,9 @@ TEST(CheckerAgreement, PrimitivesAndFclAgreeOnRandomConfigurations) {
       free += expected;
       if (fcl_primitives->IsFree(q) != expected) {
         ++disagree_primitives;
-        EXPECT_LT(std::abs(ours.Clearance(q)), 1e-5) << "seed " << seed << " trial " << trial;
+        // Our float tests pad the arm by 1e-5 m (conservative): a disagreement lies within
+        // that padding plus rounding of contact.
+        EXPECT_LT(std::abs(ours.Clearance(q)), 2e-5) << "seed " << seed << " trial " << trial;
       }
       if (fcl_mesh->IsFree(q) != expected) {
         ++disagree_mesh;

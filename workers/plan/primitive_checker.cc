@@ -206,32 +206,21 @@ bool PrimitiveChecker::Impl::Free(const Joints& q) {
   Place(q, /*float_trig=*/true);
   // `all` lists moving capsules first (distal first), then fixed ones; see the constructor.
   for (size_t i = 0; i < moving.size(); ++i) {
-    if (SegHitsPlanes(i, world_a[i], world_b[i], all[i].radius)) return false;
+    if (SegHitsPlanes(i, world_a[i], world_b[i], all[i].radius + kFloatPadM)) return false;
   }
   for (size_t i = 0; i < moving.size(); ++i) {
-    if (SegHitsObstacles(world_a[i], world_b[i], all[i].radius)) return false;
+    if (SegHitsObstacles(world_a[i], world_b[i], all[i].radius + kFloatPadM)) return false;
   }
-  // Self-collision pairs four at a time, gathered from the placed capsules.
-  // cap[k * stride + i]: p0 xyz, d xyz, |d|^2, 1/|d|^2, radius of capsule i.
-  float* cap = cap_soa.data();
-  const size_t stride = all.size() + 2;
-  for (size_t i = 0; i < all.size(); ++i) {
-    const Eigen::Vector3d d = world_b[i] - world_a[i];
-    const double len2 = d.squaredNorm();
-    const double v[9] = {world_a[i].x(), world_a[i].y(), world_a[i].z(), d.x(), d.y(), d.z(),
-                         len2, len2 > 0 ? 1.0 / len2 : 0.0, all[i].radius};
-    for (size_t k = 0; k < 9; ++k) cap[k * stride + i] = static_cast<float>(v[k]);
-  }
-  for (size_t g = 0; g < self_lanes.size(); g += 8) {
-    F4 x[9], y[9];
-    for (int k = 0; k < 9; ++k) {
-      for (int lane = 0; lane < 4; ++lane) {
-        x[k][lane] = cap[k * stride + self_lanes[g + lane]];
-        y[k][lane] = cap[k * stride + self_lanes[g + 4 + lane]];
-      }
+  // Self-collision pairs: bounding spheres about the midpoints first (most pairs are far apart),
+  // then the distance in double. The positions come from float sincos, hence the padding (as for
+  // the planes above).
+  for (const auto& [i, j] : self_pairs) {
+    const double reach = cap_half_reach[i] + cap_half_reach[j];
+    if ((world_a[i] + world_b[i] - world_a[j] - world_b[j]).squaredNorm() >= 4 * reach * reach) {
+      continue;
     }
-    if (Bits(CapsulesTouch(x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7], y[0], y[1], y[2],
-                           y[3], y[4], y[5], y[6], y[7], x[8] + y[8]))) {
+    if (SegmentSegmentDistance(world_a[i], world_b[i], world_a[j], world_b[j]) <
+        all[i].radius + all[j].radius + kFloatPadM) {
       return false;
     }
   }
@@ -337,17 +326,6 @@ PrimitiveChecker::PrimitiveChecker(const RobotModel& robot, const CollisionScene
     for (int i : capsules_of[bi]) {
       for (int j : capsules_of[bj]) m.self_pairs.emplace_back(i, j);
     }
-  }
-  // Padding lanes pair two points far apart (the two slots after the real capsules).
-  const int n_caps = static_cast<int>(caps.size());
-  m.cap_soa.assign(9 * (n_caps + 2), 0.f);
-  m.cap_soa[n_caps] = kFarAway;
-  m.cap_soa[n_caps + 1] = -kFarAway;
-  std::vector<std::pair<int, int>> padded = m.self_pairs;
-  while (padded.size() % 4 != 0) padded.emplace_back(n_caps, n_caps + 1);
-  for (size_t g = 0; g < padded.size(); g += 4) {
-    for (size_t k = 0; k < 4; ++k) m.self_lanes.push_back(padded[g + k].first);
-    for (size_t k = 0; k < 4; ++k) m.self_lanes.push_back(padded[g + k].second);
   }
   m.planes = scene.planes;
   // A capsule reaches plane n . x <= offset only if its reach cylinder about the base axis

@@ -207,7 +207,7 @@ unsigned CapsuleLanesHit(Impl& m, size_t c, unsigned lanes, bool stop_at_first) 
   }
   const QueryBox box{Splat(lo[0]), Splat(lo[1]), Splat(lo[2]),
                      Splat(hi[0]), Splat(hi[1]), Splat(hi[2])};
-  const float radius = static_cast<float>(m.all[c].radius);
+  const float radius = static_cast<float>(m.all[c].radius + kFloatPadM);
   const V len2 = SplatV<V>(m.cap_len2[c]), inv_len2 = SplatV<V>(m.cap_inv_len2[c]);
   unsigned hit = 0;
   for (size_t g = 0; g < m.top.size(); ++g) {
@@ -262,7 +262,7 @@ unsigned CollidingLanes(Impl& m, const Joints* q, int count, bool coherent, bool
   unsigned hit = 0;
   for (size_t c = 0; c < m.moving.size(); ++c) {
     const auto& pl = placed[c];
-    const V r = SplatV<V>(m.all[c].radius);
+    const V r = SplatV<V>(m.all[c].radius + kFloatPadM);
     for (const HalfSpace& h : m.planes_of[c]) {
       const V nx = SplatV<V>(h.normal.x()), ny = SplatV<V>(h.normal.y());
       const V nz = SplatV<V>(h.normal.z());
@@ -301,7 +301,7 @@ unsigned CollidingLanes(Impl& m, const Joints* q, int count, bool coherent, bool
                x.p[0], x.p[1], x.p[2], x.d[0], x.d[1], x.d[2], SplatV<V>(m.cap_len2[i]),
                SplatV<V>(m.cap_inv_len2[i]), y.p[0], y.p[1], y.p[2], y.d[0], y.d[1], y.d[2],
                SplatV<V>(m.cap_len2[j]), SplatV<V>(m.cap_inv_len2[j]),
-               SplatV<V>(m.all[i].radius + m.all[j].radius))) &
+               SplatV<V>(m.all[i].radius + m.all[j].radius + kFloatPadM))) &
            all_lanes;
     if (hit && stop_at_first) return hit;
   }

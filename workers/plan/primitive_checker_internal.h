@@ -28,6 +28,15 @@ constexpr int kHalves = kLeaf / 4;
 constexpr float kFarAway = 1e6f;
 // Coarse spheres are inflated by this so that float rounding never culls a real contact.
 constexpr double kCoarseSlackM = 1e-4;
+// Every float test against the exact geometry (arm capsule against obstacle piece or plane, self
+// pairs in lanes) pads the arm's radius by this, so that float rounding can only make a check
+// conservative. The rounding it covers: positions < 2 m from the base carry ~1e-7 m per float
+// operation, a few 1e-7 m after the six frames of forward kinematics plus ~1.3e-7 m per joint from
+// the float sincos (error ~1e-7 rad, lever < 1.3 m); the squared distance of two segments
+// (terms < 4 m^2) carries ~2.4e-7 m^2, i.e. ~1.2e-6 m at a contact distance of 0.1 m. Together
+// < 3e-6 m; PrimitiveChecker.NeverFreeInContact checks configurations bisected to within 1e-9 m
+// of contact.
+constexpr double kFloatPadM = 1e-5;
 
 inline F4 Splat(float v) { return F4{v, v, v, v}; }
 inline F4 Min(F4 a, F4 b) { return a < b ? a : b; }
@@ -209,10 +218,6 @@ struct PrimitiveChecker::Impl {
   // Capsule pairs (indices into `all`, the capsules in body order) that must not touch.
   std::vector<ArmCapsule> all;
   std::vector<std::pair<int, int>> self_pairs;
-  // self_pairs in groups of 4: 4 first capsules then 4 second ones; padded with a pair of far
-  // apart capsules.
-  std::vector<int> self_lanes;
-  std::vector<float> cap_soa;  // scratch, see Free()
   std::vector<HalfSpace> planes;
   // planes_of[c]: the planes capsule c of `all` can reach in some configuration (per-link reach
   // culling, Botterill et al. 2017 section 3.4: the others are never tested for it).
