@@ -158,18 +158,6 @@ inline void SinCos4(F4 x, F4* s, F4* c) {
   *c = neg_c ? -cc : cc;
 }
 
-// A link frame per lane (columns and origin).
-struct Frame4 {
-  F4 x[3], y[3], z[3], p[3];
-};
-
-// Lanes where the lane boxes (lo, hi per axis) overlap box b (scalars).
-inline unsigned LanesOverlap(const F4 lo[3], const F4 hi[3], const float blo[3],
-                             const float bhi[3]) {
-  return Bits((lo[0] <= Splat(bhi[0])) & (hi[0] >= Splat(blo[0])) & (lo[1] <= Splat(bhi[1])) &
-              (hi[1] >= Splat(blo[1])) & (lo[2] <= Splat(bhi[2])) & (hi[2] >= Splat(blo[2])));
-}
-
 // An obstacle piece (a capsule; a sphere when a == b).
 struct Piece {
   Eigen::Vector3d a, b;
