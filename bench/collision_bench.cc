@@ -8,7 +8,8 @@
 // resolution (IsMotionFree; what a planner asks): between consecutive free configurations (mostly
 // colliding, early exit) or along free motions (every sample checked: a direct path; each from a
 // free configuration a quarter of the way to the next one, kept if free). BM_AreFree checks the
-// configurations in batches of 64 (AreFree; the primitive checker works 4 lanes at a time).
+// configurations in batches of 64 (AreFree; the primitive checker works 8 lanes at a time with
+// AVX2, 4 otherwise).
 // `baseline_simd:1` variants run the primitive checker's baseline SIMD code (SSE2) instead of the
 // AVX2 code it picks on a CPU that has AVX2.
 // Counters: ns_per_check, free_fraction, checks_per_motion (and, on free motions,
