@@ -14,7 +14,9 @@
 
 // The 8-lane functions are only ever inlined into the AVX2 entry point (flatten), so the note
 // that passing 32-byte vectors without AVX changes the ABI does not apply.
+#if !defined(__clang__)
 #pragma GCC diagnostic ignored "-Wpsabi"
+#endif
 
 namespace vb::plan {
 namespace {

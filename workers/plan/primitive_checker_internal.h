@@ -265,6 +265,7 @@ struct PrimitiveChecker::Impl {
 // True on an x86-64 CPU with AVX2 and FMA (the checker's fast code paths).
 inline bool CpuHasAvx2Fma() {
 #if defined(__x86_64__) && defined(__GNUC__)
+  __builtin_cpu_init();  // a checker may be built before libgcc's own initialiser has run
   return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
 #else
   return false;
