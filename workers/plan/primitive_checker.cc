@@ -10,6 +10,11 @@
 #include <limits>
 #include <vector>
 
+// The 8-lane helpers (SegTouchesSet8) are only ever inlined, into IsFree's AVX2 variant or as
+// SSE halves, so GCC's note that 32-byte vectors without AVX change the ABI does not apply.
+#if !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wpsabi"
+#endif
 #include "workers/plan/primitive_checker_internal.h"
 
 namespace vb::plan {
@@ -175,6 +180,7 @@ void PrimitiveChecker::Impl::Place(const Joints& q, bool float_trig) {
   }
 }
 
+template <bool kWide>
 bool PrimitiveChecker::Impl::SegHitsObstacles(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double r) const {
   const ArmSeg s = PrepareSeg(a, b, r);
   for (size_t g = 0; g < top.size(); ++g) {
@@ -186,7 +192,7 @@ bool PrimitiveChecker::Impl::SegHitsObstacles(const Eigen::Vector3d& a, const Ei
       while (ls) {
         const int l = n * kLeaf + __builtin_ctz(ls);
         ls &= ls - 1;
-            if (SegVsSet(s, leaves[l])) return true;
+            if (kWide ? SegTouchesSet8(s, leaves[l]) : SegVsSet(s, leaves[l]) != 0) return true;
       }
     }
   }
@@ -201,6 +207,7 @@ bool PrimitiveChecker::Impl::SegHitsPlanes(size_t c, const Eigen::Vector3d& a, c
   return false;
 }
 
+template <bool kWide>
 bool PrimitiveChecker::Impl::Free(const Joints& q) {
   if (base_blocked) return false;
   Place(q, /*float_trig=*/true);
@@ -209,7 +216,9 @@ bool PrimitiveChecker::Impl::Free(const Joints& q) {
     if (SegHitsPlanes(i, world_a[i], world_b[i], all[i].radius + kFloatPadM)) return false;
   }
   for (size_t i = 0; i < moving.size(); ++i) {
-    if (SegHitsObstacles(world_a[i], world_b[i], all[i].radius + kFloatPadM)) return false;
+    if (SegHitsObstacles<kWide>(world_a[i], world_b[i], all[i].radius + kFloatPadM)) {
+      return false;
+    }
   }
   // Self-collision pairs: bounding spheres about the midpoints first (most pairs are far apart),
   // then the distance in double. The positions come from float sincos, hence the padding (as for
@@ -263,14 +272,14 @@ namespace {
 // SelectLanes in primitive_checker_batch.cc). FMA changes the double forward kinematics by an
 // ulp and the float tests by an ulp or so: far below the float rounding IsFree already accepts.
 __attribute__((flatten)) bool FreeBaseline(PrimitiveChecker::Impl& m, const Joints& q) {
-  return m.Free(q);
+  return m.Free<false>(q);
 }
 
 #if defined(__x86_64__) && defined(__GNUC__)
 #define VB_PRIM_HAVE_AVX2 1
 __attribute__((target("avx2,fma"), flatten)) bool FreeAvx2(PrimitiveChecker::Impl& m,
                                                           const Joints& q) {
-  return m.Free(q);
+  return m.Free<true>(q);
 }
 #endif
 

@@ -10,13 +10,13 @@
 #include <type_traits>
 
 #include "workers/plan/primitive_checker.h"
-#include "workers/plan/primitive_checker_internal.h"
 
 // The 8-lane functions are only ever inlined into the AVX2 entry point (flatten), so the note
 // that passing 32-byte vectors without AVX changes the ABI does not apply.
 #if !defined(__clang__)
 #pragma GCC diagnostic ignored "-Wpsabi"
 #endif
+#include "workers/plan/primitive_checker_internal.h"
 
 namespace vb::plan {
 namespace {
@@ -53,39 +53,6 @@ struct Lanes<8> {
     return out;
   }
 };
-
-template <class V>
-inline V SplatV(float v) {
-  return V{} + v;
-}
-template <class V>
-inline V Clamp01V(V x) {
-  const V zero = SplatV<V>(0.f), one = SplatV<V>(1.f);
-  x = x > zero ? x : zero;
-  return x < one ? x : one;
-}
-
-// CapsulesTouch of primitive_checker_internal.h, for any lane count.
-template <class V, class M>
-inline M Touch(V p0x, V p0y, V p0z, V d1x, V d1y, V d1z, V a, V inv_a, V q0x, V q0y, V q0z, V d2x,
-               V d2y, V d2z, V e, V inv_e, V rr) {
-  const V rx = p0x - q0x, ry = p0y - q0y, rz = p0z - q0z;
-  const V b = d1x * d2x + d1y * d2y + d1z * d2z;
-  const V c = d1x * rx + d1y * ry + d1z * rz;
-  const V f = d2x * rx + d2y * ry + d2z * rz;
-  const V denom = a * e - b * b;
-  const M skew = denom > SplatV<V>(1e-12f);
-  V sp = skew ? Clamp01V((b * f - c * e) / (skew ? denom : SplatV<V>(1.f))) : SplatV<V>(0.f);
-  sp = e > SplatV<V>(0.f) ? sp : Clamp01V(-c * inv_a);
-  const V tn = (b * sp + f) * inv_e;
-  const V s_lo = Clamp01V(-c * inv_a), s_hi = Clamp01V((b - c) * inv_a);
-  sp = tn < SplatV<V>(0.f) ? s_lo : (tn > SplatV<V>(1.f) ? s_hi : sp);
-  const V t = Clamp01V(tn);
-  const V ex = rx + d1x * sp - d2x * t;
-  const V ey = ry + d1y * sp - d2y * t;
-  const V ez = rz + d1z * sp - d2z * t;
-  return ex * ex + ey * ey + ez * ez < rr * rr;
-}
 
 // SinCos4 of primitive_checker_internal.h, for any lane count.
 template <class V, class M>
@@ -177,7 +144,7 @@ inline bool SegTouchesLeaf(const LaneSeg<W>& s, const CapsuleSet& l) {
   using V = typename Lanes<W>::V;
   using M = typename Lanes<W>::M;
   for (int h = 0; h < 8 / W; ++h) {
-    if (Lanes<W>::ToBits(Touch<V, M>(s.p0x, s.p0y, s.p0z, s.d1x, s.d1y, s.d1z, s.a, s.inv_a,
+    if (Lanes<W>::ToBits(CapsulesTouchT<V, M>(s.p0x, s.p0y, s.p0z, s.d1x, s.d1y, s.d1z, s.a, s.inv_a,
                                      Lanes<W>::Leaf(l.q0x, h), Lanes<W>::Leaf(l.q0y, h),
                                      Lanes<W>::Leaf(l.q0z, h), Lanes<W>::Leaf(l.dx, h),
                                      Lanes<W>::Leaf(l.dy, h), Lanes<W>::Leaf(l.dz, h),
@@ -231,7 +198,7 @@ unsigned CapsuleLanesHit(Impl& m, size_t c, unsigned lanes, bool stop_at_first) 
         if (!todo) continue;
         // The leaf's bounding capsule against all lanes at once.
         const std::array<float, 9>& lb = m.leaf_caps[leaf];
-        todo &= Lanes<W>::ToBits(Touch<V, M>(
+        todo &= Lanes<W>::ToBits(CapsulesTouchT<V, M>(
             pl.p[0], pl.p[1], pl.p[2], pl.d[0], pl.d[1], pl.d[2], len2, inv_len2,
             SplatV<V>(lb[0]), SplatV<V>(lb[1]), SplatV<V>(lb[2]), SplatV<V>(lb[3]),
             SplatV<V>(lb[4]), SplatV<V>(lb[5]), SplatV<V>(lb[6]), SplatV<V>(lb[7]),
@@ -299,7 +266,7 @@ unsigned CollidingLanes(Impl& m, const Joints* q, int count, bool coherent, bool
     if (!(Lanes<W>::ToBits(gx * gx + gy * gy + gz * gz < reach * reach) & all_lanes & ~hit)) {
       continue;
     }
-    hit |= Lanes<W>::ToBits(Touch<V, M>(
+    hit |= Lanes<W>::ToBits(CapsulesTouchT<V, M>(
                x.p[0], x.p[1], x.p[2], x.d[0], x.d[1], x.d[2], SplatV<V>(m.cap_len2[i]),
                SplatV<V>(m.cap_inv_len2[i]), y.p[0], y.p[1], y.p[2], y.d[0], y.d[1], y.d[2],
                SplatV<V>(m.cap_len2[j]), SplatV<V>(m.cap_inv_len2[j]),

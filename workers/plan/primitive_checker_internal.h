@@ -98,28 +98,47 @@ inline unsigned SegVsBoxes(const QueryBox& s, const BoxSet& set) {
   return bits;
 }
 
+// V splatted from a float, and clamped to [0, 1], for any lane count.
+template <class V>
+inline V SplatV(float v) {
+  return V{} + v;
+}
+template <class V>
+inline V Clamp01V(V x) {
+  const V zero = SplatV<V>(0.f), one = SplatV<V>(1.f);
+  x = x > zero ? x : zero;
+  return x < one ? x : one;
+}
+
 // Lanes where capsule (p0 + s d1, s in [0, 1]) comes within rr of capsule (q0 + t d2): closest
 // points of two segments (Ericson, Real-Time Collision Detection, 5.1.9), branch-free. a = |d1|^2,
-// e = |d2|^2, inv_* their inverses or 0 for a sphere.
+// e = |d2|^2, inv_* their inverses or 0 for a sphere. V: F4 or F8 (8 lanes, in AVX2 code).
+template <class V, class M>
+inline M CapsulesTouchT(V p0x, V p0y, V p0z, V d1x, V d1y, V d1z, V a, V inv_a, V q0x, V q0y,
+                        V q0z, V d2x, V d2y, V d2z, V e, V inv_e, V rr) {
+  const V rx = p0x - q0x, ry = p0y - q0y, rz = p0z - q0z;
+  const V b = d1x * d2x + d1y * d2y + d1z * d2z;
+  const V c = d1x * rx + d1y * ry + d1z * rz;
+  const V f = d2x * rx + d2y * ry + d2z * rz;
+  const V denom = a * e - b * b;
+  const M skew = denom > SplatV<V>(1e-12f);
+  V sp = skew ? Clamp01V((b * f - c * e) / (skew ? denom : SplatV<V>(1.f))) : SplatV<V>(0.f);
+  // A sphere second (e = 0): the closest point of the first segment to its centre.
+  sp = e > SplatV<V>(0.f) ? sp : Clamp01V(-c * inv_a);
+  const V tn = (b * sp + f) * inv_e;
+  const V s_lo = Clamp01V(-c * inv_a), s_hi = Clamp01V((b - c) * inv_a);
+  sp = tn < SplatV<V>(0.f) ? s_lo : (tn > SplatV<V>(1.f) ? s_hi : sp);
+  const V t = Clamp01V(tn);
+  const V ex = rx + d1x * sp - d2x * t;
+  const V ey = ry + d1y * sp - d2y * t;
+  const V ez = rz + d1z * sp - d2z * t;
+  return ex * ex + ey * ey + ez * ez < rr * rr;
+}
+
 inline I4 CapsulesTouch(F4 p0x, F4 p0y, F4 p0z, F4 d1x, F4 d1y, F4 d1z, F4 a, F4 inv_a, F4 q0x,
                         F4 q0y, F4 q0z, F4 d2x, F4 d2y, F4 d2z, F4 e, F4 inv_e, F4 rr) {
-  const F4 rx = p0x - q0x, ry = p0y - q0y, rz = p0z - q0z;
-  const F4 b = d1x * d2x + d1y * d2y + d1z * d2z;
-  const F4 c = d1x * rx + d1y * ry + d1z * rz;
-  const F4 f = d2x * rx + d2y * ry + d2z * rz;
-  const F4 denom = a * e - b * b;
-  const I4 skew = denom > Splat(1e-12f);
-  F4 sp = skew ? Clamp01((b * f - c * e) / (skew ? denom : Splat(1.f))) : Splat(0.f);
-  // A sphere second (e = 0): the closest point of the first segment to its centre.
-  sp = e > Splat(0.f) ? sp : Clamp01(-c * inv_a);
-  const F4 tn = (b * sp + f) * inv_e;
-  const F4 s_lo = Clamp01(-c * inv_a), s_hi = Clamp01((b - c) * inv_a);
-  sp = tn < Splat(0.f) ? s_lo : (tn > Splat(1.f) ? s_hi : sp);
-  const F4 t = Clamp01(tn);
-  const F4 ex = rx + d1x * sp - d2x * t;
-  const F4 ey = ry + d1y * sp - d2y * t;
-  const F4 ez = rz + d1z * sp - d2z * t;
-  return ex * ex + ey * ey + ez * ez < rr * rr;
+  return CapsulesTouchT<F4, I4>(p0x, p0y, p0z, d1x, d1y, d1z, a, inv_a, q0x, q0y, q0z, d2x, d2y,
+                                d2z, e, inv_e, rr);
 }
 
 // Lanes of `set` that arm segment s touches (bit k for lane k).
@@ -132,6 +151,24 @@ inline unsigned SegVsSet(const ArmSeg& s, const CapsuleSet& l) {
             << (4 * h);
   }
   return bits;
+}
+
+// Whether arm segment s touches any capsule of `set`, the 8 in one 8-lane test: one AVX stream in
+// code compiled for AVX2 (IsFree's AVX2 variant), two SSE halves otherwise.
+inline bool SegTouchesSet8(const ArmSeg& s, const CapsuleSet& l) {
+  const auto wide = [](F4 x) { return F8(__builtin_shufflevector(x, x, 0, 1, 2, 3, 0, 1, 2, 3)); };
+  const auto load = [](const F4* v) {
+    F8 out;
+    __builtin_memcpy(&out, v, sizeof(out));
+    return out;
+  };
+  const I8 touch = CapsulesTouchT<F8, I8>(
+      wide(s.p0x), wide(s.p0y), wide(s.p0z), wide(s.d1x), wide(s.d1y), wide(s.d1z), wide(s.a),
+      wide(s.inv_a), load(l.q0x), load(l.q0y), load(l.q0z), load(l.dx), load(l.dy), load(l.dz),
+      load(l.e), load(l.inv_e), wide(s.r) + load(l.rad));
+  const I4 any = __builtin_shufflevector(touch, touch, 0, 1, 2, 3) |
+                 __builtin_shufflevector(touch, touch, 4, 5, 6, 7);
+  return Bits(any) != 0;
 }
 
 // sin and cos of four floats (Cephes' sinf/cosf: reduction by pi/2 in three parts, minimax
@@ -226,9 +263,12 @@ struct PrimitiveChecker::Impl {
   // are in float anyway) instead of libm's (for Clearance, exact in double).
   void Fk(const Joints& q, std::array<Frame, 7>& f, bool float_trig) const;
   void Place(const Joints& q, bool float_trig);
+  // kWide: leaves tested 8 pieces at once (SegTouchesSet8; for the AVX2 variant).
+  template <bool kWide>
   bool SegHitsObstacles(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double r) const;
   bool SegHitsPlanes(size_t c, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                      double r) const;
+  template <bool kWide>
   bool Free(const Joints& q);
   double SegClearance(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double r,
                       double best) const;
