@@ -8,7 +8,10 @@
 // resolution (IsMotionFree; what a planner asks): between consecutive free configurations (mostly
 // colliding, early exit) or along free motions (every sample checked: a direct path; each from a
 // free configuration a quarter of the way to the next one, kept if free). BM_AreFree checks the
-// configurations in batches of 64 (AreFree; the primitive checker works 4 lanes at a time).
+// configurations in batches of 64 (AreFree; the primitive checker works 8 lanes at a time with
+// AVX2, 4 otherwise).
+// `baseline_simd:1` variants run the primitive checker's baseline SIMD code (SSE2) instead of the
+// AVX2 code it picks on a CPU that has AVX2.
 // Counters: ns_per_check, free_fraction, checks_per_motion (and, on free motions,
 // checks_per_motion_reach_1_2m: the samples of the former single-reach MotionSteps). Run:
 //   build/bench/vb_collision_bench --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
@@ -77,9 +80,15 @@ const Fixture& GetFixture() {
 
 enum Kind { kPrimitive = 0, kFclPrimitives = 1, kFclMesh = 2 };
 
+// kind: checker kind; baseline_simd: the primitive checker's baseline SIMD code even where the
+// CPU has AVX2.
 std::unique_ptr<CollisionChecker> Make(int kind, const RobotModel& robot,
-                                       const CollisionScene& scene) {
-  if (kind == kPrimitive) return MakePrimitiveChecker(robot, scene);
+                                       const CollisionScene& scene, bool baseline_simd = false) {
+  if (kind == kPrimitive) {
+    auto checker = std::make_unique<PrimitiveChecker>(robot, scene);
+    if (baseline_simd) checker->UseBaselineSimd();
+    return checker;
+  }
   return MakeFclChecker(robot, scene, kind == kFclMesh ? FclMode::kMesh : FclMode::kPrimitives);
 }
 
@@ -105,11 +114,14 @@ void BM_Check(benchmark::State& state) {
   state.counters["free_fraction"] = static_cast<double>(free) / std::max<int64_t>(1, checks);
 }
 
-// state.range(0): checker kind, range(1): 0 free configurations, 1 also colliding ones.
+// state.range(0): checker kind, range(1): 0 random configurations, 1 free ones only; range(2):
+// 1 for the baseline SIMD code.
 void BM_AreFree(benchmark::State& state) {
   const Fixture& f = GetFixture();
   std::vector<std::unique_ptr<CollisionChecker>> checkers;
-  for (const CollisionScene& scene : f.scenes) checkers.push_back(Make(state.range(0), f.robot, scene));
+  for (const CollisionScene& scene : f.scenes) {
+    checkers.push_back(Make(state.range(0), f.robot, scene, state.range(2) == 1));
+  }
   const bool free_only = state.range(1) == 1;
   constexpr size_t kBatch = 64;
   bool out[kBatch];
@@ -132,7 +144,7 @@ void BM_AreFree(benchmark::State& state) {
 
 // state.range(0): checker kind; range(1): 0 motions between consecutive free configurations of
 // a scene, 1 free motions only, 2 free motions with IsFree at each sample (unbatched, the same
-// samples). 1 cm resolution.
+// samples). 1 cm resolution. range(2): 1 for the baseline SIMD code.
 bool MotionByIsFree(CollisionChecker& checker, const Joints& a, const Joints& b) {
   const int n = MotionSteps(a, b, 0.01, checker.lever_m());
   for (int k = 0; k <= n; ++k) {
@@ -144,7 +156,9 @@ bool MotionByIsFree(CollisionChecker& checker, const Joints& a, const Joints& b)
 void BM_Motion(benchmark::State& state) {
   const Fixture& f = GetFixture();
   std::vector<std::unique_ptr<CollisionChecker>> checkers;
-  for (const CollisionScene& scene : f.scenes) checkers.push_back(Make(state.range(0), f.robot, scene));
+  for (const CollisionScene& scene : f.scenes) {
+    checkers.push_back(Make(state.range(0), f.robot, scene, state.range(2) == 1));
+  }
   const bool free_only = state.range(1) >= 1, by_is_free = state.range(1) == 2;
   int64_t motions = 0, free = 0, uniform_checks = 0;
   size_t k = 0;
@@ -187,17 +201,21 @@ BENCHMARK(BM_Check)
     ->Args({kFclMesh, 0})
     ->Args({kFclMesh, 1});
 BENCHMARK(BM_AreFree)
-    ->ArgNames({"checker", "free_only"})
-    ->Args({kPrimitive, 0})
-    ->Args({kPrimitive, 1});
+    ->ArgNames({"checker", "free_only", "baseline_simd"})
+    ->Args({kPrimitive, 0, 0})
+    ->Args({kPrimitive, 1, 0})
+    ->Args({kPrimitive, 0, 1})
+    ->Args({kPrimitive, 1, 1});
 BENCHMARK(BM_Motion)
-    ->ArgNames({"checker", "free_only"})
-    ->Args({kPrimitive, 0})
-    ->Args({kPrimitive, 1})
-    ->Args({kPrimitive, 2})
-    ->Args({kFclPrimitives, 0})
-    ->Args({kFclPrimitives, 1})
-    ->Args({kFclMesh, 0});
+    ->ArgNames({"checker", "free_only", "baseline_simd"})
+    ->Args({kPrimitive, 0, 0})
+    ->Args({kPrimitive, 1, 0})
+    ->Args({kPrimitive, 2, 0})
+    ->Args({kPrimitive, 0, 1})
+    ->Args({kPrimitive, 1, 1})
+    ->Args({kFclPrimitives, 0, 0})
+    ->Args({kFclPrimitives, 1, 0})
+    ->Args({kFclMesh, 0, 0});
 
 }  // namespace
 }  // namespace vb::plan

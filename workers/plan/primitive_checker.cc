@@ -1,4 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
+// Building the primitive checker, and the checks of one configuration (IsFree in float, Clearance
+// in double). The batched checks are in primitive_checker_batch.cc.
 #include "workers/plan/primitive_checker.h"
 
 #include <algorithm>
@@ -6,177 +8,19 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
-#include <numeric>
 #include <vector>
+
+// The 8-lane helpers (SegTouchesSet8) are only ever inlined, into IsFree's AVX2 variant or as
+// SSE halves, so GCC's note that 32-byte vectors without AVX change the ABI does not apply.
+#if !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wpsabi"
+#endif
+#include "workers/plan/primitive_checker_internal.h"
 
 namespace vb::plan {
 namespace {
 
-// Four float lanes: SSE2 on x86-64, NEON on arm64, scalar code elsewhere. Leaves hold 8
-// obstacles, processed as two halves.
-typedef float F4 __attribute__((vector_size(16)));
-typedef int32_t I4 __attribute__((vector_size(16)));
-constexpr int kLeaf = 8;
-constexpr int kHalves = kLeaf / 4;
-// Padding lanes sit here with radius 0: never within reach of the arm.
-constexpr float kFarAway = 1e6f;
-// Coarse spheres are inflated by this so that float rounding never culls a real contact.
-constexpr double kCoarseSlackM = 1e-4;
-
-inline F4 Splat(float v) { return F4{v, v, v, v}; }
-inline F4 Min(F4 a, F4 b) { return a < b ? a : b; }
-inline F4 Max(F4 a, F4 b) { return a > b ? a : b; }
-inline F4 Clamp01(F4 x) { return Min(Max(x, Splat(0.f)), Splat(1.f)); }
-inline unsigned Bits(I4 m) {
-#if defined(__SSE__)
-  return static_cast<unsigned>(__builtin_ia32_movmskps((F4)m));
-#else
-  return (m[0] ? 1u : 0u) | (m[1] ? 2u : 0u) | (m[2] ? 4u : 0u) | (m[3] ? 8u : 0u);
-#endif
-}
-
-// Eight capsules, SoA: q0 + t d for t in [0, 1], e = |d|^2, inv_e = 1/e (0 for a sphere),
-// rad = radius (+ margin). Obstacle pieces in a leaf, or the bounding capsules of a node's leaves
-// or of a group of nodes: long thin canes are bounded far more tightly by capsules than by spheres.
-struct CapsuleSet {
-  F4 q0x[kHalves], q0y[kHalves], q0z[kHalves];
-  F4 dx[kHalves], dy[kHalves], dz[kHalves];
-  F4 e[kHalves], inv_e[kHalves], rad[kHalves];
-};
-
-// Eight axis-aligned boxes, SoA: the coarse levels. A box test is a handful of compares, several
-// times cheaper than a capsule test, and canes (mostly along x or z) fill their boxes well.
-struct BoxSet {
-  F4 lox[kHalves], loy[kHalves], loz[kHalves], hix[kHalves], hiy[kHalves], hiz[kHalves];
-};
-
-// An axis-aligned box splatted over the lanes (a query against a BoxSet).
-struct QueryBox {
-  F4 lox, loy, loz, hix, hiy, hiz;
-};
-
-// One arm capsule in the base frame, prepared for the lanes.
-struct ArmSeg {
-  F4 p0x, p0y, p0z, d1x, d1y, d1z, a, inv_a, r;
-  QueryBox box;  // its bounding box
-};
-
-ArmSeg PrepareSeg(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double r) {
-  const Eigen::Vector3d d = b - a;
-  const double len2 = d.squaredNorm();
-  const Eigen::Vector3d lo = a.cwiseMin(b).array() - r, hi = a.cwiseMax(b).array() + r;
-  return ArmSeg{Splat(a.x()), Splat(a.y()), Splat(a.z()),
-                Splat(d.x()), Splat(d.y()), Splat(d.z()),
-                Splat(len2),  Splat(len2 > 0 ? 1.0 / len2 : 0.0), Splat(r),
-                QueryBox{Splat(lo.x()), Splat(lo.y()), Splat(lo.z()),
-                         Splat(hi.x()), Splat(hi.y()), Splat(hi.z())}};
-}
-
-// Lanes of `set` whose box overlaps the query box.
-inline unsigned SegVsBoxes(const QueryBox& s, const BoxSet& set) {
-  unsigned bits = 0;
-  for (int h = 0; h < kHalves; ++h) {
-    const I4 overlap = (set.lox[h] <= s.hix) & (set.hix[h] >= s.lox) & (set.loy[h] <= s.hiy) &
-                       (set.hiy[h] >= s.loy) & (set.loz[h] <= s.hiz) & (set.hiz[h] >= s.loz);
-    bits |= Bits(overlap) << (4 * h);
-  }
-  return bits;
-}
-
-// Lanes where capsule (p0 + s d1, s in [0, 1]) comes within rr of capsule (q0 + t d2): closest
-// points of two segments (Ericson, Real-Time Collision Detection, 5.1.9), branch-free. a = |d1|^2,
-// e = |d2|^2, inv_* their inverses or 0 for a sphere.
-inline I4 CapsulesTouch(F4 p0x, F4 p0y, F4 p0z, F4 d1x, F4 d1y, F4 d1z, F4 a, F4 inv_a, F4 q0x,
-                        F4 q0y, F4 q0z, F4 d2x, F4 d2y, F4 d2z, F4 e, F4 inv_e, F4 rr) {
-  const F4 rx = p0x - q0x, ry = p0y - q0y, rz = p0z - q0z;
-  const F4 b = d1x * d2x + d1y * d2y + d1z * d2z;
-  const F4 c = d1x * rx + d1y * ry + d1z * rz;
-  const F4 f = d2x * rx + d2y * ry + d2z * rz;
-  const F4 denom = a * e - b * b;
-  const I4 skew = denom > Splat(1e-12f);
-  F4 sp = skew ? Clamp01((b * f - c * e) / (skew ? denom : Splat(1.f))) : Splat(0.f);
-  // A sphere second (e = 0): the closest point of the first segment to its centre.
-  sp = e > Splat(0.f) ? sp : Clamp01(-c * inv_a);
-  const F4 tn = (b * sp + f) * inv_e;
-  const F4 s_lo = Clamp01(-c * inv_a), s_hi = Clamp01((b - c) * inv_a);
-  sp = tn < Splat(0.f) ? s_lo : (tn > Splat(1.f) ? s_hi : sp);
-  const F4 t = Clamp01(tn);
-  const F4 ex = rx + d1x * sp - d2x * t;
-  const F4 ey = ry + d1y * sp - d2y * t;
-  const F4 ez = rz + d1z * sp - d2z * t;
-  return ex * ex + ey * ey + ez * ez < rr * rr;
-}
-
-// Lanes of `set` that arm segment s touches (bit k for lane k).
-inline unsigned SegVsSet(const ArmSeg& s, const CapsuleSet& l) {
-  unsigned bits = 0;
-  for (int h = 0; h < kHalves; ++h) {
-    bits |= Bits(CapsulesTouch(s.p0x, s.p0y, s.p0z, s.d1x, s.d1y, s.d1z, s.a, s.inv_a, l.q0x[h],
-                               l.q0y[h], l.q0z[h], l.dx[h], l.dy[h], l.dz[h], l.e[h], l.inv_e[h],
-                               s.r + l.rad[h]))
-            << (4 * h);
-  }
-  return bits;
-}
-
-// sin and cos of four floats (Cephes' sinf/cosf: reduction by pi/2 in three parts, minimax
-// polynomials on [-pi/4, pi/4]); absolute error ~1e-7 for |x| < 100, far below the float
-// rounding of the positions. Joint values are within +-2 pi.
-inline void SinCos4(F4 x, F4* s, F4* c) {
-  const F4 jf = __builtin_convertvector(
-      __builtin_convertvector(x * Splat(0.63661977236758134f) +
-                                  (x >= Splat(0.f) ? Splat(0.5f) : Splat(-0.5f)), I4), F4);
-  const I4 quadrant = __builtin_convertvector(jf, I4) & I4{3, 3, 3, 3};
-  const F4 y = ((x - jf * Splat(1.5703125f)) - jf * Splat(4.837512969970703125e-4f)) -
-               jf * Splat(7.54978995489188216e-8f);
-  const F4 z = y * y;
-  const F4 sy = y + y * z * (Splat(-1.6666654611e-1f) +
-                             z * (Splat(8.3321608736e-3f) + z * Splat(-1.9515295891e-4f)));
-  const F4 cy = Splat(1.f) - Splat(0.5f) * z +
-                z * z * (Splat(4.166664568298827e-2f) +
-                         z * (Splat(-1.388731625493765e-3f) + z * Splat(2.443315711809948e-5f)));
-  const I4 swap = (quadrant & I4{1, 1, 1, 1}) != I4{0, 0, 0, 0};
-  const I4 neg_s = (quadrant == I4{2, 2, 2, 2}) | (quadrant == I4{3, 3, 3, 3});
-  const I4 neg_c = (quadrant == I4{1, 1, 1, 1}) | (quadrant == I4{2, 2, 2, 2});
-  const F4 ss = swap ? cy : sy, cc = swap ? sy : cy;
-  *s = neg_s ? -ss : ss;
-  *c = neg_c ? -cc : cc;
-}
-
-// A link frame per lane (columns and origin).
-struct Frame4 {
-  F4 x[3], y[3], z[3], p[3];
-};
-
-// Lanes where the lane boxes (lo, hi per axis) overlap box b (scalars).
-inline unsigned LanesOverlap(const F4 lo[3], const F4 hi[3], const float blo[3],
-                             const float bhi[3]) {
-  return Bits((lo[0] <= Splat(bhi[0])) & (hi[0] >= Splat(blo[0])) & (lo[1] <= Splat(bhi[1])) &
-              (hi[1] >= Splat(blo[1])) & (lo[2] <= Splat(bhi[2])) & (hi[2] >= Splat(blo[2])));
-}
-
-struct Piece {
-  Eigen::Vector3d a, b;
-  double rad;  // radius + margin
-};
-
-// A bounding capsule (a sphere when a == b).
-struct Bound {
-  Eigen::Vector3d a, b;
-  double radius;
-};
-
-struct ArmCapsule {
-  int frame;
-  int body;
-  Eigen::Vector3d a, b;  // in the link frame
-  double radius;
-};
-
-// A link frame as columns and origin (the rotation is never needed as a matrix).
-struct Frame {
-  Eigen::Vector3d x, y, z, p;
-};
+using namespace prim;
 
 // The capsule around spheres (centre, radius) and capsules given by their end spheres (a capsule
 // lies inside a capsule that holds both its end spheres: the distance to a segment is convex).
@@ -295,321 +139,160 @@ double CapsuleCapsuleGap(const Eigen::Vector3d& a0, const Eigen::Vector3d& a1, d
 
 }  // namespace
 
-struct PrimitiveChecker::Impl {
-  std::array<double, 6> dh_a{}, dh_d{}, dh_ca{}, dh_sa{};
-  std::vector<ArmCapsule> moving;   // frame > 0, distal first (most likely to touch the vine)
-  std::vector<ArmCapsule> fixed;    // frame 0
-  // Capsule pairs (indices into `all`, the capsules in body order) that must not touch.
-  std::vector<ArmCapsule> all;
-  std::vector<std::pair<int, int>> self_pairs;
-  // self_pairs in groups of 4: 4 first capsules then 4 second ones; padded with a pair of far
-  // apart capsules.
-  std::vector<int> self_lanes;
-  std::vector<float> cap_soa;  // scratch, see Free()
-  std::vector<HalfSpace> planes;
-  // planes_of[c]: the planes capsule c of `all` can reach in some configuration (per-link reach
-  // culling, Botterill et al. 2017 section 3.4: the others are never tested for it).
-  std::vector<std::vector<HalfSpace>> planes_of;
-  bool base_blocked = false;
+using namespace prim;
 
-  std::vector<Piece> pieces;        // in leaf order
-  std::vector<Bound> leaf_bounds;   // one per leaf
-  std::vector<CapsuleSet> leaves;
-  std::vector<BoxSet> node_children;  // per node: its leaves' boxes
-  std::vector<BoxSet> top;            // per group of 8 nodes: the nodes' boxes
-
-  // Per-configuration scratch: the base-frame ends of every capsule in `all`.
-  std::vector<Eigen::Vector3d> world_a, world_b;
-
-  void Fk(const Joints& q, std::array<Frame, 7>& f) const {
-    f[0] = Frame{Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(), Eigen::Vector3d::UnitZ(),
-                 Eigen::Vector3d::Zero()};
-    // Standard DH, Rz(q) Tz(d) Tx(a) Rx(alpha), applied to the columns of the previous frame.
-    for (int i = 0; i < 6; ++i) {
-      const double ct = std::cos(q[i]), st = std::sin(q[i]);
-      const Frame& in = f[i];
-      Frame& out = f[i + 1];
-      out.x = ct * in.x + st * in.y;
-      const Eigen::Vector3d w = ct * in.y - st * in.x;
-      out.y = dh_ca[i] * w + dh_sa[i] * in.z;
-      out.z = dh_ca[i] * in.z - dh_sa[i] * w;
-      out.p = in.p + dh_a[i] * out.x + dh_d[i] * in.z;
-    }
+void PrimitiveChecker::Impl::Fk(const Joints& q, std::array<Frame, 7>& f,
+                                bool float_trig) const {
+  double c[6], sn[6];
+  if (float_trig) {
+    F4 s_lo, c_lo, s_hi, c_hi;
+    SinCos4(F4{float(q[0]), float(q[1]), float(q[2]), float(q[3])}, &s_lo, &c_lo);
+    SinCos4(F4{float(q[4]), float(q[5]), 0.f, 0.f}, &s_hi, &c_hi);
+    for (int i = 0; i < 4; ++i) c[i] = c_lo[i], sn[i] = s_lo[i];
+    for (int i = 0; i < 2; ++i) c[4 + i] = c_hi[i], sn[4 + i] = s_hi[i];
+  } else {
+    for (int i = 0; i < 6; ++i) c[i] = std::cos(q[i]), sn[i] = std::sin(q[i]);
   }
-
-  void Place(const Joints& q) {
-    std::array<Frame, 7> f;
-    Fk(q, f);
-    for (size_t i = 0; i < all.size(); ++i) {
-      const Frame& fr = f[all[i].frame];
-      const Eigen::Vector3d& a = all[i].a;
-      const Eigen::Vector3d& b = all[i].b;
-      world_a[i] = fr.p + a.x() * fr.x + a.y() * fr.y + a.z() * fr.z;
-      world_b[i] = fr.p + b.x() * fr.x + b.y() * fr.y + b.z() * fr.z;
-    }
+  f[0] = Frame{Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(), Eigen::Vector3d::UnitZ(),
+               Eigen::Vector3d::Zero()};
+  // Standard DH, Rz(q) Tz(d) Tx(a) Rx(alpha), applied to the columns of the previous frame.
+  for (int i = 0; i < 6; ++i) {
+    const double ct = c[i], st = sn[i];
+    const Frame& in = f[i];
+    Frame& out = f[i + 1];
+    out.x = ct * in.x + st * in.y;
+    const Eigen::Vector3d w = ct * in.y - st * in.x;
+    out.y = dh_ca[i] * w + dh_sa[i] * in.z;
+    out.z = dh_ca[i] * in.z - dh_sa[i] * w;
+    out.p = in.p + dh_a[i] * out.x + dh_d[i] * in.z;
   }
+}
 
-  bool SegHitsObstacles(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double r) const {
-    const ArmSeg s = PrepareSeg(a, b, r);
-    for (size_t g = 0; g < top.size(); ++g) {
-      unsigned nodes = SegVsBoxes(s.box, top[g]);
-      while (nodes) {
-        const int n = static_cast<int>(g) * kLeaf + __builtin_ctz(nodes);
-        nodes &= nodes - 1;
-          unsigned ls = SegVsBoxes(s.box, node_children[n]);
-        while (ls) {
-          const int l = n * kLeaf + __builtin_ctz(ls);
-          ls &= ls - 1;
-              if (SegVsSet(s, leaves[l])) return true;
-        }
-      }
-    }
-    return false;
+void PrimitiveChecker::Impl::Place(const Joints& q, bool float_trig) {
+  std::array<Frame, 7> f;
+  Fk(q, f, float_trig);
+  for (size_t i = 0; i < all.size(); ++i) {
+    const Frame& fr = f[all[i].frame];
+    const Eigen::Vector3d& a = all[i].a;
+    const Eigen::Vector3d& b = all[i].b;
+    world_a[i] = fr.p + a.x() * fr.x + a.y() * fr.y + a.z() * fr.z;
+    world_b[i] = fr.p + b.x() * fr.x + b.y() * fr.y + b.z() * fr.z;
   }
+}
 
-  bool SegHitsPlanes(size_t c, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                     double r) const {
-    for (const HalfSpace& h : planes_of[c]) {
-      if (std::max(h.normal.dot(a), h.normal.dot(b)) + r + h.margin_m > h.offset) return true;
-    }
-    return false;
-  }
-
-  bool Free(const Joints& q) {
-    if (base_blocked) return false;
-    Place(q);
-    // `all` lists moving capsules first (distal first), then fixed ones; see the constructor.
-    for (size_t i = 0; i < moving.size(); ++i) {
-      if (SegHitsPlanes(i, world_a[i], world_b[i], all[i].radius)) return false;
-    }
-    for (size_t i = 0; i < moving.size(); ++i) {
-      if (SegHitsObstacles(world_a[i], world_b[i], all[i].radius)) return false;
-    }
-    // Self-collision pairs four at a time, gathered from the placed capsules.
-    // cap[k * stride + i]: p0 xyz, d xyz, |d|^2, 1/|d|^2, radius of capsule i.
-    float* cap = cap_soa.data();
-    const size_t stride = all.size() + 2;
-    for (size_t i = 0; i < all.size(); ++i) {
-      const Eigen::Vector3d d = world_b[i] - world_a[i];
-      const double len2 = d.squaredNorm();
-      const double v[9] = {world_a[i].x(), world_a[i].y(), world_a[i].z(), d.x(), d.y(), d.z(),
-                           len2, len2 > 0 ? 1.0 / len2 : 0.0, all[i].radius};
-      for (size_t k = 0; k < 9; ++k) cap[k * stride + i] = static_cast<float>(v[k]);
-    }
-    for (size_t g = 0; g < self_lanes.size(); g += 8) {
-      F4 x[9], y[9];
-      for (int k = 0; k < 9; ++k) {
-        for (int lane = 0; lane < 4; ++lane) {
-          x[k][lane] = cap[k * stride + self_lanes[g + lane]];
-          y[k][lane] = cap[k * stride + self_lanes[g + 4 + lane]];
-        }
-      }
-      if (Bits(CapsulesTouch(x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7], y[0], y[1], y[2],
-                             y[3], y[4], y[5], y[6], y[7], x[8] + y[8]))) {
-        return false;
-      }
-    }
-    return true;
-  }
-
-  // Batched checks (VAMP's idea: configurations in SIMD lanes). Per lane and per capsule of
-  // `all`: start point, axis, bounding box; lanes are configurations.
-  struct PlacedLanes {
-    F4 p[3], d[3], lo[3], hi[3];
-  };
-  std::vector<PlacedLanes> lanes_scratch;
-  std::vector<float> leaf_lo, leaf_hi;  // leaf boxes, 3 floats per leaf
-  // Leaf bounding capsules: q0 xyz, d xyz, |d|^2, 1/|d|^2 (0 for a sphere), radius + slack.
-  std::vector<std::array<float, 9>> leaf_caps;
-  std::vector<float> cap_half_reach;  // per capsule: half its length plus its radius
-  std::vector<float> cap_len2, cap_inv_len2;  // per capsule of `all` (rigid: configuration-free)
-
-  void PlaceLanes(const Joints* q, int count) {
-    F4 ct[6], st[6];
-    for (int i = 0; i < 6; ++i) {
-      F4 v;
-      for (int l = 0; l < 4; ++l) v[l] = static_cast<float>(q[std::min(l, count - 1)][i]);
-      SinCos4(v, &st[i], &ct[i]);
-    }
-    std::array<Frame4, 7> f;
-    for (int k = 0; k < 3; ++k) {
-      f[0].x[k] = Splat(k == 0), f[0].y[k] = Splat(k == 1), f[0].z[k] = Splat(k == 2);
-      f[0].p[k] = Splat(0.f);
-    }
-    for (int i = 0; i < 6; ++i) {
-      const Frame4& in = f[i];
-      Frame4& out = f[i + 1];
-      const F4 ca = Splat(static_cast<float>(dh_ca[i])), sa = Splat(static_cast<float>(dh_sa[i]));
-      const F4 a = Splat(static_cast<float>(dh_a[i])), d = Splat(static_cast<float>(dh_d[i]));
-      for (int k = 0; k < 3; ++k) {
-        out.x[k] = ct[i] * in.x[k] + st[i] * in.y[k];
-        const F4 w = ct[i] * in.y[k] - st[i] * in.x[k];
-        out.y[k] = ca * w + sa * in.z[k];
-        out.z[k] = ca * in.z[k] - sa * w;
-        out.p[k] = in.p[k] + a * out.x[k] + d * in.z[k];
-      }
-    }
-    for (size_t c = 0; c < all.size(); ++c) {
-      const Frame4& fr = f[all[c].frame];
-      const F4 ax = Splat(all[c].a.x()), ay = Splat(all[c].a.y()), az = Splat(all[c].a.z());
-      const F4 bx = Splat(all[c].b.x()), by = Splat(all[c].b.y()), bz = Splat(all[c].b.z());
-      const F4 r = Splat(all[c].radius + kCoarseSlackM);
-      PlacedLanes& out = lanes_scratch[c];
-      for (int k = 0; k < 3; ++k) {
-        const F4 pa = fr.p[k] + ax * fr.x[k] + ay * fr.y[k] + az * fr.z[k];
-        const F4 pb = fr.p[k] + bx * fr.x[k] + by * fr.y[k] + bz * fr.z[k];
-        out.p[k] = pa;
-        out.d[k] = pb - pa;
-        out.lo[k] = Min(pa, pb) - r;
-        out.hi[k] = Max(pa, pb) + r;
+template <bool kWide>
+bool PrimitiveChecker::Impl::SegHitsObstacles(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double r) const {
+  const ArmSeg s = PrepareSeg(a, b, r);
+  for (size_t g = 0; g < top.size(); ++g) {
+    unsigned nodes = SegVsBoxes(s.box, top[g]);
+    while (nodes) {
+      const int n = static_cast<int>(g) * kLeaf + __builtin_ctz(nodes);
+      nodes &= nodes - 1;
+        unsigned ls = SegVsBoxes(s.box, node_children[n]);
+      while (ls) {
+        const int l = n * kLeaf + __builtin_ctz(ls);
+        ls &= ls - 1;
+            if (kWide ? SegTouchesSet8(s, leaves[l]) : SegVsSet(s, leaves[l]) != 0) return true;
       }
     }
   }
+  return false;
+}
 
-  ArmSeg LaneSeg(size_t c, int lane) const {
-    const PlacedLanes& pl = lanes_scratch[c];
-    return ArmSeg{Splat(pl.p[0][lane]), Splat(pl.p[1][lane]), Splat(pl.p[2][lane]),
-                  Splat(pl.d[0][lane]), Splat(pl.d[1][lane]), Splat(pl.d[2][lane]),
-                  Splat(cap_len2[c]), Splat(cap_inv_len2[c]), Splat(all[c].radius), QueryBox{}};
+bool PrimitiveChecker::Impl::SegHitsPlanes(size_t c, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                   double r) const {
+  for (const HalfSpace& h : planes_of[c]) {
+    if (std::max(h.normal.dot(a), h.normal.dot(b)) + r + h.margin_m > h.offset) return true;
   }
+  return false;
+}
 
-  // Lanes (of `lanes`) where capsule c touches an obstacle piece. The hierarchy is walked once
-  // with the union of the lanes' boxes (lanes should be nearby configurations); leaves are then
-  // tested per lane. With `stop_at_first`, returns after the first colliding lane.
-  unsigned CapsuleLanesHit(size_t c, unsigned lanes, bool stop_at_first) const {
-    const PlacedLanes& pl = lanes_scratch[c];
-    float lo[3], hi[3];
-    for (int k = 0; k < 3; ++k) {
-      lo[k] = std::numeric_limits<float>::infinity(), hi[k] = -lo[k];
-      for (unsigned m = lanes; m; m &= m - 1) {
-        const int l = __builtin_ctz(m);
-        lo[k] = std::min(lo[k], pl.lo[k][l]);
-        hi[k] = std::max(hi[k], pl.hi[k][l]);
-      }
-    }
-    const QueryBox box{Splat(lo[0]), Splat(lo[1]), Splat(lo[2]),
-                       Splat(hi[0]), Splat(hi[1]), Splat(hi[2])};
-    std::array<ArmSeg, 4> segs;
-    unsigned prepared = 0, hit = 0;
-    for (size_t g = 0; g < top.size(); ++g) {
-      unsigned nodes = SegVsBoxes(box, top[g]);
-      while (nodes) {
-        const int n = static_cast<int>(g) * kLeaf + __builtin_ctz(nodes);
-        nodes &= nodes - 1;
-        unsigned ls = SegVsBoxes(box, node_children[n]);
-        while (ls) {
-          const int leaf = n * kLeaf + __builtin_ctz(ls);
-          ls &= ls - 1;
-          unsigned todo = LanesOverlap(pl.lo, pl.hi, &leaf_lo[3 * leaf], &leaf_hi[3 * leaf]) &
-                          lanes & ~hit;
-          if (!todo) continue;
-          // The leaf's bounding capsule against all lanes at once.
-          const std::array<float, 9>& lb = leaf_caps[leaf];
-          todo &= Bits(CapsulesTouch(pl.p[0], pl.p[1], pl.p[2], pl.d[0], pl.d[1], pl.d[2],
-                                     Splat(cap_len2[c]), Splat(cap_inv_len2[c]), Splat(lb[0]),
-                                     Splat(lb[1]), Splat(lb[2]), Splat(lb[3]), Splat(lb[4]),
-                                     Splat(lb[5]), Splat(lb[6]), Splat(lb[7]),
-                                     Splat(lb[8] + all[c].radius)));
-          while (todo) {
-            const int l = __builtin_ctz(todo);
-            todo &= todo - 1;
-            if (!(prepared >> l & 1u)) segs[l] = LaneSeg(c, l), prepared |= 1u << l;
-            if (SegVsSet(segs[l], leaves[leaf])) {
-              hit |= 1u << l;
-              if (stop_at_first || hit == lanes) return hit;
-            }
-          }
-        }
-      }
-    }
-    return hit;
+template <bool kWide>
+bool PrimitiveChecker::Impl::Free(const Joints& q) {
+  if (base_blocked) return false;
+  Place(q, /*float_trig=*/true);
+  // `all` lists moving capsules first (distal first), then fixed ones; see the constructor.
+  for (size_t i = 0; i < moving.size(); ++i) {
+    if (SegHitsPlanes(i, world_a[i], world_b[i], all[i].radius + kFloatPadM)) return false;
   }
+  for (size_t i = 0; i < moving.size(); ++i) {
+    if (SegHitsObstacles<kWide>(world_a[i], world_b[i], all[i].radius + kFloatPadM)) {
+      return false;
+    }
+  }
+  // Self-collision pairs: bounding spheres about the midpoints first (most pairs are far apart),
+  // then the distance in double. The positions come from float sincos, hence the padding (as for
+  // the planes above).
+  for (const auto& [i, j] : self_pairs) {
+    const double reach = cap_half_reach[i] + cap_half_reach[j];
+    if ((world_a[i] + world_b[i] - world_a[j] - world_b[j]).squaredNorm() >= 4 * reach * reach) {
+      continue;
+    }
+    if (SegmentSegmentDistance(world_a[i], world_b[i], world_a[j], world_b[j]) <
+        all[i].radius + all[j].radius + kFloatPadM) {
+      return false;
+    }
+  }
+  return true;
+}
 
-  // Lanes (of the first `count` configurations q[0..count), count <= 4) that are not free.
-  // `coherent`: the configurations are close together (consecutive samples of a motion), so the
-  // obstacle hierarchy is walked once for all lanes; otherwise once per lane. `stop_at_first`:
-  // return as soon as one lane is known to collide (the others are then unspecified).
-  unsigned CollidingLanes(const Joints* q, int count, bool coherent, bool stop_at_first) {
-    const unsigned all_lanes = (1u << count) - 1;
-    if (base_blocked) return all_lanes;
-    PlaceLanes(q, count);
-    unsigned hit = 0;
-    for (size_t c = 0; c < moving.size(); ++c) {
-      const PlacedLanes& pl = lanes_scratch[c];
-      const F4 r = Splat(all[c].radius);
-      for (const HalfSpace& h : planes_of[c]) {
-        const F4 nx = Splat(h.normal.x()), ny = Splat(h.normal.y()), nz = Splat(h.normal.z());
-        const F4 da = nx * pl.p[0] + ny * pl.p[1] + nz * pl.p[2];
-        const F4 db = da + nx * pl.d[0] + ny * pl.d[1] + nz * pl.d[2];
-        hit |= Bits(Max(da, db) + r + Splat(h.margin_m) > Splat(h.offset)) & all_lanes;
-      }
-      if (hit && stop_at_first) return hit;
-    }
-    for (size_t c = 0; c < moving.size(); ++c) {
-      const unsigned open = all_lanes & ~hit;
-      if (!open) return hit;
-      if (coherent) {
-        hit |= CapsuleLanesHit(c, open, stop_at_first);
-      } else {
-        for (unsigned m = open; m; m &= m - 1) {
-          hit |= CapsuleLanesHit(c, m & (~m + 1), stop_at_first);
-          if (hit && stop_at_first) return hit;
-        }
-      }
-      if (hit && stop_at_first) return hit;
-    }
-    // Self-collision pairs, one pair at a time across the lanes.
-    for (const auto& [i, j] : self_pairs) {
-      const PlacedLanes& x = lanes_scratch[i];
-      const PlacedLanes& y = lanes_scratch[j];
-      // Bounding spheres about the midpoints first: most pairs are far apart.
-      F4 gap2 = Splat(0.f);
-      for (int k = 0; k < 3; ++k) {
-        const F4 g = (x.p[k] + Splat(0.5f) * x.d[k]) - (y.p[k] + Splat(0.5f) * y.d[k]);
-        gap2 += g * g;
-      }
-      const F4 reach = Splat(cap_half_reach[i] + cap_half_reach[j]);
-      if (!(Bits(gap2 < reach * reach) & all_lanes & ~hit)) continue;
-      hit |= Bits(CapsulesTouch(x.p[0], x.p[1], x.p[2], x.d[0], x.d[1], x.d[2],
-                                Splat(cap_len2[i]), Splat(cap_inv_len2[i]), y.p[0], y.p[1],
-                                y.p[2], y.d[0], y.d[1], y.d[2], Splat(cap_len2[j]),
-                                Splat(cap_inv_len2[j]), Splat(all[i].radius + all[j].radius))) &
-             all_lanes;
-      if (hit && stop_at_first) return hit;
-    }
-    return hit;
+double PrimitiveChecker::Impl::SegClearance(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double r,
+                    double best) const {
+  for (const HalfSpace& h : planes) {
+    best = std::min(best, h.offset - std::max(h.normal.dot(a), h.normal.dot(b)) - r - h.margin_m);
   }
+  for (size_t l = 0; l < leaf_bounds.size(); ++l) {
+    const double lower = CapsuleCapsuleGap(a, b, r, leaf_bounds[l].a, leaf_bounds[l].b,
+                                           leaf_bounds[l].radius);
+    if (lower >= best) continue;
+    const int end = std::min<int>(pieces.size(), (l + 1) * kLeaf);
+    for (int k = l * kLeaf; k < end; ++k) {
+      best = std::min(best, CapsuleCapsuleGap(a, b, r, pieces[k].a, pieces[k].b, pieces[k].rad));
+    }
+  }
+  return best;
+}
 
-  double SegClearance(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double r,
-                      double best) const {
-    for (const HalfSpace& h : planes) {
-      best = std::min(best, h.offset - std::max(h.normal.dot(a), h.normal.dot(b)) - r - h.margin_m);
-    }
-    for (size_t l = 0; l < leaf_bounds.size(); ++l) {
-      const double lower = CapsuleCapsuleGap(a, b, r, leaf_bounds[l].a, leaf_bounds[l].b,
-                                             leaf_bounds[l].radius);
-      if (lower >= best) continue;
-      const int end = std::min<int>(pieces.size(), (l + 1) * kLeaf);
-      for (int k = l * kLeaf; k < end; ++k) {
-        best = std::min(best, CapsuleCapsuleGap(a, b, r, pieces[k].a, pieces[k].b, pieces[k].rad));
-      }
-    }
-    return best;
+double PrimitiveChecker::Impl::Clearance(const Joints& q) {
+  Place(q, /*float_trig=*/false);
+  double best = std::numeric_limits<double>::infinity();
+  for (size_t i = 0; i < all.size(); ++i) {
+    best = SegClearance(world_a[i], world_b[i], all[i].radius, best);
   }
+  for (const auto& [i, j] : self_pairs) {
+    best = std::min(best, CapsuleCapsuleGap(world_a[i], world_b[i], all[i].radius, world_a[j],
+                                            world_b[j], all[j].radius));
+  }
+  return best;
+}
 
-  double Clearance(const Joints& q) {
-    Place(q);
-    double best = std::numeric_limits<double>::infinity();
-    for (size_t i = 0; i < all.size(); ++i) {
-      best = SegClearance(world_a[i], world_b[i], all[i].radius, best);
-    }
-    for (const auto& [i, j] : self_pairs) {
-      best = std::min(best, CapsuleCapsuleGap(world_a[i], world_b[i], all[i].radius, world_a[j],
-                                              world_b[j], all[j].radius));
-    }
-    return best;
-  }
-};
+namespace {
+
+// Free twice, every call inlined (flatten): for the baseline ISA and for AVX2 + FMA (see
+// SelectLanes in primitive_checker_batch.cc). FMA changes the double forward kinematics by an
+// ulp and the float tests by an ulp or so: far below the float rounding IsFree already accepts.
+__attribute__((flatten)) bool FreeBaseline(PrimitiveChecker::Impl& m, const Joints& q) {
+  return m.Free<false>(q);
+}
+
+#if defined(__x86_64__) && defined(__GNUC__)
+#define VB_PRIM_HAVE_AVX2 1
+__attribute__((target("avx2,fma"), flatten)) bool FreeAvx2(PrimitiveChecker::Impl& m,
+                                                          const Joints& q) {
+  return m.Free<true>(q);
+}
+#endif
+
+}  // namespace
+
+void PrimitiveChecker::Impl::SelectFree(bool allow_avx2) {
+  free_fn = &FreeBaseline;
+#if defined(VB_PRIM_HAVE_AVX2)
+  if (allow_avx2 && CpuHasAvx2Fma()) free_fn = &FreeAvx2;
+#else
+  (void)allow_avx2;
+#endif
+}
 
 PrimitiveChecker::PrimitiveChecker(const RobotModel& robot, const CollisionScene& scene)
     : impl_(std::make_unique<Impl>()) {
@@ -640,7 +323,8 @@ PrimitiveChecker::PrimitiveChecker(const RobotModel& robot, const CollisionScene
   m.all = caps;
   m.world_a.resize(caps.size());
   m.world_b.resize(caps.size());
-  m.lanes_scratch.resize(caps.size());
+  m.lanes4.resize(caps.size());
+  m.lanes8.resize(caps.size());
   for (const ArmCapsule& c : caps) {
     const double len2 = (c.b - c.a).squaredNorm();
     m.cap_len2.push_back(static_cast<float>(len2));
@@ -651,17 +335,6 @@ PrimitiveChecker::PrimitiveChecker(const RobotModel& robot, const CollisionScene
     for (int i : capsules_of[bi]) {
       for (int j : capsules_of[bj]) m.self_pairs.emplace_back(i, j);
     }
-  }
-  // Padding lanes pair two points far apart (the two slots after the real capsules).
-  const int n_caps = static_cast<int>(caps.size());
-  m.cap_soa.assign(9 * (n_caps + 2), 0.f);
-  m.cap_soa[n_caps] = kFarAway;
-  m.cap_soa[n_caps + 1] = -kFarAway;
-  std::vector<std::pair<int, int>> padded = m.self_pairs;
-  while (padded.size() % 4 != 0) padded.emplace_back(n_caps, n_caps + 1);
-  for (size_t g = 0; g < padded.size(); g += 4) {
-    for (size_t k = 0; k < 4; ++k) m.self_lanes.push_back(padded[g + k].first);
-    for (size_t k = 0; k < 4; ++k) m.self_lanes.push_back(padded[g + k].second);
   }
   m.planes = scene.planes;
   // A capsule reaches plane n . x <= offset only if its reach cylinder about the base axis
@@ -734,6 +407,8 @@ PrimitiveChecker::PrimitiveChecker(const RobotModel& robot, const CollisionScene
     m.top.push_back(MakeBoxSet(node_boxes, g * kLeaf, std::min(n_nodes, (g + 1) * kLeaf)));
   }
 
+  m.SelectLanes(/*allow_avx2=*/true);
+  m.SelectFree(/*allow_avx2=*/true);
   // The base never moves: decide once whether it touches anything.
   for (const ArmCapsule& c : m.fixed) {
     if (m.SegClearance(c.a, c.b, c.radius, std::numeric_limits<double>::infinity()) < 0) {
@@ -744,59 +419,14 @@ PrimitiveChecker::PrimitiveChecker(const RobotModel& robot, const CollisionScene
 
 PrimitiveChecker::~PrimitiveChecker() = default;
 
-namespace {
-// Non-finite or absurd joint values are never free (the float lanes would wrap them silently).
-bool Sane(const Joints& q) { return q.allFinite() && !(q.array().abs() > 1e6).any(); }
-}  // namespace
-
 bool PrimitiveChecker::IsFree(const Joints& q) {
   ++checks_;
-  return Sane(q) && impl_->Free(q);
-}
-
-void PrimitiveChecker::AreFree(std::span<const Joints> qs, std::span<bool> out) {
-  const size_t n = std::min(qs.size(), out.size());
-  checks_ += static_cast<int64_t>(n);
-  // Arbitrary configurations: forward kinematics in lanes, the hierarchy walked per lane.
-  for (size_t i = 0; i < n; i += 4) {
-    const int count = static_cast<int>(std::min<size_t>(4, n - i));
-    const unsigned hit = impl_->CollidingLanes(&qs[i], count, /*coherent=*/false,
-                                               /*stop_at_first=*/false);
-    for (int l = 0; l < count; ++l) out[i + l] = !(hit >> l & 1u) && Sane(qs[i + l]);
-  }
-}
-
-bool PrimitiveChecker::IsMotionFree(const Joints& a, const Joints& b, double max_step_m) {
-  if (!Sane(a) || !Sane(b)) return false;
-  const int n = MotionSteps(a, b, max_step_m, lever_m_);
-  // The ends first (one batch), then the n - 1 interior samples in blocks of 4 consecutive ones
-  // (nearby configurations share one walk of the obstacle hierarchy), the blocks in van der
-  // Corput order (coarse to fine) so that a colliding motion usually fails early.
-  const Joints ends[2] = {a, b};
-  checks_ += 2;
-  if (impl_->CollidingLanes(ends, 2, /*coherent=*/false, /*stop_at_first=*/true)) return false;
-  const int interior = n - 1;
-  const int blocks = (interior + 3) / 4;
-  int bits = 0;
-  while ((1 << bits) < blocks) ++bits;
-  const Joints step = (b - a) / n;
-  Joints q[4];
-  for (uint32_t i = 0; i < (1u << bits); ++i) {
-    uint32_t block = 0;
-    for (int k = 0; k < bits; ++k) block |= ((i >> k) & 1u) << (bits - 1 - k);
-    if (static_cast<int>(block) >= blocks) continue;
-    const int first = 4 * static_cast<int>(block) + 1;
-    const int count = std::min(4, n - first);
-    for (int l = 0; l < count; ++l) q[l] = a + step * (first + l);
-    checks_ += count;
-    if (impl_->CollidingLanes(q, count, /*coherent=*/true, /*stop_at_first=*/true)) return false;
-  }
-  return true;
+  return SaneJoints(q) && impl_->free_fn(*impl_, q);
 }
 
 double PrimitiveChecker::Clearance(const Joints& q) {
   ++checks_;
-  if (!Sane(q)) return -std::numeric_limits<double>::infinity();
+  if (!SaneJoints(q)) return -std::numeric_limits<double>::infinity();
   return impl_->Clearance(q);
 }
 

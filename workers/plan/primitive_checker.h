@@ -9,11 +9,16 @@
 //    form a node. Each arm capsule's bounding box is tested against the node boxes (8 lanes),
 //    then the leaf boxes of hit nodes, then the capsules of hit leaves with an exact
 //    segment-segment test (GCC/Clang vector extensions: SSE2 on x86-64, NEON on arm64);
-//  - planes first, then obstacles (distal links first), then self-collision pairs, 4 lanes at a
-//    time; the first hit ends the check; the base, which never moves, is checked once at build;
-//  - forward kinematics is written out for the DH chain with an inlined sincos.
-// Float is used for IsFree (obstacle coordinates are < 10 m from the base, so rounding is
-// ~1e-6 m); Clearance is exact in double with branch-and-bound over the same leaves.
+//  - planes first, then obstacles (distal links first), then self-collision pairs; the first
+//    hit ends the check; the base, which never moves, is checked once at build;
+//  - forward kinematics is written out for the DH chain with an inlined sincos;
+//  - AreFree and IsMotionFree check 8 configurations at a time in AVX2 lanes where the CPU has
+//    AVX2 and FMA (detected at run time; the library is built for baseline x86-64), 4 in
+//    SSE2/NEON lanes elsewhere.
+// IsFree, AreFree and IsMotionFree test in float with the arm padded by 1e-5 m, which covers the
+// float rounding (< 3e-6 m, see primitive_checker_internal.h): they are conservative, never free
+// in contact, and may report contact within ~1e-5 m of it. Clearance is exact in double with
+// branch-and-bound over the same leaves.
 // Thread-compatible: one checker per thread (it counts checks).
 #pragma once
 
@@ -32,22 +37,30 @@ class PrimitiveChecker : public CollisionChecker {
   ~PrimitiveChecker() override;
 
   bool IsFree(const Joints& q) override;
-  // Four configurations at a time: forward kinematics and the plane and self-collision tests in
-  // SIMD lanes (float), the obstacle hierarchy walked per configuration. Agrees with IsFree
-  // except within float rounding (~1e-5 m) of contact.
+  // 8 (AVX2) or 4 configurations at a time: forward kinematics and the plane and self-collision
+  // tests in SIMD lanes (float), the obstacle hierarchy walked per configuration. Agrees with
+  // IsFree except within float rounding (~1e-6 m) of the padded contact (1e-5 m).
   void AreFree(std::span<const Joints> qs, std::span<bool> out) override;
-  // Batched along the motion: blocks of 4 consecutive samples share one walk of the obstacle
-  // hierarchy (with the union of their boxes); the first collision ends the check. Same samples
-  // as CollisionChecker::IsMotionFree (MotionSteps with lever_m()).
+  // Batched along the motion: blocks of 8 (AVX2) or 4 consecutive samples share one walk of the
+  // obstacle hierarchy (with the union of their boxes); the first collision ends the check. Same
+  // samples as CollisionChecker::IsMotionFree (MotionSteps with lever_m()).
   bool IsMotionFree(const Joints& a, const Joints& b, double max_step_m) override;
   double Clearance(const Joints& q) override;
+
+  // The batched checks (AreFree, IsMotionFree) run AVX2 + FMA code where the CPU has it (x86-64,
+  // detected at construction); UseBaselineSimd() switches this checker to the baseline code
+  // (SSE2 / NEON) that every machine runs, for tests and benchmarks.
+  void UseBaselineSimd();
+  bool uses_avx2() const;
 
   // Number of obstacle pieces, leaves and nodes (for benchmarks and tests).
   int pieces() const;
   int leaves() const;
 
- private:
+ // The state (primitive_checker_internal.h), named here for the checker's own translation units.
   struct Impl;
+
+ private:
   std::unique_ptr<Impl> impl_;
 };
 
