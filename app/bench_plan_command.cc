@@ -6,6 +6,8 @@
 // time, checks per path, ns per configuration check and the fraction of reachable cuts planned;
 // plus IK time, execution time per vine, the ordering's saving, and the dense re-check of every
 // trajectory planned with our checker against FCL meshes with the margins removed.
+#include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <iostream>
@@ -142,6 +144,10 @@ absl::Status RunBenchPlan(Flags& flags) {
       planned_per_vine;
   int verified = 0, verified_free = 0, failures = 0;
   int blend_vias = 0, blend_stops = 0, blend_shrinks = 0;  // transit timing, our checker
+  // Joint travel of the transits (rad, summed along their samples), our checker: per transit its
+  // most-moving joint; per joint the total over all vines; per vine the wrist roll (joint 6).
+  std::vector<double> transit_max_joint_rad, wrist_roll_rad_per_vine;
+  std::array<double, 6> travel_per_joint{};
   for (int64_t v = 0; v < vines; ++v) {
     const uint64_t seed = static_cast<uint64_t>(seed_base + v);
     VB_ASSIGN_OR_RETURN(const sim::Scene scene, sim::GenerateScene(seed, 1));
@@ -198,6 +204,18 @@ absl::Status RunBenchPlan(Flags& flags) {
         const double d = segment.points.back().t - segment.points.front().t;
         (segment.kind == SegmentKind::kCut ? cutting : transit) += d;
       }
+      double wrist_roll = 0;
+      for (const TrajectorySegment& segment : result->trajectory.segments) {
+        if (segment.kind != SegmentKind::kTransit) continue;
+        std::array<double, 6> travel{};
+        for (size_t i = 1; i < segment.points.size(); ++i)
+          for (int j = 0; j < 6; ++j)
+            travel[j] += std::abs(segment.points[i].q[j] - segment.points[i - 1].q[j]);
+        for (int j = 0; j < 6; ++j) travel_per_joint[j] += travel[j];
+        transit_max_joint_rad.push_back(*std::max_element(travel.begin(), travel.end()));
+        wrist_roll += travel[5];
+      }
+      wrist_roll_rad_per_vine.push_back(wrist_roll);
       transit_s.push_back(transit);
       cut_s.push_back(cutting);
       planned_per_vine.push_back(s.planned);
@@ -278,6 +296,15 @@ absl::Status RunBenchPlan(Flags& flags) {
   out["transit_vias"] = blend_vias;
   out["transit_via_stops"] = blend_stops;
   out["transit_blend_shrinks"] = blend_shrinks;
+  out["transit_max_joint_travel_rad_median"] = Median(transit_max_joint_rad);
+  out["transit_wrist_roll_rad_per_vine_median"] = Median(wrist_roll_rad_per_vine);
+  {
+    double total = 0;
+    for (double t : travel_per_joint) total += t;
+    std::vector<double> share;
+    for (double t : travel_per_joint) share.push_back(total > 0 ? t / total : 0.0);
+    out["transit_travel_share_per_joint"] = share;
+  }
   out["order_saving_fraction"] = Median(saving);
   out["order_saving_vs_nearest_neighbour_fraction"] = Median(saving_vs_nn);
   if (verify) {

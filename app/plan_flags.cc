@@ -42,11 +42,18 @@ absl::StatusOr<PlanSetup> ParsePlanSetup(Flags& flags) {
   VB_ASSIGN_OR_RETURN(const double acceleration,
                       flags.Double("joint-acceleration", plan::JointLimits().max_acceleration[0]));
   VB_ASSIGN_OR_RETURN(o.blend_transits, flags.Bool("blend-transits", o.blend_transits));
+  VB_ASSIGN_OR_RETURN(o.choose_motions_with_order,
+                      flags.Bool("choose-motions-with-order", o.choose_motions_with_order));
+  VB_ASSIGN_OR_RETURN(o.rolled_twins, flags.Bool("rolled-twins", o.rolled_twins));
+  VB_ASSIGN_OR_RETURN(const int64_t alternatives, flags.Int("cut-alternatives", cut.alternatives));
   o.path.shortcut_rounds = static_cast<int>(rounds);
   if (max_states < 0 || max_states > 100000000)
     return absl::InvalidArgumentError("--path-max-tree-states must be in [0, 1e8]");
   o.path.max_tree_states = static_cast<int>(max_states);
   o.max_passes = static_cast<int>(passes);
+  if (alternatives < 0 || alternatives > 100)
+    return absl::InvalidArgumentError("--cut-alternatives must be in [0, 100]");
+  cut.alternatives = static_cast<int>(alternatives);
   cut.max_tilt_rad = tilt_deg * M_PI / 180;
   cut.tilt_steps = static_cast<int>(tilt_steps);
   if (tool == "mill_end") {

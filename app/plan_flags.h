@@ -21,6 +21,8 @@ struct PlanSetup {
 // --shortcut-rounds N, --sweep-m S, --max-slide-m M, --max-tilt-deg D, --tilt-steps N,
 // --max-passes N, --blend-transits true|false (defaults: PlanOptions'), --joint-acceleration A
 // (rad/s^2 for every joint; default JointLimits', URScript movej's 1.4; for what-if runs).
+// --choose-motions-with-order true|false, --rolled-twins true|false (PlanOptions'),
+// --cut-alternatives N (CutMotionOptions::alternatives, [0, 100]).
 // INVALID_ARGUMENT naming the flag.
 absl::StatusOr<PlanSetup> ParsePlanSetup(Flags& flags);
 

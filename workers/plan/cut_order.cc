@@ -253,4 +253,126 @@ OrderResult OrderCuts(const Eigen::MatrixXd& cost, bool return_to_start) {
   return HeuristicOrder(cost, return_to_start);
 }
 
+namespace {
+
+double Usable(double c) { return std::isnan(c) ? std::numeric_limits<double>::infinity() : c; }
+
+}  // namespace
+
+ChoiceResult ChooseAlongOrder(const std::vector<Eigen::MatrixXd>& transition) {
+  ChoiceResult r;
+  if (transition.empty()) {
+    r.choice = {0};
+    return r;
+  }
+  const size_t layers = transition.size() + 1;
+  for (size_t l = 0; l < transition.size(); ++l) {
+    if (transition[l].size() == 0 ||
+        (l + 1 < transition.size() && transition[l + 1].rows() != transition[l].cols())) {
+      r.cost = std::numeric_limits<double>::quiet_NaN();
+      return r;
+    }
+  }
+  // Backward: value[l](a) = the cheapest cost from layer l's option a to the last layer.
+  const double inf = std::numeric_limits<double>::infinity();
+  std::vector<Eigen::VectorXd> value(layers);
+  std::vector<std::vector<int>> next(layers);
+  value[layers - 1] = Eigen::VectorXd::Zero(transition.back().cols());
+  for (size_t l = layers - 1; l-- > 0;) {
+    const Eigen::MatrixXd& t = transition[l];
+    value[l] = Eigen::VectorXd::Constant(t.rows(), inf);
+    next[l].assign(t.rows(), 0);
+    for (int a = 0; a < t.rows(); ++a) {
+      for (int b = 0; b < t.cols(); ++b) {
+        const double v = Usable(t(a, b)) + value[l + 1](b);
+        if (v < value[l](a)) {
+          value[l](a) = v;
+          next[l][a] = b;
+        }
+      }
+    }
+  }
+  int at = 0;
+  for (int a = 1; a < value[0].size(); ++a)
+    if (value[0](a) < value[0](at)) at = a;
+  r.cost = value[0](at);
+  r.choice.push_back(at);
+  for (size_t l = 0; l + 1 < layers; ++l) {
+    at = next[l][at];
+    r.choice.push_back(at);
+  }
+  for (int b = 0; b < transition[0].cols(); ++b)
+    r.first_costs.push_back(Usable(transition[0](r.choice[0], b)) + value[1](b));
+  return r;
+}
+
+OrderChoiceResult OrderAndChoose(const std::vector<int>& option_counts, const MoveCost& move_cost,
+                                 bool return_to_start, int rounds) {
+  const int n = static_cast<int>(option_counts.size());
+  std::vector<int> count = {1};
+  count.insert(count.end(), option_counts.begin(), option_counts.end());
+  // pair[i * (n + 1) + j]: node i's options x node j's options.
+  std::vector<Eigen::MatrixXd> pair((n + 1) * (n + 1));
+  for (int i = 0; i <= n; ++i) {
+    for (int j = return_to_start ? 0 : 1; j <= n; ++j) {
+      if (i == j) continue;
+      Eigen::MatrixXd& m = pair[i * (n + 1) + j];
+      m.resize(count[i], count[j]);
+      for (int a = 0; a < count[i]; ++a)
+        for (int b = 0; b < count[j]; ++b) m(a, b) = Usable(move_cost(i, a, j, b));
+    }
+  }
+  auto matrix = [&](const std::vector<int>* choice) {
+    Eigen::MatrixXd c = Eigen::MatrixXd::Zero(n + 1, n + 1);
+    for (int i = 0; i <= n; ++i) {
+      for (int j = 0; j <= n; ++j) {
+        const Eigen::MatrixXd& m = pair[i * (n + 1) + j];
+        if (m.size() == 0) continue;
+        c(i, j) = choice ? m((*choice)[i], (*choice)[j]) : m.minCoeff();
+      }
+    }
+    return c;
+  };
+  auto choose = [&](const std::vector<int>& order) {
+    std::vector<Eigen::MatrixXd> transition;
+    int at = 0;
+    for (int node : order) {
+      transition.push_back(pair[at * (n + 1) + node]);
+      at = node;
+    }
+    if (return_to_start && !order.empty()) transition.push_back(pair[at * (n + 1)]);
+    const ChoiceResult chosen = ChooseAlongOrder(transition);
+    std::vector<int> choice(n + 1, 0);
+    for (size_t k = 0; k < order.size(); ++k) choice[order[k]] = chosen.choice[k + 1];
+    return std::pair{choice, chosen.cost};
+  };
+
+  OrderChoiceResult best;
+  best.cost = std::numeric_limits<double>::infinity();
+  best.choice.assign(n + 1, 0);
+  best.exact_order = true;
+  const std::vector<int> first_options(n + 1, 0);
+  for (const std::vector<int>* start : {static_cast<const std::vector<int>*>(nullptr),
+                                        &first_options}) {
+    Eigen::MatrixXd c = matrix(start);
+    double previous = std::numeric_limits<double>::infinity();
+    for (int round = 0; round < std::max(rounds, 1); ++round) {
+      const OrderResult order = OrderCuts(c, return_to_start);
+      auto [choice, cost] = choose(order.order);
+      best.exact_order = best.exact_order && order.exact;
+      if (cost < best.cost || best.order.empty()) {
+        best.order = order.order;
+        best.choice = choice;
+        best.cost = cost;
+      }
+      // With the options fixed, the next exact order costs at most this; stop when it stops
+      // paying (or when nothing is usable).
+      if (!(cost < previous - 1e-12 * (1.0 + std::abs(cost)))) break;
+      previous = cost;
+      c = matrix(&choice);
+    }
+  }
+  return best;
+}
+
 }  // namespace vb::plan

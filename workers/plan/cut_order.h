@@ -14,6 +14,7 @@
 // Thread-safe (pure functions).
 #pragma once
 
+#include <functional>
 #include <vector>
 
 #include "Eigen/Core"
@@ -50,5 +51,38 @@ OrderResult NearestNeighbourOrder(const Eigen::MatrixXd& cost, bool return_to_st
 // Repeated or missing cuts are not detected here.
 double OrderCost(const Eigen::MatrixXd& cost, const std::vector<int>& order,
                  bool return_to_start = false);
+
+// Choice among each cut's options (its alternative motions) along a fixed order, by dynamic
+// programming over the layers (Viterbi 1967; Bellman 1957): exact for that order. Layer 0 is
+// the start; transition[l] is the (options of layer l) x (options of layer l+1) cost matrix.
+// O(sum of the matrices' sizes).
+struct ChoiceResult {
+  std::vector<int> choice;   // one option per layer (choice[0] for the start layer too)
+  double cost = 0.0;         // the sum of the chosen transitions; +infinity if all are unusable
+  // Per option of layer 1: the cheapest total through it (from choice[0]); empty if only one
+  // layer. Ranks the first move's options when the chosen one cannot be reached.
+  std::vector<double> first_costs;
+};
+// Empty transitions: one layer of one option, cost 0. Matrices whose sizes do not chain (rows of
+// transition[l+1] != columns of transition[l]), or a matrix with no entries, are programmer
+// errors: the result is then empty with cost NaN. +infinity and NaN entries are unusable moves.
+ChoiceResult ChooseAlongOrder(const std::vector<Eigen::MatrixXd>& transition);
+
+// Order and option choice together. Node 0 (the start) has one option, node i in 1..n has
+// option_counts[i - 1] >= 1; move_cost(i, a, j, b) is the cost from node i's option a to node
+// j's option b (j = 0 only for the return with return_to_start). Alternates exact steps from
+// OrderCuts's cost matrix of the cheapest option pairs: order on it, choose the options along
+// the order (ChooseAlongOrder), order again on the chosen options, choose again, ... while the
+// cost decreases (at most `rounds` orders); also starts from options 0 (the first of each node),
+// and keeps the cheapest. Costs are evaluated once per option pair (O(n^2 m^2) calls).
+struct OrderChoiceResult {
+  std::vector<int> order;    // nodes 1..n in visiting order
+  std::vector<int> choice;   // per node 0..n, the option chosen (choice[0] = 0)
+  double cost = 0.0;         // of the order with those options
+  bool exact_order = false;  // the orders were Held-Karp's (n <= kMaxExactCuts)
+};
+using MoveCost = std::function<double(int from_node, int from_option, int to_node, int to_option)>;
+OrderChoiceResult OrderAndChoose(const std::vector<int>& option_counts, const MoveCost& move_cost,
+                                 bool return_to_start = false, int rounds = 4);
 
 }  // namespace vb::plan

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <numeric>
 #include <optional>
 #include <cmath>
 #include <unordered_map>
@@ -12,6 +13,7 @@
 #include "workers/plan/blend.h"
 #include "workers/plan/cut_order.h"
 #include "workers/plan/fallen_wood.h"
+#include "workers/plan/motion_choice.h"
 #include "workers/plan/time_parameterization.h"
 #include "workers/plan/tool.h"
 
@@ -353,27 +355,69 @@ absl::StatusOr<std::vector<int>> PlanPass(const VineModel& model, const std::vec
   p.UsePassScenes(scene, inflated);
   stats.margins_s += Seconds(t);
 
-  // Order: node 0 is where the arm is, node j the j-th planned cut (entered at its motion's first
-  // configuration, left at its last).
+  // The options of each planned cut: its motion, alternatives and their rolled twins (the same
+  // geometry, hence the same clearance and margins), with their cut indices.
   t = std::chrono::steady_clock::now();
   const int n = static_cast<int>(planned.size());
+  const JointLimits& limits = p.robot.limits;
+  const bool twins = options.rolled_twins && RollSymmetric(p.robot);
+  std::vector<std::vector<std::vector<Joints>>> choices(n);  // per node - 1, per option
+  std::vector<std::vector<int>> cut_index_of(n);
+  for (int node = 1; node <= n; ++node) {
+    CutMotion& motion = motions[planned[node - 1]];
+    auto& c = choices[node - 1];
+    auto& index = cut_index_of[node - 1];
+    c.push_back(std::move(motion.path));
+    for (auto& alternative : motion.alternatives) c.push_back(std::move(alternative));
+    motion.alternatives.clear();
+    index.assign(c.size(), motion.cut_index);
+    for (size_t a = 0, originals = c.size(); twins && a < originals; ++a) {
+      int twin_index = -1;
+      auto twin = RolledTwin(c[a], index[a], StrokeOf(p.robot.tool), limits, &twin_index);
+      if (!twin || std::any_of(c.begin(), c.end(), [&](const std::vector<Joints>& other) {
+            return SameUpToTurns(other.front(), twin->front(), 0.05) &&
+                   SameUpToTurns(other.back(), twin->back(), 0.05);
+          }))
+        continue;
+      c.push_back(std::move(*twin));
+      index.push_back(twin_index);
+    }
+  }
+
+  // Order: node 0 is where the arm is, node j the j-th planned cut (entered at an option's first
+  // configuration, left at its last). Jointly with the options (OrderAndChoose), or on each cut's
+  // best motion.
   const Joints from = p.At();
-  auto exit_of = [&](int node) -> const Joints& {
-    return node == 0 ? from : motions[planned[node - 1]].path.back();
+  const bool joint = options.choose_motions_with_order;
+  auto move_cost = [&](int i, int a, int j, int b) {
+    const Joints& exit = i == 0 ? from : choices[i - 1][a].back();
+    if (j == 0)
+      return joint ? TurnAwareMoveTimeS(options.home, exit, limits)
+                   : MoveTimeS(exit, options.home, limits);
+    const Joints& entry = choices[j - 1][b].front();
+    return joint ? TurnAwareMoveTimeS(exit, entry, limits) : MoveTimeS(exit, entry, limits);
   };
-  auto entry_of = [&](int node) -> const Joints& {
-    return node == 0 ? from : motions[planned[node - 1]].path.front();
-  };
-  Eigen::MatrixXd cost = Eigen::MatrixXd::Zero(n + 1, n + 1);
+  Eigen::MatrixXd cost = Eigen::MatrixXd::Zero(n + 1, n + 1);  // on the best motions
   for (int i = 0; i <= n; ++i)
     for (int j = 0; j <= n; ++j)
-      if (i != j) cost(i, j) = MoveTimeS(exit_of(i), entry_of(j), p.robot.limits);
+      if (i != j) cost(i, j) = move_cost(i, 0, j, 0);
   const bool home_after = options.return_home && (retry.empty() || last_pass);
-  const OrderResult order = OrderCuts(cost, home_after);
+  std::vector<int> order;
+  if (joint) {
+    std::vector<int> counts(n);
+    for (int j = 0; j < n; ++j) counts[j] = static_cast<int>(choices[j].size());
+    const OrderChoiceResult chosen = OrderAndChoose(counts, move_cost, home_after);
+    order = chosen.order;
+    stats.order_cost_s += chosen.cost;
+    stats.order_exact = stats.order_exact && chosen.exact_order;
+  } else {
+    const OrderResult best = OrderCuts(cost, home_after);
+    order = best.order;
+    stats.order_cost_s += best.cost;
+    stats.order_exact = stats.order_exact && best.exact;
+  }
   std::vector<int> given(n);
   for (int j = 0; j < n; ++j) given[j] = j + 1;
-  stats.order_cost_s += order.cost;
-  stats.order_exact = stats.order_exact && order.exact;
   stats.given_order_cost_s += OrderCost(cost, given, home_after);
   stats.nearest_neighbour_cost_s += NearestNeighbourOrder(cost, home_after).cost;
   stats.ordering_s += Seconds(t);
@@ -382,23 +426,41 @@ absl::StatusOr<std::vector<int>> PlanPass(const VineModel& model, const std::vec
   t = std::chrono::steady_clock::now();
   const size_t legs_before = p.legs.size();
   std::vector<int> unreached;  // into plan.cuts: no transit found, to try in the next pass
-  for (int node : order.order) {
+  for (size_t step = 0; step < order.size(); ++step) {
+    const int node = order[step];
     const int k = planned[node - 1];
-    // The motion (or alternative) nearest in move time first: all are collision-free, and the
-    // arm's execution time is mostly transits; the next one when no path reaches it.
-    std::vector<std::vector<Joints>> choices = {std::move(motions[k].path)};
-    for (auto& alternative : motions[k].alternatives) choices.push_back(std::move(alternative));
-    for (std::vector<Joints>& choice : choices) {
-      choice = ShiftedForReach(choice, p.At(), p.robot.limits, *p.self_checker,
-                               options.path.max_step_m);
+    std::vector<std::vector<Joints>>& c = choices[node - 1];
+    for (std::vector<Joints>& choice : c)
+      choice = ShiftedForReach(choice, p.At(), limits, *p.self_checker, options.path.max_step_m);
+    // Every option is collision-free, and the arm's execution time is mostly transits: the
+    // cheapest remaining plan through an option first (from where the arm is, along the rest of
+    // the order), or the nearest in move time; the next when no path reaches it.
+    std::vector<double> rank(c.size());
+    for (size_t b = 0; b < c.size(); ++b) rank[b] = MoveTimeS(p.At(), c[b].front(), limits);
+    if (joint) {
+      std::vector<Eigen::MatrixXd> transition = {Eigen::Map<Eigen::RowVectorXd>(
+          rank.data(), static_cast<Eigen::Index>(rank.size()))};
+      int at = node;
+      for (size_t s = step + 1; s <= order.size(); ++s) {
+        const int next = s < order.size() ? order[s] : 0;
+        if (next == 0 && !home_after) break;
+        const int rows = static_cast<int>(choices[at - 1].size());
+        const int cols = next == 0 ? 1 : static_cast<int>(choices[next - 1].size());
+        Eigen::MatrixXd m(rows, cols);
+        for (int a = 0; a < rows; ++a)
+          for (int b = 0; b < cols; ++b) m(a, b) = move_cost(at, a, next, b);
+        transition.push_back(std::move(m));
+        at = next;
+      }
+      rank = ChooseAlongOrder(transition).first_costs;
     }
-    std::stable_sort(choices.begin(), choices.end(), [&](const auto& a, const auto& b) {
-      return MoveTimeS(p.At(), a.front(), p.robot.limits) <
-             MoveTimeS(p.At(), b.front(), p.robot.limits);
-    });
+    std::vector<int> ranked(c.size());
+    std::iota(ranked.begin(), ranked.end(), 0);
+    std::stable_sort(ranked.begin(), ranked.end(),
+                     [&](int a, int b) { return rank[a] < rank[b]; });
     // All of them in one query: a cut none of them can be reached at costs one time limit.
     std::vector<Joints> goals;
-    for (const std::vector<Joints>& choice : choices) goals.push_back(choice.front());
+    for (int b : ranked) goals.push_back(c[b].front());
     auto reached = p.Path(std::move(goals), cuts[k].id);
     if (!reached) {
       const PathOutcome outcome = stats.paths.back().outcome;
@@ -408,7 +470,9 @@ absl::StatusOr<std::vector<int>> PlanPass(const VineModel& model, const std::vec
         p.Unplanned(cuts[k].id, PathReason(outcome));
       continue;
     }
-    motions[k].path = std::move(choices[reached->goal_index]);
+    const int option = ranked[reached->goal_index];
+    motions[k].path = std::move(c[option]);
+    motions[k].cut_index = cut_index_of[node - 1][option];
     Cut made = cuts[k];
     made.point = motions[k].cut_point_in_platform;
     if (motions[k].slid_m > 0)

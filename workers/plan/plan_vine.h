@@ -78,6 +78,15 @@ struct PlanOptions {
   // A cut that no transit reaches (walled in by wood) is tried again in the next pass, on the vine
   // without the wood of the cuts made before it, as cuts with no collision-free motion are.
   bool retry_unreached = true;
+  // Each cut's motion (the best, its alternatives and their rolled twins) is chosen jointly with
+  // the order (cut_order.h OrderAndChoose) on turn-aware move times (motion_choice.h), and each
+  // transit's query tries a cut's motions by the cheapest remaining plan through them
+  // (ChooseAlongOrder from where the arm is); false: the order on the best motions, then at each
+  // step the motion nearest in move time.
+  bool choose_motions_with_order = true;
+  // Adds each motion's twin rolled by pi about the tool axis (motion_choice.h RolledTwin) when
+  // the tool is symmetric under that roll (RollSymmetric): the same cut, another wrist roll.
+  bool rolled_twins = true;
   // Where the arm starts and ends: folded clear of the cameras' view (DefaultHome()).
   Joints home = Joints::Zero();
   bool return_home = true;
