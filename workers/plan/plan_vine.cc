@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <deque>
 #include <numeric>
 #include <optional>
 #include <cmath>
@@ -423,11 +424,27 @@ absl::StatusOr<std::vector<int>> PlanPass(const VineModel& model, const std::vec
   stats.ordering_s += Seconds(t);
 
   // Paths: a cut whose transit fails is given up, and the next one is joined to the last reached.
+  // When `kWalledInFailures` cuts in a row fail from the cut the arm is at, that cut walls the
+  // arm in (its exit is in a pocket of the vine): it is undone once, the failed cuts are tried
+  // again from the cut before, and it goes to the end of the pass's order.
+  constexpr int kWalledInFailures = 2;
   t = std::chrono::steady_clock::now();
   const size_t legs_before = p.legs.size();
   std::vector<int> unreached;  // into plan.cuts: no transit found, to try in the next pass
-  for (size_t step = 0; step < order.size(); ++step) {
-    const int node = order[step];
+  std::deque<int> queue(order.begin(), order.end());
+  std::vector<int> leg_nodes;                          // the node of each leg of this pass
+  std::vector<std::pair<int, PathOutcome>> failed;     // in a row, from where the arm is
+  std::vector<bool> undone(n + 1, false);
+  auto give_up = [&](int node, PathOutcome outcome) {
+    const int k = planned[node - 1];
+    if (options.retry_unreached && !last_pass && outcome == PathOutcome::kNoPathWithinDeadline)
+      unreached.push_back(pending_here[k]);
+    else
+      p.Unplanned(cuts[k].id, PathReason(outcome));
+  };
+  while (!queue.empty()) {
+    const int node = queue.front();
+    queue.pop_front();
     const int k = planned[node - 1];
     std::vector<std::vector<Joints>>& c = choices[node - 1];
     for (std::vector<Joints>& choice : c)
@@ -441,8 +458,8 @@ absl::StatusOr<std::vector<int>> PlanPass(const VineModel& model, const std::vec
       std::vector<Eigen::MatrixXd> transition = {Eigen::Map<Eigen::RowVectorXd>(
           rank.data(), static_cast<Eigen::Index>(rank.size()))};
       int at = node;
-      for (size_t s = step + 1; s <= order.size(); ++s) {
-        const int next = s < order.size() ? order[s] : 0;
+      for (size_t s = 0; s <= queue.size(); ++s) {
+        const int next = s < queue.size() ? queue[s] : 0;
         if (next == 0 && !home_after) break;
         const int rows = static_cast<int>(choices[at - 1].size());
         const int cols = next == 0 ? 1 : static_cast<int>(choices[next - 1].size());
@@ -463,23 +480,37 @@ absl::StatusOr<std::vector<int>> PlanPass(const VineModel& model, const std::vec
     for (int b : ranked) goals.push_back(c[b].front());
     auto reached = p.Path(std::move(goals), cuts[k].id);
     if (!reached) {
-      const PathOutcome outcome = stats.paths.back().outcome;
-      if (options.retry_unreached && !last_pass && outcome == PathOutcome::kNoPathWithinDeadline)
-        unreached.push_back(pending_here[k]);
-      else
-        p.Unplanned(cuts[k].id, PathReason(outcome));
+      failed.push_back({node, stats.paths.back().outcome});
+      if (static_cast<int>(failed.size()) >= kWalledInFailures && !leg_nodes.empty() &&
+          !undone[leg_nodes.back()]) {
+        const int walled = leg_nodes.back();
+        undone[walled] = true;
+        motions[planned[walled - 1]] = std::move(p.legs.back().motion);
+        p.legs.pop_back();
+        leg_nodes.pop_back();
+        for (auto it = failed.rbegin(); it != failed.rend(); ++it) queue.push_front(it->first);
+        failed.clear();
+        queue.push_back(walled);
+      }
       continue;
     }
+    for (const auto& [failed_node, outcome] : failed) give_up(failed_node, outcome);
+    failed.clear();
     const int option = ranked[reached->goal_index];
-    motions[k].path = std::move(c[option]);
+    motions[k].path = c[option];
     motions[k].cut_index = cut_index_of[node - 1][option];
     Cut made = cuts[k];
     made.point = motions[k].cut_point_in_platform;
-    if (motions[k].slid_m > 0)
-      stats.notes.push_back(absl::StrCat("cut ", made.id.value, ": slid ", motions[k].slid_m,
-                                         " m outward along cane ", made.cane_id.value));
     p.legs.push_back(
         {std::move(reached->waypoints), std::move(motions[k]), made, std::move(reached->checker)});
+    leg_nodes.push_back(node);
+  }
+  for (const auto& [failed_node, outcome] : failed) give_up(failed_node, outcome);
+  for (size_t l = legs_before; l < p.legs.size(); ++l) {
+    const Leg& leg = p.legs[l];
+    if (leg.motion.slid_m > 0)
+      stats.notes.push_back(absl::StrCat("cut ", leg.cut.id.value, ": slid ", leg.motion.slid_m,
+                                         " m outward along cane ", leg.cut.cane_id.value));
   }
   stats.paths_s += Seconds(t);
   // The next pass sees the vine without the wood of this pass's cuts; with no cut made, it would
