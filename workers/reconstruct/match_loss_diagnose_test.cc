@@ -119,7 +119,8 @@ TEST(MatchLoss, DISABLED_Report) {
         }
     const auto scored = ScoreCandidates(stop.views, rig, options.correspondence, deadline);
     ASSERT_TRUE(scored.ok());
-    for (const ScoredCandidate& s : *scored) fitted_grid.AddLine(s.fit.control_points, s.probability);
+    for (const ScoredCandidate& s : *scored)
+      fitted_grid.AddLine(s.fit.control_points, s.probability);
     for (const Piece3D& p : matched->pieces) piece_grid.AddLine(p.polyline.points, 1.0);
     // The later stages as PipelineStages.DISABLED_Report runs them.
     PointGrid assembled_grid, connected_grid;
