@@ -34,14 +34,24 @@ absl::StatusOr<PlanSetup> ParsePlanSetup(Flags& flags) {
   VB_ASSIGN_OR_RETURN(const double tilt_deg,
                       flags.Double("max-tilt-deg", cut.max_tilt_rad * 180 / M_PI));
   VB_ASSIGN_OR_RETURN(const int64_t tilt_steps, flags.Int("tilt-steps", cut.tilt_steps));
+  VB_ASSIGN_OR_RETURN(const double roll_deg,
+                      flags.Double("max-roll-deg", cut.max_roll_rad * 180 / M_PI));
+  VB_ASSIGN_OR_RETURN(const int64_t roll_steps, flags.Int("roll-steps", cut.roll_steps));
   o.path.shortcut_rounds = static_cast<int>(rounds);
   o.max_passes = static_cast<int>(passes);
   cut.max_tilt_rad = tilt_deg * M_PI / 180;
   cut.tilt_steps = static_cast<int>(tilt_steps);
+  cut.max_roll_rad = roll_deg * M_PI / 180;
+  cut.roll_steps = static_cast<int>(roll_steps);
+  plan::SecateurOptions secateur;
+  VB_ASSIGN_OR_RETURN(secateur.jaw_opening_m,
+                      flags.Double("jaw-opening-m", secateur.jaw_opening_m));
+  if (absl::Status s = secateur.Validate(); !s.ok())
+    return absl::InvalidArgumentError(absl::StrCat("--jaw-opening-m: ", s.message()));
   if (tool == "mill_end") {
     setup.robot = plan::DefaultUr5(plan::MillEndTool());
   } else if (tool == "secateur") {
-    setup.robot = plan::DefaultUr5(plan::SecateurTool());
+    setup.robot = plan::DefaultUr5(plan::SecateurTool(secateur));
   } else {
     return absl::InvalidArgumentError(
         absl::StrCat("--tool: unknown tool '", tool, "' (expected secateur or mill_end)"));

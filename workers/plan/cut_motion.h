@@ -41,6 +41,8 @@ struct CutMotionOptions {
   int approach_sides = 2;               // 1: TCP y along the cane tangent only; 2: both signs
   double max_tilt_rad = 0.0;            // tool tilt about TCP x (oblique cut), sampled +-
   int tilt_steps = 0;                   // tilts sampled per sign: k * max_tilt_rad / tilt_steps
+  double max_roll_rad = 0.0;            // tool roll about TCP z (oblique cut), sampled +-
+  int roll_steps = 0;                   // rolls sampled per sign: k * max_roll_rad / roll_steps
   double sweep_m = 0.10;                // mill end: TCP sweep length across the cane, centred
   double approach_m = 0.06;             // secateur: approach (and retract) distance along TCP z
   double cartesian_step_m = 0.005;      // TCP spacing of the configurations along the stroke
@@ -52,7 +54,7 @@ struct CutMotionOptions {
   int alternatives = 3;                 // other motions kept per cut (CutMotion::alternatives)
 
   // INVALID_ARGUMENT naming the field ("options.sweep_m: ..."): counts < 1 (sides > 2, tilt_steps
-  // < 0, alternatives < 0), max_tilt_rad outside [0, pi/2),
+  // or roll_steps < 0, alternatives < 0), max_tilt_rad or max_roll_rad outside [0, pi/2),
   // non-finite or non-positive lengths (max_slide_m may be 0), slide_step_m > 0 when sliding.
   absl::Status Validate() const;
 };
