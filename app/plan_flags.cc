@@ -37,12 +37,15 @@ absl::StatusOr<PlanSetup> ParsePlanSetup(Flags& flags) {
   VB_ASSIGN_OR_RETURN(const double roll_deg,
                       flags.Double("max-roll-deg", cut.max_roll_rad * 180 / M_PI));
   VB_ASSIGN_OR_RETURN(const int64_t roll_steps, flags.Int("roll-steps", cut.roll_steps));
+  VB_ASSIGN_OR_RETURN(const int64_t alternatives,
+                      flags.Int("cut-alternatives", cut.alternatives));
   o.path.shortcut_rounds = static_cast<int>(rounds);
   o.max_passes = static_cast<int>(passes);
   cut.max_tilt_rad = tilt_deg * M_PI / 180;
   cut.tilt_steps = static_cast<int>(tilt_steps);
   cut.max_roll_rad = roll_deg * M_PI / 180;
   cut.roll_steps = static_cast<int>(roll_steps);
+  cut.alternatives = static_cast<int>(alternatives);
   plan::SecateurOptions secateur;
   VB_ASSIGN_OR_RETURN(secateur.jaw_opening_m,
                       flags.Double("jaw-opening-m", secateur.jaw_opening_m));

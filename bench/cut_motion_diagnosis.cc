@@ -9,7 +9,8 @@
 // Obstacle classes: the cut cane beyond the free radius (distal: toward its tip, falls with the
 // cut; proximal: toward its base), another cane that the plan removes anyway ("goes": it or that
 // part of it falls with one of the plan's cuts, planned or not) or that stays, the trunk, the
-// head spheres, wires, posts, the platform (planes by name, camera spheres) and self-collision.
+// head spheres, wires, posts, the platform (planes by name, camera spheres) and self-collision;
+// for the secateur also the cut cane near the cut, which must lie between the open jaws.
 // A candidate's blockers are the classes touched at its cut configuration or along its stroke.
 // Per cut it prints the candidate with the fewest blocker classes; over all cuts, the number of
 // cuts that at least one candidate would free if one class (or one class on one body) were not
@@ -210,16 +211,32 @@ void Diagnose(const RobotModel& robot, const PlatformGeometry& platform,
     const Eigen::Vector3d point = base_from_platform * (k == 0 ? cut.point : cane.PointAt(s));
     const Eigen::Vector3d dir =
         base_from_platform.linear() * (k == 0 ? cut.direction : cane.TangentAt(s));
-    const CollisionScene local = scene->WithoutCaneNear(cut.cane_id, point,
-                                                        options.cut_cane_free_radius_m);
-    const Classifier classify(robot, local,
-                              ObstacleClasses(local, now, after_all, robot, cut.cane_id, s));
+    CollisionScene local = scene->WithoutCaneNear(cut.cane_id, point,
+                                                  options.cut_cane_free_radius_m);
+    std::vector<std::string> classes =
+        ObstacleClasses(local, now, after_all, robot, cut.cane_id, s);
+    // A secateur may not touch the cut cane near the cut either (it lies between the jaws).
+    if (StrokeOf(robot.tool) == CutStroke::kApproachCloseRetract) {
+      for (const Obstacle& o : scene->obstacles) {
+        if (o.kind == ObstacleKind::kCane && o.owner_id == cut.cane_id.value &&
+            PointSegmentDistance(point, o.capsule.a, o.capsule.b) - o.capsule.radius <=
+                options.cut_cane_free_radius_m) {
+          local.obstacles.push_back(o);
+          classes.push_back("cut_cane_near");
+        }
+      }
+    }
+    const Classifier classify(robot, local, classes);
     for (const Eigen::Isometry3d& pose : SampleCutPoses(point, dir, options)) {
       const IkSolutions ik = InverseKinematics(pose * tcp_from_flange, robot.limits);
       for (int b = 0; b < ik.count; ++b) {
         ++ik_solutions;
         Contacts at_cut = classify.At(ik.q[b]);
         if (at_cut.empty()) ++free_cut;
+        std::set<std::string> cut_classes;
+        for (const auto& [cls, body] : at_cut) cut_classes.insert(cls);
+        // Two classes at the cut already: neither single-class nor better than a best with one.
+        if (cut_classes.size() >= 2 && best.classes <= cut_classes.size()) continue;
         // The stroke toward its start (secateur: the approach; its retract retraces it).
         Contacts along;
         bool end_collides = false, ik_ok = true;
