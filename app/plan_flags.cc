@@ -46,6 +46,8 @@ absl::StatusOr<PlanSetup> ParsePlanSetup(Flags& flags) {
   cut.max_roll_rad = roll_deg * M_PI / 180;
   cut.roll_steps = static_cast<int>(roll_steps);
   cut.alternatives = static_cast<int>(alternatives);
+  VB_ASSIGN_OR_RETURN(cut.min_clearance_m,
+                      flags.Double("cut-min-clearance-m", cut.min_clearance_m));
   plan::SecateurOptions secateur;
   VB_ASSIGN_OR_RETURN(secateur.jaw_opening_m,
                       flags.Double("jaw-opening-m", secateur.jaw_opening_m));

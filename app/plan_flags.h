@@ -19,7 +19,8 @@ struct PlanSetup {
 // --tool secateur|mill_end (default secateur), --checker primitives|fcl_primitives|fcl_mesh
 // (default primitives), --max-margin-m M, --path-time-limit-s T, --path-range-rad R,
 // --shortcut-rounds N, --sweep-m S, --max-slide-m M, --max-tilt-deg D, --tilt-steps N,
-// --max-roll-deg D, --roll-steps N, --cut-alternatives N, --max-passes N (defaults: PlanOptions'), --jaw-opening-m W
+// --max-roll-deg D, --roll-steps N, --cut-alternatives N,
+// --cut-min-clearance-m M, --max-passes N (defaults: PlanOptions'), --jaw-opening-m W
 // (the secateur's, SecateurOptions' default).
 // INVALID_ARGUMENT naming the flag.
 absl::StatusOr<PlanSetup> ParsePlanSetup(Flags& flags);

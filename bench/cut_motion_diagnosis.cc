@@ -12,10 +12,14 @@
 // head spheres, wires, posts, the platform (planes by name, camera spheres) and self-collision;
 // for the secateur also the cut cane near the cut, which must lie between the open jaws.
 // A candidate's blockers are the classes touched at its cut configuration or along its stroke.
-// Per cut it prints the candidate with the fewest blocker classes; over all cuts, the number of
-// cuts that at least one candidate would free if one class (or one class on one body) were not
-// an obstacle. Run:
+// Per cut it prints the IK solutions over all slides and poses, those free at the cut, the strokes
+// followed (a cut configuration already touching two classes, when a candidate with fewer is
+// known, is not followed), and the candidate with the fewest blocker classes; over all cuts, the
+// number of cuts that at least one candidate would free if one class (or one class on one body)
+// were not an obstacle. The stroke is sampled at its Cartesian steps (not interpolated). Run:
 //   build/bench/vb_cut_motion_diagnosis [--seed-base 1110] [--vines 20] [--verbose]
+// --recheck instead re-checks each vine's trajectory (FCL meshes, 1 mm, as the bench) and prints
+// the colliding segments.
 #include <algorithm>
 #include <cstdio>
 #include <cstring>
@@ -33,6 +37,7 @@
 #include "workers/plan/plan_vine.h"
 #include "workers/plan/robot_model.h"
 #include "workers/plan/tool.h"
+#include "workers/plan/trajectory_check.h"
 #include "workers/plan/ur5_kinematics.h"
 
 namespace vb::plan {
@@ -328,11 +333,12 @@ void Diagnose(const RobotModel& robot, const PlatformGeometry& platform,
 
 int Main(int argc, char** argv) {
   int seed_base = 1110, vines = 20;
-  bool verbose = false;
+  bool verbose = false, recheck = false;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--seed-base") && i + 1 < argc) seed_base = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--vines") && i + 1 < argc) vines = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--verbose")) verbose = true;
+    else if (!std::strcmp(argv[i], "--recheck")) recheck = true;
     else {
       std::fprintf(stderr, "usage: %s [--seed-base N] [--vines N] [--verbose]\n", argv[0]);
       return 2;
@@ -359,6 +365,59 @@ int Main(int argc, char** argv) {
     cuts += result->stats.cuts;
     reachable += result->stats.cuts - result->stats.unreachable;
     planned += result->stats.planned;
+    if (recheck) {
+      std::vector<int> bad;
+      const int64_t n = CountTrajectoryCollisions(
+          result->trajectory, result->cuts, scene->vine, platform, robot, CheckerKind::kFclMesh,
+          0.001, options.cut_motion.cut_cane_free_radius_m, &bad);
+      std::printf("seed %llu: %lld colliding configurations\n",
+                  static_cast<unsigned long long>(seed), static_cast<long long>(n));
+      for (size_t i = 0; i < bad.size(); ++i) {
+        if (bad[i] == 0) continue;
+        const TrajectorySegment& segment = result->trajectory.segments[i];
+        std::printf("  segment %zu (%s, cut %lld, %zu points): %d\n", i,
+                    segment.kind == SegmentKind::kCut ? "cut" : "transit",
+                    static_cast<long long>(segment.cut_id.value), segment.points.size(), bad[i]);
+        for (const Cut& c : result->cuts) {
+          if (c.id.value != segment.cut_id.value) continue;
+          std::vector<Cut> before;
+          for (const Cut& b : result->cuts) {
+            if (b.id.value == c.id.value) break;
+            before.push_back(b);
+          }
+          const auto s = CollisionScene::Build(WithoutFallenWood(scene->vine, before), platform, robot);
+          const CollisionScene allowed = s->WithoutCaneNear(
+              c.cane_id, robot.platform_from_arm_base.inverse() * c.point,
+              options.cut_motion.cut_cane_free_radius_m);
+          auto primitive = MakeChecker(CheckerKind::kPrimitives, robot, allowed);
+          auto mesh = MakeChecker(CheckerKind::kFclMesh, robot, allowed);
+          double worst = 1;
+          int mesh_bad = 0;
+          for (const TrajectoryPoint& p : segment.points) {
+            const Joints q = Eigen::Map<const Joints>(p.q.data());
+            worst = std::min(worst, primitive->Clearance(q));
+            mesh_bad += mesh->IsFree(q) ? 0 : 1;
+          }
+          std::printf("    primitive clearance along it %.6f m; mesh-colliding points %d\n", worst,
+                      mesh_bad);
+          std::vector<std::string> names;
+          for (const Obstacle& o : allowed.obstacles)
+            names.push_back(std::to_string(static_cast<int>(o.kind)) + ":" +
+                            std::to_string(o.owner_id));
+          const Classifier who(robot, allowed, names);
+          Contacts all;
+          for (const TrajectoryPoint& p : segment.points) {
+            const Contacts c = who.At(Eigen::Map<const Joints>(p.q.data()));
+            all.insert(c.begin(), c.end());
+          }
+          for (const auto& [o, body] : all) std::printf("    touches %s with %s\n", o.c_str(), body.c_str());
+          std::printf("    cut cane %lld, cuts before:", static_cast<long long>(c.cane_id.value));
+          for (const Cut& b : before) std::printf(" %lld(cane %lld)", static_cast<long long>(b.id.value), static_cast<long long>(b.cane_id.value));
+          std::printf("\n");
+        }
+      }
+      continue;
+    }
     const VineModel now = WithoutFallenWood(scene->vine, result->cuts);
     const VineModel after_all = WithoutFallenWood(scene->vine, decision->plan.cuts);
     std::printf("seed %llu: %d cuts, %d planned\n", static_cast<unsigned long long>(seed),

@@ -42,6 +42,9 @@ absl::Status CutMotionOptions::Validate() const {
           absl::StrCat("options.", name, ": must be finite and > 0, is ", value));
     }
   }
+  if (!std::isfinite(min_clearance_m) || min_clearance_m < 0) {
+    return absl::InvalidArgumentError("options.min_clearance_m: must be finite and >= 0");
+  }
   if (!std::isfinite(max_slide_m) || max_slide_m < 0) {
     return absl::InvalidArgumentError("options.max_slide_m: must be finite and >= 0");
   }
@@ -499,7 +502,7 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
       if (stroke == StrokeResult::kCollides) continue;
       candidate.clearance_m = checker->Clearance(candidate.q);
       // Exact (double): a batched float check may pass a configuration within ~1e-5 m of contact.
-      if (!(candidate.clearance_m > 0)) continue;
+      if (!(candidate.clearance_m > options.min_clearance_m)) continue;
       free_strokes.emplace_back(candidate.clearance_m, path);
     }
     std::stable_sort(free_strokes.begin(), free_strokes.end(),
@@ -508,7 +511,8 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
       if (deadline.Expired()) return Fail(motion, CutMotionOutcome::kDeadline, what + ": deadline");
       if (cut_clearance <= bar()) break;  // sorted: no later stroke can beat the bar either
       const std::optional<double> clearance = EvaluatePath(
-          *checker, path, cut_index, mirrored, cut_clearance, bar(), options.max_step_m);
+          *checker, path, cut_index, mirrored, cut_clearance,
+          std::max(bar(), options.min_clearance_m), options.max_step_m);
       if (!clearance.has_value()) continue;
       // A path whose cut configuration is near a better one adds no choice: keep the better.
       const Joints& q = path[cut_index];

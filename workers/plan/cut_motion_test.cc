@@ -294,6 +294,28 @@ TEST(CutMotion, SecateurJawsNeverTouchTheCutCane) {
             CutMotionOutcome::kPlanned);
 }
 
+TEST(CutMotion, MinimumClearanceRejectsMotionsThatGraze) {
+  const RobotModel robot = TestRobot(SecateurTool());
+  const TestWorld w = MakeWorld(robot);
+  CutMotionOptions options;
+  options.max_slide_m = 0;
+  const auto best = PlanCutMotions(robot, w.model, w.scene, std::span(&w.cut, 1), options,
+                                   Deadline::Infinite(), MakeBruteForce);
+  ASSERT_EQ(best[0].outcome, CutMotionOutcome::kPlanned) << best[0].message;
+  options.min_clearance_m = 0.5 * best[0].clearance_m;
+  const auto half = PlanCutMotions(robot, w.model, w.scene, std::span(&w.cut, 1), options,
+                                   Deadline::Infinite(), MakeBruteForce);
+  ASSERT_EQ(half[0].outcome, CutMotionOutcome::kPlanned) << half[0].message;
+  EXPECT_EQ(half[0].clearance_m, best[0].clearance_m);
+  options.min_clearance_m = best[0].clearance_m + 1e-4;  // the best has too little
+  EXPECT_EQ(PlanCutMotions(robot, w.model, w.scene, std::span(&w.cut, 1), options,
+                           Deadline::Infinite(), MakeBruteForce)[0]
+                .outcome,
+            CutMotionOutcome::kNoCollisionFreeMotion);
+  options.min_clearance_m = -1;
+  EXPECT_THAT(options.Validate().message(), HasSubstr("options.min_clearance_m"));
+}
+
 TEST(CutMotion, TiltedCutStillSweepsAcrossTheCaneThroughTheCut) {
   const RobotModel robot = TestRobot(MillEndTool());
   // A wide ball 12 mm below the cut: a perpendicular (horizontal) tool's body, 33 mm in radius,

@@ -48,9 +48,8 @@ struct PlanOptions {
   // slide up to 0.10 m outward and be oblique by up to 30 degrees (tilt) when no perpendicular
   // one is free, and the tool may roll about its axis by up to 45 degrees (two steps) where no
   // unrolled pose is free at a slide; oblique cuts heal as well on dormant canes, and near the
-  // head the canes crowd. Up to 16 alternative motions per cut: near the head a motion that is
-  // free is often one no transit reaches, and the paths try the others (8 or more planned 0.86
-  // of reachable cuts on seeds 1110-1129 against 0.80 with 3; 16 gave the fastest vines).
+  // head the canes crowd. (More alternative motions per cut plan more cuts, but pick motions
+  // that graze canes; docs/plan.md "Cut motions".)
   CutMotionOptions cut_motion = [] {
     CutMotionOptions o;
     o.max_slide_m = 0.10;
@@ -58,7 +57,6 @@ struct PlanOptions {
     o.tilt_steps = 1;
     o.max_roll_rad = 45.0 * 3.141592653589793 / 180.0;
     o.roll_steps = 2;
-    o.alternatives = 16;
     return o;
   }();
   MarginOptions margins;
