@@ -19,7 +19,8 @@
 // were not an obstacle. The stroke is sampled at its Cartesian steps (not interpolated). Run:
 //   build/bench/vb_cut_motion_diagnosis [--seed-base 1110] [--vines 20] [--verbose]
 // --recheck instead re-checks each vine's trajectory (FCL meshes, 1 mm, as the bench) and prints
-// the colliding segments.
+// the colliding segments, and any slid cut that passed the base of a child of its cane (the child
+// would then stay on the vine: decide gives it no cut of its own).
 #include <algorithm>
 #include <cstdio>
 #include <cstring>
@@ -366,6 +367,24 @@ int Main(int argc, char** argv) {
     reachable += result->stats.cuts - result->stats.unreachable;
     planned += result->stats.planned;
     if (recheck) {
+      // A slid cut must not pass the base of a child of its cane (that child would stay).
+      for (const Cut& made : result->cuts) {
+        const Cut* given = nullptr;
+        for (const Cut& c : decision->plan.cuts)
+          if (c.id.value == made.id.value) given = &c;
+        const Cane& cane = scene->vine.canes[*scene->vine.IndexOf(made.cane_id)];
+        const double s_given = cane.polyline.Project(given->point);
+        const double s_made = cane.polyline.Project(made.point);
+        if (s_made <= s_given + 1e-9) continue;
+        for (CaneId child : scene->vine.ChildrenOf(made.cane_id)) {
+          const Cane& c = scene->vine.canes[*scene->vine.IndexOf(child)];
+          const double at = cane.polyline.Project(c.polyline.points.front());
+          if (at > s_given && at <= s_made)
+            std::printf("  cut %lld slid %.3f m past the base of cane %lld (at %.3f m)\n",
+                        static_cast<long long>(made.id.value), s_made - s_given,
+                        static_cast<long long>(child.value), at);
+        }
+      }
       std::vector<int> bad;
       const int64_t n = CountTrajectoryCollisions(
           result->trajectory, result->cuts, scene->vine, platform, robot, CheckerKind::kFclMesh,
