@@ -42,24 +42,35 @@ absl::StatusOr<PlanSetup> ParsePlanSetup(Flags& flags) {
   VB_ASSIGN_OR_RETURN(const double acceleration,
                       flags.Double("joint-acceleration", plan::JointLimits().max_acceleration[0]));
   VB_ASSIGN_OR_RETURN(o.blend_transits, flags.Bool("blend-transits", o.blend_transits));
+  VB_ASSIGN_OR_RETURN(const double roll_deg,
+                      flags.Double("max-roll-deg", cut.max_roll_rad * 180 / M_PI));
+  VB_ASSIGN_OR_RETURN(const int64_t roll_steps, flags.Int("roll-steps", cut.roll_steps));
+  VB_ASSIGN_OR_RETURN(const int64_t alternatives,
+                      flags.Int("cut-alternatives", cut.alternatives));
   VB_ASSIGN_OR_RETURN(o.choose_motions_with_order,
                       flags.Bool("choose-motions-with-order", o.choose_motions_with_order));
   VB_ASSIGN_OR_RETURN(o.rolled_twins, flags.Bool("rolled-twins", o.rolled_twins));
-  VB_ASSIGN_OR_RETURN(const int64_t alternatives, flags.Int("cut-alternatives", cut.alternatives));
   o.path.shortcut_rounds = static_cast<int>(rounds);
   if (max_states < 0 || max_states > 100000000)
     return absl::InvalidArgumentError("--path-max-tree-states must be in [0, 1e8]");
   o.path.max_tree_states = static_cast<int>(max_states);
   o.max_passes = static_cast<int>(passes);
-  if (alternatives < 0 || alternatives > 100)
-    return absl::InvalidArgumentError("--cut-alternatives must be in [0, 100]");
-  cut.alternatives = static_cast<int>(alternatives);
   cut.max_tilt_rad = tilt_deg * M_PI / 180;
   cut.tilt_steps = static_cast<int>(tilt_steps);
+  cut.max_roll_rad = roll_deg * M_PI / 180;
+  cut.roll_steps = static_cast<int>(roll_steps);
+  cut.alternatives = static_cast<int>(alternatives);
+  VB_ASSIGN_OR_RETURN(cut.min_clearance_m,
+                      flags.Double("cut-min-clearance-m", cut.min_clearance_m));
+  plan::SecateurOptions secateur;
+  VB_ASSIGN_OR_RETURN(secateur.jaw_opening_m,
+                      flags.Double("jaw-opening-m", secateur.jaw_opening_m));
+  if (absl::Status s = secateur.Validate(); !s.ok())
+    return absl::InvalidArgumentError(absl::StrCat("--jaw-opening-m: ", s.message()));
   if (tool == "mill_end") {
     setup.robot = plan::DefaultUr5(plan::MillEndTool());
   } else if (tool == "secateur") {
-    setup.robot = plan::DefaultUr5(plan::SecateurTool());
+    setup.robot = plan::DefaultUr5(plan::SecateurTool(secateur));
   } else {
     return absl::InvalidArgumentError(
         absl::StrCat("--tool: unknown tool '", tool, "' (expected secateur or mill_end)"));

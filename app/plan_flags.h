@@ -19,10 +19,13 @@ struct PlanSetup {
 // --tool secateur|mill_end (default secateur), --checker primitives|fcl_primitives|fcl_mesh
 // (default primitives), --max-margin-m M, --path-time-limit-s T, --path-range-rad R,
 // --shortcut-rounds N, --sweep-m S, --max-slide-m M, --max-tilt-deg D, --tilt-steps N,
-// --max-passes N, --blend-transits true|false (defaults: PlanOptions'), --joint-acceleration A
-// (rad/s^2 for every joint; default JointLimits', URScript movej's 1.4; for what-if runs).
-// --choose-motions-with-order true|false, --rolled-twins true|false (PlanOptions'),
-// --cut-alternatives N (CutMotionOptions::alternatives, [0, 100]).
+// --max-roll-deg D, --roll-steps N, --cut-alternatives N, --cut-min-clearance-m M,
+// --max-passes N, --path-max-tree-states N, --margin-fallback true|false,
+// --retry-unreached true|false, --blend-transits true|false (defaults: PlanOptions'),
+// --jaw-opening-m W
+// (the secateur's, SecateurOptions' default), --joint-acceleration A (rad/s^2 for every joint;
+// default JointLimits', URScript movej's 1.4; for what-if runs).
+// --choose-motions-with-order true|false, --rolled-twins true|false (PlanOptions').
 // INVALID_ARGUMENT naming the flag.
 absl::StatusOr<PlanSetup> ParsePlanSetup(Flags& flags);
 

@@ -21,9 +21,13 @@ absl::Status CutMotionOptions::Validate() const {
     return absl::InvalidArgumentError("options.approach_sides: must be 1 or 2");
   }
   if (tilt_steps < 0) return absl::InvalidArgumentError("options.tilt_steps: must be >= 0");
+  if (roll_steps < 0) return absl::InvalidArgumentError("options.roll_steps: must be >= 0");
   if (alternatives < 0) return absl::InvalidArgumentError("options.alternatives: must be >= 0");
   if (!(max_tilt_rad >= 0 && max_tilt_rad < M_PI / 2)) {
     return absl::InvalidArgumentError("options.max_tilt_rad: must be in [0, pi/2)");
+  }
+  if (!(max_roll_rad >= 0 && max_roll_rad < M_PI / 2)) {
+    return absl::InvalidArgumentError("options.max_roll_rad: must be in [0, pi/2)");
   }
   const std::pair<double, const char*> positive[] = {
       {sweep_m, "sweep_m"},
@@ -37,6 +41,9 @@ absl::Status CutMotionOptions::Validate() const {
       return absl::InvalidArgumentError(
           absl::StrCat("options.", name, ": must be finite and > 0, is ", value));
     }
+  }
+  if (!std::isfinite(min_clearance_m) || min_clearance_m < 0) {
+    return absl::InvalidArgumentError("options.min_clearance_m: must be finite and >= 0");
   }
   if (!std::isfinite(max_slide_m) || max_slide_m < 0) {
     return absl::InvalidArgumentError("options.max_slide_m: must be finite and >= 0");
@@ -92,28 +99,37 @@ std::vector<Eigen::Isometry3d> SampleCutPoses(const Eigen::Vector3d& p, const Ei
   const Eigen::Vector3d e1 = toward_base.normalized();
   const Eigen::Vector3d e2 = d.cross(e1);
   std::vector<Eigen::Isometry3d> poses;
-  // Tilts 0, +t, -t, +2t, -2t, ... up to max_tilt_rad: perpendicular cuts are tried first.
-  std::vector<double> tilts = {0.0};
-  for (int k = 1; k <= options.tilt_steps; ++k) {
-    const double tilt = options.max_tilt_rad * k / options.tilt_steps;
-    tilts.push_back(tilt);
-    tilts.push_back(-tilt);
-  }
-  for (double tilt : tilts) {
-    for (int i = 0; i < options.orientations; ++i) {
-      const double theta = 2.0 * M_PI * i / options.orientations;
-      const Eigen::Vector3d z_perpendicular = -(std::cos(theta) * e1 + std::sin(theta) * e2);
-      for (int side = 0; side < options.approach_sides; ++side) {
-        const Eigen::Vector3d y_along = side == 0 ? d : Eigen::Vector3d(-d);
-        // Rotation by `tilt` about x = y cross z: x stays across the cane.
-        const Eigen::Vector3d y = std::cos(tilt) * y_along + std::sin(tilt) * z_perpendicular;
-        const Eigen::Vector3d z = -std::sin(tilt) * y_along + std::cos(tilt) * z_perpendicular;
-        Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-        pose.linear().col(0) = y.cross(z);
-        pose.linear().col(1) = y;
-        pose.linear().col(2) = z;
-        pose.translation() = p;
-        poses.push_back(pose);
+  // Tilts (and rolls) 0, +t, -t, +2t, -2t, ... up to their maximum: perpendicular cuts first.
+  auto signed_steps = [](double max_rad, int steps) {
+    std::vector<double> out = {0.0};
+    for (int k = 1; k <= steps; ++k) {
+      out.push_back(max_rad * k / steps);
+      out.push_back(-max_rad * k / steps);
+    }
+    return out;
+  };
+  const std::vector<double> tilts = signed_steps(options.max_tilt_rad, options.tilt_steps);
+  const std::vector<double> rolls = signed_steps(options.max_roll_rad, options.roll_steps);
+  for (double roll : rolls) {
+    for (double tilt : tilts) {
+      for (int i = 0; i < options.orientations; ++i) {
+        const double theta = 2.0 * M_PI * i / options.orientations;
+        const Eigen::Vector3d z_perpendicular = -(std::cos(theta) * e1 + std::sin(theta) * e2);
+        for (int side = 0; side < options.approach_sides; ++side) {
+          const Eigen::Vector3d y_along = side == 0 ? d : Eigen::Vector3d(-d);
+          // Rotation by `tilt` about x = y cross z: x stays across the cane.
+          const Eigen::Vector3d y_tilted =
+              std::cos(tilt) * y_along + std::sin(tilt) * z_perpendicular;
+          const Eigen::Vector3d z = -std::sin(tilt) * y_along + std::cos(tilt) * z_perpendicular;
+          const Eigen::Vector3d x_tilted = y_tilted.cross(z);
+          // Then by `roll` about z: the jaws' plane turns about the tool axis.
+          Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+          pose.linear().col(0) = std::cos(roll) * x_tilted + std::sin(roll) * y_tilted;
+          pose.linear().col(1) = -std::sin(roll) * x_tilted + std::cos(roll) * y_tilted;
+          pose.linear().col(2) = z;
+          pose.translation() = p;
+          poses.push_back(pose);
+        }
       }
     }
   }
@@ -360,12 +376,23 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
                          : 0;
 
   FlangeBodies flange_bodies(robot);
+  // A secateur's cane sits in the throat between the open jaws: no part of the tool may touch
+  // the cut cane there either (only the closing blades cut it). The mill end's bit cuts through
+  // it, so there the cut cane near the cut is free.
+  const bool in_throat = StrokeOf(robot.tool) == CutStroke::kApproachCloseRetract;
+  FlangeBodies cut_cane_bodies(robot);
+  // Rolled poses (oblique to the jaws' plane) only where no unrolled pose gives a motion at the
+  // same slide: cuts stay as square as they can, and a cut that rolls need not slide.
+  const int unrolled_poses = options.orientations * options.approach_sides *
+                             (1 + 2 * options.tilt_steps);
+  const int stages = options.roll_steps > 0 && options.max_roll_rad > 0 ? 2 : 1;
   std::unique_ptr<CollisionChecker> checker;
   CollisionScene checker_scene;  // the scene `checker` was built on
   bool reachable = false;
   int free_at_cut = 0, strokes_followed = 0;  // over all slides, for the message
   // Strokes followed includes those stopped by a collision (IK did not fail first).
-  for (int k = 0; k <= slides; ++k) {
+  for (int step = 0; step < (slides + 1) * stages; ++step) {
+    const int k = step / stages, stage = step % stages;
     Eigen::Vector3d point = cut.point, direction = cut.direction;
     if (k > 0) {
       const double s = s0 + k * options.slide_step_m;
@@ -381,17 +408,32 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
     CollisionScene local =
         scene.WithoutCaneNear(cut.cane_id, point_in_base, options.cut_cane_free_radius_m);
     flange_bodies.Select(local, point_in_base, stroke_travel_m);
+    if (in_throat) {
+      CollisionScene cut_cane;  // the capsules of the cut cane that `local` leaves out
+      for (const Obstacle& o : scene.obstacles) {
+        if (o.kind == ObstacleKind::kCane && o.owner_id == cut.cane_id.value &&
+            PointSegmentDistance(point_in_base, o.capsule.a, o.capsule.b) - o.capsule.radius <=
+                options.cut_cane_free_radius_m)
+          cut_cane.obstacles.push_back(o);
+      }
+      cut_cane_bodies.Select(cut_cane, point_in_base, stroke_travel_m);
+    }
     // Every IK solution at every sampled pose, checked in one batch (AreFree checks several
     // configurations at once), in sampling order.
     std::vector<Candidate> solutions;
-    const std::vector<Eigen::Isometry3d> poses =
+    std::vector<Eigen::Isometry3d> poses =
         SampleCutPoses(point_in_base, direction_in_base, options);
+    if (stages == 2) {
+      if (stage == 0) poses.resize(unrolled_poses);
+      else poses.erase(poses.begin(), poses.begin() + unrolled_poses);
+    }
     for (int pose_index = 0; pose_index < static_cast<int>(poses.size()); ++pose_index) {
       const Eigen::Isometry3d& pose = poses[pose_index];
       if (deadline.Expired()) return Fail(motion, CutMotionOutcome::kDeadline, what + ": deadline");
       const Eigen::Isometry3d base_from_flange = pose * tcp_from_flange;
       // Reachability still needs the IK of a blocked pose, but only until one pose is reachable.
-      const bool blocked = flange_bodies.Collides(base_from_flange);
+      const bool blocked = flange_bodies.Collides(base_from_flange) ||
+                           (in_throat && cut_cane_bodies.Collides(base_from_flange));
       if (blocked && reachable) continue;
       const IkSolutions ik = InverseKinematics(base_from_flange, robot.limits);
       reachable = reachable || ik.count > 0;
@@ -440,7 +482,8 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
           if (static_cast<int>(i) == cut_index) continue;
           Eigen::Isometry3d base_from_tcp = c.base_from_tcp;
           base_from_tcp.translation() += c.base_from_tcp.linear() * waypoints[i];
-          b = flange_bodies.Collides(base_from_tcp * tcp_from_flange);
+          b = flange_bodies.Collides(base_from_tcp * tcp_from_flange) ||
+              (in_throat && cut_cane_bodies.Collides(base_from_tcp * tcp_from_flange));
         }
       }
       return b == 1;
@@ -459,7 +502,7 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
       if (stroke == StrokeResult::kCollides) continue;
       candidate.clearance_m = checker->Clearance(candidate.q);
       // Exact (double): a batched float check may pass a configuration within ~1e-5 m of contact.
-      if (!(candidate.clearance_m > 0)) continue;
+      if (!(candidate.clearance_m > options.min_clearance_m)) continue;
       free_strokes.emplace_back(candidate.clearance_m, path);
     }
     std::stable_sort(free_strokes.begin(), free_strokes.end(),
@@ -468,7 +511,8 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
       if (deadline.Expired()) return Fail(motion, CutMotionOutcome::kDeadline, what + ": deadline");
       if (cut_clearance <= bar()) break;  // sorted: no later stroke can beat the bar either
       const std::optional<double> clearance = EvaluatePath(
-          *checker, path, cut_index, mirrored, cut_clearance, bar(), options.max_step_m);
+          *checker, path, cut_index, mirrored, cut_clearance,
+          std::max(bar(), options.min_clearance_m), options.max_step_m);
       if (!clearance.has_value()) continue;
       // A path whose cut configuration is near a better one adds no choice: keep the better.
       const Joints& q = path[cut_index];

@@ -11,7 +11,9 @@
 // at angle theta about the cane (`orientations` samples of theta over a full turn, theta = 0
 // pointing from the arm base toward the cane), x = y cross z; with tilts, the frame is then
 // rotated about x by each sampled tilt (the sweep stays across the cane, the cut becomes oblique;
-// tilt 0, a perpendicular cut, is sampled first). The stroke (tool.h StrokeOf) is
+// tilt 0, a perpendicular cut, is sampled first), then about z by each sampled roll (the jaws'
+// plane turns about the tool axis; the cut becomes oblique the other way). Rolled poses are tried
+// at a cut point only when no unrolled one there gives a free motion. The stroke (tool.h StrokeOf) is
 // followed in Cartesian steps of `cartesian_step_m` with IK on the same branch: each step takes
 // the IK solution nearest the previous configuration, and a joint jump above
 // `max_joint_jump_rad` rejects the branch (the arm would leave the straight TCP line).
@@ -41,6 +43,8 @@ struct CutMotionOptions {
   int approach_sides = 2;               // 1: TCP y along the cane tangent only; 2: both signs
   double max_tilt_rad = 0.0;            // tool tilt about TCP x (oblique cut), sampled +-
   int tilt_steps = 0;                   // tilts sampled per sign: k * max_tilt_rad / tilt_steps
+  double max_roll_rad = 0.0;            // tool roll about TCP z (oblique cut), sampled +-
+  int roll_steps = 0;                   // rolls sampled per sign: k * max_roll_rad / roll_steps
   double sweep_m = 0.10;                // mill end: TCP sweep length across the cane, centred
   double approach_m = 0.06;             // secateur: approach (and retract) distance along TCP z
   double cartesian_step_m = 0.005;      // TCP spacing of the configurations along the stroke
@@ -50,10 +54,15 @@ struct CutMotionOptions {
   double cut_cane_free_radius_m = 0.04; // cut-cane capsules within this of the cut may touch
   double max_step_m = 0.005;            // IsMotionFree resolution between path configurations
   int alternatives = 3;                 // other motions kept per cut (CutMotion::alternatives)
+  // A motion's clearance (min over its configurations) must exceed this. Off by default: 1 mm
+  // halves the gain of rolls on tuning seeds (docs/plan.md), though the scene's capsules only
+  // approximate the canes (a truncated cane is resampled into other capsules).
+  double min_clearance_m = 0.0;
 
   // INVALID_ARGUMENT naming the field ("options.sweep_m: ..."): counts < 1 (sides > 2, tilt_steps
-  // < 0, alternatives < 0), max_tilt_rad outside [0, pi/2),
-  // non-finite or non-positive lengths (max_slide_m may be 0), slide_step_m > 0 when sliding.
+  // or roll_steps < 0, alternatives < 0), max_tilt_rad or max_roll_rad outside [0, pi/2),
+  // non-finite or non-positive lengths (max_slide_m and min_clearance_m may be 0), slide_step_m > 0
+  // when sliding.
   absl::Status Validate() const;
 };
 
@@ -91,7 +100,9 @@ using CheckerFactory = std::function<std::unique_ptr<CollisionChecker>(const Rob
 
 // One CutMotion per cut, in order. For each cut: sample TCP poses about the cane, solve IK (all
 // branches), follow the stroke, and check every configuration and motion with a checker built on
-// scene.WithoutCaneNear(cut cane, cut point, cut_cane_free_radius_m); keep the collision-free
+// scene.WithoutCaneNear(cut cane, cut point, cut_cane_free_radius_m) -- with a secateur, whose
+// cane lies between the open jaws, the flange bodies must also stay clear of the cut cane's
+// capsules left out there, at every stroke pose (exact test); keep the collision-free
 // motion with the largest clearance. If none, slide the cut outward (toward the tip) along the
 // cane of `model` by slide_step_m up to max_slide_m (and the cane's tip) and report slid_m.
 // `scene` is in the arm base frame (robot.platform_from_arm_base maps base -> platform); cuts and

@@ -184,6 +184,138 @@ TEST(SampleCutPoses, FramesCrossTheCaneAndTiltAboutTheSweepAxis) {
   EXPECT_GT(poses[0].linear().col(2).dot(p), 0.0);
 }
 
+TEST(SampleCutPoses, RollsTurnTheJawsAboutTheToolAxisAfterTheUnrolledPoses) {
+  CutMotionOptions options;
+  options.max_tilt_rad = 0.3;
+  options.tilt_steps = 1;
+  options.max_roll_rad = 0.6;
+  options.roll_steps = 2;
+  const Eigen::Vector3d p(0.4, 0.1, 0.3), d = Eigen::Vector3d(0.2, -0.1, 1).normalized();
+  const auto poses = SampleCutPoses(p, d, options);
+  const size_t unrolled = 16u * 2u * 3u;
+  ASSERT_EQ(poses.size(), unrolled * 5u);
+  double max_roll = 0, max_tilt = 0;
+  bool half_step = false;
+  for (size_t i = 0; i < poses.size(); ++i) {
+    const Eigen::Matrix3d r = poses[i].linear();
+    EXPECT_TRUE((r.transpose() * r).isIdentity(1e-12));
+    EXPECT_NEAR(r.determinant(), 1.0, 1e-12);
+    EXPECT_EQ(poses[i].translation(), p);
+    // The tilt moves the cane out of the tool's cross-section, the roll turns it within it:
+    // x . d = sin(roll) cos(tilt) (up to sign), z . d = sin(tilt).
+    const double tilt = std::asin(std::min(1.0, std::abs(r.col(2).dot(d))));
+    const double roll = std::asin(std::min(1.0, std::abs(r.col(0).dot(d)) / std::cos(tilt)));
+    max_tilt = std::max(max_tilt, tilt);
+    max_roll = std::max(max_roll, roll);
+    if (i < unrolled) EXPECT_NEAR(roll, 0.0, 1e-9) << i;  // unrolled poses come first
+    else EXPECT_GT(roll, 0.29) << i;
+    half_step = half_step || std::abs(roll - 0.3) < 1e-9;
+  }
+  EXPECT_NEAR(max_tilt, 0.3, 1e-9);
+  EXPECT_NEAR(max_roll, 0.6, 1e-9);
+  EXPECT_TRUE(half_step);
+}
+
+TEST(CutMotionOptions, ValidateRejectsBadRolls) {
+  CutMotionOptions bad;
+  bad.roll_steps = -1;
+  EXPECT_THAT(bad.Validate().message(), HasSubstr("options.roll_steps"));
+  bad = CutMotionOptions();
+  bad.max_roll_rad = 2.0;
+  EXPECT_THAT(bad.Validate().message(), HasSubstr("options.max_roll_rad"));
+  bad.max_roll_rad = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THAT(bad.Validate().message(), HasSubstr("options.max_roll_rad"));
+}
+
+// A half ring of 3 mm balls 30 mm from the cut cane's axis in the plane of the cut, on the far
+// side from the arm: an unrolled secateur's jaws (their axes 23.5 mm from the cane, reaching
+// 45 mm past it) cross that circle in every orientation; rolled by 45 degrees about its axis
+// they pass 16.6 mm above and below the plane.
+std::vector<Obstacle> HalfRingAroundTheCut() {
+  std::vector<Obstacle> ring;
+  for (int k = -6; k <= 6; ++k) {
+    const double a = k * M_PI / 12;
+    ring.push_back(Ball({0.05 + 0.03 * std::sin(a), 0.8 + 0.03 * std::cos(a), 0.95}, 0.003));
+  }
+  return ring;
+}
+
+TEST(CutMotion, SecateurRollsAboutItsAxisWhereNoSquareCutIsFree) {
+  const RobotModel robot = TestRobot(SecateurTool());
+  const TestWorld w = MakeWorld(robot, HalfRingAroundTheCut());
+  CutMotionOptions options;
+  options.max_slide_m = 0;
+  const auto square = PlanCutMotions(robot, w.model, w.scene, std::span(&w.cut, 1), options,
+                                     Deadline::Infinite(), MakeBruteForce);
+  EXPECT_EQ(square[0].outcome, CutMotionOutcome::kNoCollisionFreeMotion) << square[0].message;
+  options.max_roll_rad = M_PI / 4;
+  options.roll_steps = 2;
+  const auto rolled = PlanCutMotions(robot, w.model, w.scene, std::span(&w.cut, 1), options,
+                                     Deadline::Infinite(), MakeBruteForce);
+  const CutMotion& m = rolled[0];
+  ASSERT_EQ(m.outcome, CutMotionOutcome::kPlanned) << m.message;
+  const Eigen::Isometry3d base_from_platform = robot.platform_from_arm_base.inverse();
+  const Eigen::Vector3d cane_in_base = base_from_platform.linear() * w.cut.direction;
+  const Eigen::Isometry3d at_cut = TcpInBase(robot, m.path[m.cut_index]);
+  EXPECT_LT((at_cut.translation() - base_from_platform * w.cut.point).norm(), 1e-9);
+  EXPECT_NEAR(at_cut.linear().col(2).dot(cane_in_base), 0.0, 1e-9);  // no tilt was needed
+  EXPECT_GT(std::abs(at_cut.linear().col(0).dot(cane_in_base)), 0.5);  // rolled
+  // Nothing touches, not even the cut cane: it passes between the open jaws.
+  BruteForceChecker full(robot, w.scene);
+  for (const Joints& q : m.path) EXPECT_TRUE(full.IsFree(q));
+}
+
+TEST(CutMotion, SecateurJawsNeverTouchTheCutCane) {
+  const RobotModel robot = TestRobot(SecateurTool());
+  TestWorld w = MakeWorld(robot);
+  CutMotionOptions options;
+  options.max_roll_rad = M_PI / 4;
+  options.roll_steps = 2;
+  const auto thin = PlanCutMotions(robot, w.model, w.scene, std::span(&w.cut, 1), options,
+                                   Deadline::Infinite(), MakeBruteForce);
+  ASSERT_EQ(thin[0].outcome, CutMotionOutcome::kPlanned) << thin[0].message;
+  BruteForceChecker full(robot, w.scene);
+  for (const Joints& q : thin[0].path) EXPECT_TRUE(full.IsFree(q));
+  // A cane 38 mm thick does not fit between jaws open 35 mm: no motion, though the cut cane near
+  // the cut is not an obstacle for the arm.
+  for (Obstacle& o : w.scene.obstacles)
+    if (o.owner_id == kCutCane) o.capsule.radius = 0.019;
+  const auto thick = PlanCutMotions(robot, w.model, w.scene, std::span(&w.cut, 1), options,
+                                    Deadline::Infinite(), MakeBruteForce);
+  EXPECT_EQ(thick[0].outcome, CutMotionOutcome::kNoCollisionFreeMotion) << thick[0].message;
+  // The mill end cuts through it.
+  const RobotModel mill = TestRobot(MillEndTool());
+  TestWorld mill_world = MakeWorld(mill);
+  for (Obstacle& o : mill_world.scene.obstacles)
+    if (o.owner_id == kCutCane) o.capsule.radius = 0.019;
+  EXPECT_EQ(PlanCutMotions(mill, mill_world.model, mill_world.scene, std::span(&mill_world.cut, 1),
+                           options, Deadline::Infinite(), MakeBruteForce)[0]
+                .outcome,
+            CutMotionOutcome::kPlanned);
+}
+
+TEST(CutMotion, MinimumClearanceRejectsMotionsThatGraze) {
+  const RobotModel robot = TestRobot(SecateurTool());
+  const TestWorld w = MakeWorld(robot);
+  CutMotionOptions options;
+  options.max_slide_m = 0;
+  const auto best = PlanCutMotions(robot, w.model, w.scene, std::span(&w.cut, 1), options,
+                                   Deadline::Infinite(), MakeBruteForce);
+  ASSERT_EQ(best[0].outcome, CutMotionOutcome::kPlanned) << best[0].message;
+  options.min_clearance_m = 0.5 * best[0].clearance_m;
+  const auto half = PlanCutMotions(robot, w.model, w.scene, std::span(&w.cut, 1), options,
+                                   Deadline::Infinite(), MakeBruteForce);
+  ASSERT_EQ(half[0].outcome, CutMotionOutcome::kPlanned) << half[0].message;
+  EXPECT_EQ(half[0].clearance_m, best[0].clearance_m);
+  options.min_clearance_m = best[0].clearance_m + 1e-4;  // the best has too little
+  EXPECT_EQ(PlanCutMotions(robot, w.model, w.scene, std::span(&w.cut, 1), options,
+                           Deadline::Infinite(), MakeBruteForce)[0]
+                .outcome,
+            CutMotionOutcome::kNoCollisionFreeMotion);
+  options.min_clearance_m = -1;
+  EXPECT_THAT(options.Validate().message(), HasSubstr("options.min_clearance_m"));
+}
+
 TEST(CutMotion, TiltedCutStillSweepsAcrossTheCaneThroughTheCut) {
   const RobotModel robot = TestRobot(MillEndTool());
   // A wide ball 12 mm below the cut: a perpendicular (horizontal) tool's body, 33 mm in radius,

@@ -48,14 +48,19 @@ std::unique_ptr<CollisionChecker> MakeChecker(CheckerKind kind, const RobotModel
 struct PlanOptions {
   CheckerKind checker = CheckerKind::kPrimitives;  // the fast one; FCL for baselines
   SceneOptions scene;
-  // Cut motions as tuned on simulated vines (tuning seeds 1110-1117, docs/plan.md): a cut may
-  // slide up to 0.10 m outward and be oblique by up to 30 degrees when no perpendicular one is
-  // free; oblique cuts heal as well on dormant canes, and near the head the canes crowd.
+  // Cut motions as tuned on simulated vines (tuning seeds 1110-1129, docs/plan.md): a cut may
+  // slide up to 0.10 m outward and be oblique by up to 30 degrees (tilt) when no perpendicular
+  // one is free, and the tool may roll about its axis by up to 45 degrees (two steps) where no
+  // unrolled pose is free at a slide; oblique cuts heal as well on dormant canes, and near the
+  // head the canes crowd. (More alternative motions per cut plan more cuts, but pick motions
+  // that graze canes; docs/plan.md "Cut motions".)
   CutMotionOptions cut_motion = [] {
     CutMotionOptions o;
     o.max_slide_m = 0.10;
     o.max_tilt_rad = 30.0 * 3.141592653589793 / 180.0;
     o.tilt_steps = 1;
+    o.max_roll_rad = 45.0 * 3.141592653589793 / 180.0;
+    o.roll_steps = 2;
     return o;
   }();
   MarginOptions margins;

@@ -12,7 +12,8 @@
 //     the cane (CutMotionOptions::sweep_m, ~0.10 m), orientation fixed. x = y cross z.
 //   - Secateur (powered pruning shears): the TCP is in the throat between the open jaws, which
 //     open along TCP x; a cut is an approach along +z from approach_m behind the cut, a close (no
-//     arm motion) and a retract back along -z.
+//     arm motion) and a retract back along -z. The cane lies between the open jaws: no capsule of
+//     the tool touches it (cut_motion.h checks this); only the closing blades cut it.
 // Dimensions are representative catalogue values (stated per field), not measurements of one
 // product; replace them with the measured tool when it is built.
 #pragma once

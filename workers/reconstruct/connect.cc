@@ -134,6 +134,9 @@ absl::Status ConnectOptions::Validate() const {
     if (!std::isfinite(v) || v <= 0)
       return absl::InvalidArgumentError(absl::StrCat("connect options: ", name, " must be > 0"));
   }
+  if (!(min_gap_support >= 0.0 && min_gap_support <= 1.0)) {
+    return absl::InvalidArgumentError("connect options: min_gap_support must be in [0, 1]");
+  }
   if (!std::isfinite(head_margin_m) || head_margin_m < 0 || !std::isfinite(spur_length_m) ||
       spur_length_m < 0) {
     return absl::InvalidArgumentError(
@@ -300,16 +303,18 @@ std::vector<JoinCandidate> FindJoins(const PreparedCanes& prepared, const HeadMo
 absl::StatusOr<VineModel> ConnectCanes(const std::vector<Polyline3>& input,
                                        const std::optional<Polyline3>& trunk_in,
                                        const HeadModel& head, const ConnectOptions& options,
-                                       ConnectSummary* summary) {
+                                       ConnectSummary* summary,
+                                       const GapSupportFn& gap_support) {
   absl::StatusOr<PreparedCanes> prepared = PrepareCanes(input, trunk_in, head, options);
   if (!prepared.ok()) return prepared.status();
-  return BuildTree(*prepared, FindJoins(*prepared, head, options), head, options, summary);
+  return BuildTree(*prepared, FindJoins(*prepared, head, options), head, options, summary,
+                   gap_support);
 }
 
 absl::StatusOr<VineModel> BuildTree(const PreparedCanes& prepared_in,
                                     const std::vector<JoinCandidate>& joins,
                                     const HeadModel& head, const ConnectOptions& options,
-                                    ConnectSummary* summary) {
+                                    ConnectSummary* summary, const GapSupportFn& gap_support) {
   if (absl::Status s = options.Validate(); !s.ok()) return s;
   const PreparedCanes* prepared = &prepared_in;
   ConnectSummary local;
@@ -420,7 +425,11 @@ absl::StatusOr<VineModel> BuildTree(const PreparedCanes& prepared_in,
     Polyline3 cane = canes[i];
     const Eigen::Vector3d at = joins[join[i]].point;
     const double gap = (cane.points.front() - at).norm();
-    if (gap > 1e-4 && gap <= options.max_bridge_m) {
+    // A wider gap is drawn only where the images show wood all along it: the base was there
+    // but not matched across the views.
+    if (gap > 1e-4 && (gap <= options.max_bridge_m ||
+                       (gap_support && gap_support(cane.points.front(), at) >=
+                                           options.min_gap_support))) {
       cane.points.insert(cane.points.begin(), at);
       cane.radii.insert(cane.radii.begin(), cane.radii.front());
     }

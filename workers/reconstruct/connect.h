@@ -17,9 +17,13 @@
 //     (a neighbour's canes, ghosts): the arm must avoid them, but they are not pruned.
 //  4. A cane that continues its parent from the parent's tip (a cane broken at a crossing or an
 //     occlusion) is appended to it, so that canes come out whole.
+//  5. A base near its join point (`max_bridge_m`) gets a first point there. So does a farther
+//     one whose gap the images show as wood all along (a GapSupportFn from the caller; beyond
+//     the paper): the base was there but was not matched across the views.
 // Thread-safe (pure).
 #pragma once
 
+#include <functional>
 #include <optional>
 #include <vector>
 
@@ -28,6 +32,12 @@
 #include "workers/reconstruct/join_classifier.h"
 
 namespace vb::reconstruct {
+
+// The fraction in [0, 1] of the straight line from a child's base to a join point that the
+// images show as wood. Given by the caller (reconstruct.cc, over the stop's views), so that
+// connecting stays free of 2D types. Must be thread-compatible with the call.
+using GapSupportFn =
+    std::function<double(const Eigen::Vector3d& base, const Eigen::Vector3d& join_point)>;
 
 struct ConnectOptions {
   double max_attach_m = 0.15;        // joins with a wider gap than this are not considered
@@ -45,6 +55,8 @@ struct ConnectOptions {
   double continuation_gap_m = 0.02;  // ... joining within this of the tip (arc length)
   double continuation_angle_deg = 35.0;  // ... with tangents within this angle
   JoinWeights join_weights = DefaultJoinWeights();  // the join classifier
+  double min_gap_support = 0.9;      // a gap wider than max_bridge_m is drawn when at least this
+                                     // fraction of it is wood in the images (GapSupportFn)
 
   absl::Status Validate() const;
 };
@@ -62,7 +74,8 @@ struct ConnectSummary {
 absl::StatusOr<VineModel> ConnectCanes(const std::vector<Polyline3>& canes,
                                        const std::optional<Polyline3>& trunk,
                                        const HeadModel& head, const ConnectOptions& options,
-                                       ConnectSummary* summary = nullptr);
+                                       ConnectSummary* summary = nullptr,
+                                       const GapSupportFn& gap_support = {});
 
 // Steps 1-2 alone (PrepareCanes, FindJoins), for training the join classifier and diagnosis.
 struct PreparedCanes {
@@ -92,6 +105,7 @@ std::vector<JoinCandidate> FindJoins(const PreparedCanes& prepared, const HeadMo
 absl::StatusOr<VineModel> BuildTree(const PreparedCanes& prepared,
                                     const std::vector<JoinCandidate>& joins,
                                     const HeadModel& head, const ConnectOptions& options,
-                                    ConnectSummary* summary = nullptr);
+                                    ConnectSummary* summary = nullptr,
+                                    const GapSupportFn& gap_support = {});
 
 }  // namespace vb::reconstruct

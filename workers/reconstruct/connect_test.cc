@@ -99,6 +99,46 @@ TEST(ConnectCanes, LeavesOutWhatDoesNotReachTheVine) {
   EXPECT_EQ(summary.unattached, 2);
 }
 
+// B's base was seen 6 cm above A: B hangs on A either way, but the gap is drawn only where the
+// images show wood along it (the base was there, unmatched).
+TEST(ConnectCanes, ASeenGapIsDrawnAndAnUnseenOneIsNot) {
+  const Polyline3 trunk = Line({0, 0.8, 0}, {0, 0.8, 0.95}, 0.025);
+  const std::vector<Polyline3> canes = {
+      Line({0.06, 0.8, 1.0}, {0.6, 0.8, 1.1}),       // A: from the head
+      Line({0.3, 0.8, 1.5}, {0.3, 0.8, 1.1044}),     // B: lower end 6 cm above A
+  };
+  const Eigen::Vector3d on_a(0.3, 0.8, 1.0 + 0.1 * 0.24 / 0.54);  // A below B's base
+  ConnectOptions options;
+  options.min_join_probability = 1e-3;  // whatever the classifier makes of a 6 cm gap
+  for (const double support : {1.0, 0.5}) {
+    int calls = 0;
+    const GapSupportFn gap_support = [&](const Eigen::Vector3d& base, const Eigen::Vector3d& at) {
+      ++calls;
+      EXPECT_LT((base - Eigen::Vector3d(0.3, 0.8, 1.1044)).norm(), 1e-9);
+      EXPECT_LT(PointSegmentDistance(at, {0.06, 0.8, 1.0}, {0.6, 0.8, 1.1}), 1e-3);
+      EXPECT_LT((at - on_a).norm(), 0.02);
+      return support;
+    };
+    const auto model = ConnectCanes(canes, trunk, Head(), options, nullptr, gap_support);
+    ASSERT_TRUE(model.ok()) << model.status();
+    ASSERT_TRUE(model->Validate().ok()) << model->Validate();
+    ASSERT_EQ(model->canes.size(), 3u);
+    const Cane& b = model->canes[2];
+    EXPECT_EQ(b.parent_id, model->canes[1].id);
+    EXPECT_EQ(calls, 1);
+    if (support >= options.min_gap_support) {
+      EXPECT_LT(PointSegmentDistance(b.polyline.points.front(), {0.06, 0.8, 1.0}, {0.6, 0.8, 1.1}),
+                1e-3);
+    } else {
+      EXPECT_LT((b.polyline.points.front() - Eigen::Vector3d(0.3, 0.8, 1.1044)).norm(), 1e-9);
+    }
+  }
+  ConnectOptions bad;
+  bad.min_gap_support = 1.5;
+  EXPECT_EQ(ConnectCanes(canes, trunk, Head(), bad).status().code(),
+            absl::StatusCode::kInvalidArgument);
+}
+
 TEST(ConnectCanes, BuildTreeRejectsJoinsOutOfRange) {
   const Polyline3 trunk = Line({0, 0.8, 0}, {0, 0.8, 0.95}, 0.025);
   const auto prepared = PrepareCanes({Line({0.06, 0.8, 1.0}, {0.6, 0.8, 1.1})}, trunk, Head(),

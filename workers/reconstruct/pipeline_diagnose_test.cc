@@ -13,6 +13,7 @@
 #include "gtest/gtest.h"
 #include "workers/reconstruct/correspondence_test_util.h"
 #include "workers/reconstruct/join_test_util.h"
+#include "workers/reconstruct/gap_support.h"
 #include "workers/reconstruct/reconstruct.h"
 
 namespace vb::reconstruct {
@@ -78,6 +79,10 @@ TEST(PipelineStages, DISABLED_Report) {
   if (const char* v = std::getenv("VB_MERGE")) options.connect.merge_continuations = std::atoi(v);
   if (const char* v = std::getenv("VB_MAX_BRIDGE")) options.connect.max_bridge_m = std::atof(v);
   if (const char* v = std::getenv("VB_MAX_ATTACH")) options.connect.max_attach_m = std::atof(v);
+  if (const char* v = std::getenv("VB_MIN_HITS")) options.correspondence.min_hits = std::atoi(v);
+  if (const char* v = std::getenv("VB_MAX_GAP")) options.correspondence.max_gap_samples = std::atoi(v);
+  if (const char* v = std::getenv("VB_ALPHA")) options.correspondence.alpha = std::atof(v);
+  if (const char* v = std::getenv("VB_GAP_SUPPORT")) options.connect.min_gap_support = std::atof(v);
   Row pieces_row, assembled_row, connected_row, final_row;
   double unattached_recall = 0;
   ParentBreakdown parents;
@@ -109,6 +114,9 @@ TEST(PipelineStages, DISABLED_Report) {
     ConnectSummary summary;
     const auto prepared = PrepareCanes(*canes, head->trunk, head->head, options.connect);
     ASSERT_TRUE(prepared.ok()) << prepared.status();
+    const GapSupportFn gap_support = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+      return GapSupport(a, b, stop.views, rig);
+    };
     std::vector<JoinCandidate> joins = FindJoins(*prepared, head->head, options.connect);
     if (std::getenv("VB_ORACLE") && *std::getenv("VB_ORACLE")) {
       // Upper bound of the tree step: the join classifier replaced by the true labels.
@@ -116,7 +124,7 @@ TEST(PipelineStages, DISABLED_Report) {
       const std::vector<LabelledJoin> labels = LabelJoins(*prepared, joins, truth);
       for (size_t j = 0; j < joins.size(); ++j) joins[j].probability = labels[j].right ? 0.95 : 0.01;
     }
-    auto model = BuildTree(*prepared, joins, head->head, options.connect, &summary);
+    auto model = BuildTree(*prepared, joins, head->head, options.connect, &summary, gap_support);
     ASSERT_TRUE(model.ok()) << model.status();
     VineModel connected = *model;
     ASSERT_TRUE(RefineModel(&*model, stop.views, rig, options.fit, deadline).ok());

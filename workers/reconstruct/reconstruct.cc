@@ -8,6 +8,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "core/status_macros.h"
+#include "workers/reconstruct/gap_support.h"
 
 namespace vb::reconstruct {
 namespace {
@@ -157,8 +158,12 @@ absl::StatusOr<ReconstructResult> ReconstructFromViews(const std::vector<View2D>
   result.timings.head_s = SecondsSince(t);
 
   t = std::chrono::steady_clock::now();
+  // Seen gaps (connect.h): a base whose gap to its parent is wood in every view is drawn on it.
+  const GapSupportFn gap_support = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+    return GapSupport(a, b, views, rig);
+  };
   VB_ASSIGN_OR_RETURN(result.model, ConnectCanes(canes, head.trunk, head.head, options.connect,
-                                                 &result.connect));
+                                                 &result.connect, gap_support));
   result.timings.connect_s = SecondsSince(t);
 
   if (options.refine && !result.model.canes.empty()) {
