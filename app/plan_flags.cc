@@ -50,6 +50,7 @@ absl::StatusOr<PlanSetup> ParsePlanSetup(Flags& flags) {
   VB_ASSIGN_OR_RETURN(o.choose_motions_with_order,
                       flags.Bool("choose-motions-with-order", o.choose_motions_with_order));
   VB_ASSIGN_OR_RETURN(o.rolled_twins, flags.Bool("rolled-twins", o.rolled_twins));
+  VB_ASSIGN_OR_RETURN(o.undo_walled_in, flags.Bool("undo-walled-in", o.undo_walled_in));
   o.path.shortcut_rounds = static_cast<int>(rounds);
   if (max_states < 0 || max_states > 100000000)
     return absl::InvalidArgumentError("--path-max-tree-states must be in [0, 1e8]");

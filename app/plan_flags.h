@@ -25,7 +25,8 @@ struct PlanSetup {
 // --jaw-opening-m W
 // (the secateur's, SecateurOptions' default), --joint-acceleration A (rad/s^2 for every joint;
 // default JointLimits', URScript movej's 1.4; for what-if runs).
-// --choose-motions-with-order true|false, --rolled-twins true|false (PlanOptions').
+// --choose-motions-with-order true|false, --rolled-twins true|false, --undo-walled-in
+// true|false (PlanOptions').
 // INVALID_ARGUMENT naming the flag.
 absl::StatusOr<PlanSetup> ParsePlanSetup(Flags& flags);
 

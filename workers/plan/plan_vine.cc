@@ -260,7 +260,11 @@ struct Planning {
     PathResult path = planner->PlanToAny(At(), goals, deadline);
     Record(path, to, goals, false);
     std::shared_ptr<CollisionChecker> used = checker;
-    if (path.outcome == PathOutcome::kNoPathWithinDeadline && options.margin_fallback &&
+    // Start in collision: a cut of an earlier pass, whose stroke this pass's margins did not
+    // protect (the way home after a cut is given up); it is free without margins.
+    if ((path.outcome == PathOutcome::kNoPathWithinDeadline ||
+         path.outcome == PathOutcome::kStartInCollision) &&
+        options.margin_fallback &&
         options.margins.max_margin_m > 0 && plain_scene && !deadline.Expired()) {
       if (!plain_planner) {
         plain_checker = MakeChecker(options.checker, robot, *plain_scene);
@@ -426,7 +430,7 @@ absl::StatusOr<std::vector<int>> PlanPass(const VineModel& model, const std::vec
   // Paths: a cut whose transit fails is given up, and the next one is joined to the last reached.
   // When `kWalledInFailures` cuts in a row fail from the cut the arm is at, that cut walls the
   // arm in (its exit is in a pocket of the vine): it is undone once, the failed cuts are tried
-  // again from the cut before, and it goes to the end of the pass's order.
+  // again from the cut before, and it goes to the end of the pass's order (undo_walled_in).
   constexpr int kWalledInFailures = 2;
   t = std::chrono::steady_clock::now();
   const size_t legs_before = p.legs.size();
@@ -481,10 +485,11 @@ absl::StatusOr<std::vector<int>> PlanPass(const VineModel& model, const std::vec
     auto reached = p.Path(std::move(goals), cuts[k].id);
     if (!reached) {
       failed.push_back({node, stats.paths.back().outcome});
-      if (static_cast<int>(failed.size()) >= kWalledInFailures && !leg_nodes.empty() &&
-          !undone[leg_nodes.back()]) {
+      if (options.undo_walled_in && static_cast<int>(failed.size()) >= kWalledInFailures &&
+          !leg_nodes.empty() && !undone[leg_nodes.back()]) {
         const int walled = leg_nodes.back();
         undone[walled] = true;
+        ++stats.walled_in_undone;
         motions[planned[walled - 1]] = std::move(p.legs.back().motion);
         p.legs.pop_back();
         leg_nodes.pop_back();

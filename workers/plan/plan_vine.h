@@ -5,12 +5,16 @@
 //   2. a cut motion for every cut, ranked by clearance, slid outward where none is free
 //      (cut_motion.h);
 //   3. adaptive safety margins around the chosen cut motions (safety_margins.h);
-//   4. the order of the cuts: exact Held-Karp on estimated move times (cut_order.h);
+//   4. the order of the cuts and the motion each is made with, together: exact Held-Karp and a
+//      dynamic programme over each cut's motions along the order, alternated, on estimated move
+//      times with whole-turn shifts (cut_order.h OrderAndChoose, motion_choice.h);
 //   5. paths between consecutive cut motions in the inflated scene, one query per cut to all of
-//      its alternative motions (PathPlanner::PlanToAny: straight segments, then RRT-Connect,
-//      shortcut); a query that fails there is run again in the scene without margins
-//      (margin_fallback); a cut no path reaches waits for the next pass (retry_unreached), or is
-//      dropped in the last one, and the next cut is joined to the last cut reached;
+//      its alternative motions, cheapest remaining plan first (PathPlanner::PlanToAny: straight
+//      segments, then RRT-Connect, shortcut); a query that fails there is run again in the scene
+//      without margins (margin_fallback); a cut no path reaches waits for the next pass
+//      (retry_unreached), or is dropped in the last one, and the next cut is joined to the last
+//      cut reached; a cut from which two transits in a row fail walls the arm in: it is undone
+//      once and tried again at the end of the pass;
 //   6. passes: cuts with no collision-free cut motion or no path are tried again on the vine as
 //      the cuts made so far leave it (their wood has fallen, fallen_wood.h), after those cuts, up
 //      to max_passes times -- near the head the canes that block a cut are mostly canes that go;
@@ -94,6 +98,10 @@ struct PlanOptions {
   // on tuning seeds 1110-1199 it saved no execution time and doubled the goals of each query
   // (docs/plan.md "Ordering").
   bool rolled_twins = false;
+  // A cut from which two transits in a row find no path walls the arm in: it is undone once,
+  // the failed cuts are tried again from the cut before, and it goes to the end of the pass's
+  // order. false: the failed cuts wait for the next pass (or are given up in the last).
+  bool undo_walled_in = true;
   // Where the arm starts and ends: folded clear of the cameras' view (DefaultHome()).
   Joints home = Joints::Zero();
   bool return_home = true;
@@ -136,6 +144,7 @@ struct PlanStats {
          timing_s = 0.0, total_s = 0.0;
   int cuts = 0, planned = 0, unreachable = 0;
   int passes = 0;                         // passes that planned at least one cut
+  int walled_in_undone = 0;               // cuts undone because they walled the arm in
   int64_t checks = 0;                     // configuration checks in the whole plan
   // Transit timing: interior waypoints, those where the arm stops (a blend collided at every
   // size) and blend halvings.

@@ -233,10 +233,11 @@ TEST(PlanVine, TransitsTheMarginsCloseArePlannedWithoutThem) {
   const PlatformGeometry platform = DefaultPlatform();
   PlanOptions fallback = Options();
   fallback.margins.max_margin_m = 0.3;
+  fallback.undo_walled_in = false;  // it recovers some of the same cuts another way
   PlanOptions no_fallback = fallback;
   no_fallback.margin_fallback = false;
   int planned_with = 0, planned_without = 0, solved_without_margins = 0;
-  for (uint64_t seed : {1105, 1106}) {
+  for (uint64_t seed : {1101, 1108}) {
     const Stop stop = SimStop(seed);
     auto a = PlanVine(stop.model, stop.plan, robot, platform, fallback);
     auto b = PlanVine(stop.model, stop.plan, robot, platform, no_fallback);
@@ -264,6 +265,36 @@ TEST(PlanVine, TransitsTheMarginsCloseArePlannedWithoutThem) {
   }
   EXPECT_GT(solved_without_margins, 0);
   EXPECT_GT(planned_with, planned_without);
+}
+
+TEST(PlanVine, ACutThatWallsTheArmInIsUndone) {
+  // Margins ten times the default and no fallback wall the arm in at some cuts: transits from
+  // there fail. Such a cut is undone and tried again later; every cut still ends planned once or
+  // unplanned once, and the trajectory touches nothing.
+  const RobotModel robot = DefaultUr5(SecateurTool());
+  const PlatformGeometry platform = DefaultPlatform();
+  PlanOptions undo = Options();
+  undo.margins.max_margin_m = 0.3;
+  undo.margin_fallback = false;
+  int undone = 0;
+  for (uint64_t seed : {1103, 1105}) {
+    const Stop stop = SimStop(seed);
+    auto a = PlanVine(stop.model, stop.plan, robot, platform, undo);
+    ASSERT_TRUE(a.ok()) << a.status();
+    undone += a->stats.walled_in_undone;
+    std::set<int> ids;
+    for (const Cut& cut : a->cuts) EXPECT_TRUE(ids.insert(cut.id.value).second);
+    for (const UnplannedCut& u : a->trajectory.unplanned)
+      EXPECT_TRUE(ids.insert(u.cut_id.value).second) << "cut " << u.cut_id.value;
+    EXPECT_EQ(ids.size(), stop.plan.cuts.size());
+    EXPECT_EQ(a->trajectory.segments.size(), 2 * a->cuts.size() + (a->cuts.empty() ? 0 : 1));
+    EXPECT_EQ(CountTrajectoryCollisions(a->trajectory, a->cuts, stop.model, platform, robot,
+                                        CheckerKind::kPrimitives, 0.002,
+                                        Options().cut_motion.cut_cane_free_radius_m),
+              0)
+        << "seed " << seed;
+  }
+  EXPECT_GT(undone, 0);
 }
 
 }  // namespace
