@@ -238,7 +238,7 @@ TEST(PlanVine, TransitsTheMarginsCloseArePlannedWithoutThem) {
   PlanOptions no_fallback = fallback;
   no_fallback.margin_fallback = false;
   int planned_with = 0, planned_without = 0, solved_without_margins = 0;
-  for (uint64_t seed : {1105, 1106}) {
+  for (uint64_t seed : {1102, 1103, 1104, 1105, 1106, 1107}) {
     const Stop stop = SimStop(seed);
     auto a = PlanVine(stop.model, stop.plan, robot, platform, fallback);
     auto b = PlanVine(stop.model, stop.plan, robot, platform, no_fallback);
