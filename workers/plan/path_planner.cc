@@ -74,11 +74,12 @@ class Validity : public ob::StateValidityChecker {
 
 class Motion : public ob::MotionValidator {
  public:
-  Motion(const ob::SpaceInformationPtr& si, CollisionChecker* checker, double max_step_m)
+  // *max_step_m: the resolution of the running query's edge checks.
+  Motion(const ob::SpaceInformationPtr& si, CollisionChecker* checker, const double* max_step_m)
       : ob::MotionValidator(si), checker_(checker), max_step_m_(max_step_m) {}
 
   bool checkMotion(const ob::State* s1, const ob::State* s2) const override {
-    const bool ok = checker_->IsMotionFree(ToJoints(s1), ToJoints(s2), max_step_m_);
+    const bool ok = checker_->IsMotionFree(ToJoints(s1), ToJoints(s2), *max_step_m_);
     ok ? ++valid_ : ++invalid_;
     return ok;
   }
@@ -93,7 +94,7 @@ class Motion : public ob::MotionValidator {
     Joints prev = a;
     for (int k = 1; k <= kPieces; ++k) {
       const Joints next = k == kPieces ? b : Joints(a + (b - a) * (double(k) / kPieces));
-      if (!checker_->IsMotionFree(prev, next, max_step_m_)) {
+      if (!checker_->IsMotionFree(prev, next, *max_step_m_)) {
         last_valid.second = double(k - 1) / kPieces;
         if (last_valid.first != nullptr) FromJoints(prev, last_valid.first);
         ++invalid_;
@@ -107,7 +108,7 @@ class Motion : public ob::MotionValidator {
 
  private:
   CollisionChecker* checker_;
-  double max_step_m_;
+  const double* max_step_m_;
 };
 
 // Linear nearest-neighbour search over a tree's joint vectors kept in one contiguous array:
@@ -209,6 +210,9 @@ absl::Status PathOptions::Validate() const {
   if (!(max_step_m > 0.0) || !std::isfinite(max_step_m)) {
     return absl::InvalidArgumentError("path options: max_step_m: must be finite and > 0");
   }
+  if (!(tree_max_step_m >= 0.0) || !std::isfinite(tree_max_step_m)) {
+    return absl::InvalidArgumentError("path options: tree_max_step_m: must be finite and >= 0");
+  }
   if (!(range_rad >= 0.0) || !std::isfinite(range_rad)) {
     return absl::InvalidArgumentError("path options: range_rad: must be finite and >= 0");
   }
@@ -252,6 +256,7 @@ struct PathPlanner::Ompl {
   std::uint_fast32_t seed = 1;  // read by the sampler allocator at every solve
   ob::State* start = nullptr;
   ob::State* goal = nullptr;
+  double edge_step_m = 0.01;  // RRT-Connect's edge-check resolution in the running query
 
   ~Ompl() {
     if (si != nullptr) {
@@ -283,7 +288,8 @@ PathPlanner::PathPlanner(CollisionChecker& checker, const JointLimits& limits,
     });
     ompl->si = std::make_shared<ob::SpaceInformation>(ompl->space);
     ompl->si->setStateValidityChecker(std::make_shared<Validity>(ompl->si, &checker_));
-    ompl->si->setMotionValidator(std::make_shared<Motion>(ompl->si, &checker_, options_.max_step_m));
+    ompl->edge_step_m = options_.max_step_m;
+    ompl->si->setMotionValidator(std::make_shared<Motion>(ompl->si, &checker_, &raw->edge_step_m));
     ompl->si->setup();
     ompl->pdef = std::make_shared<ob::ProblemDefinition>(ompl->si);
     ompl->start = ompl->si->allocState();
@@ -374,62 +380,80 @@ PathResult PathPlanner::PlanToAny(const Joints& start, std::span<const Joints> g
       budget_s >= 1e9 ? Clock::time_point::max()
                       : Clock::now() + std::chrono::duration_cast<Clock::duration>(
                                            std::chrono::duration<double>(budget_s));
-  try {
-    Ompl& o = *ompl_;
-    o.planner->clear();  // drops both trees and the sampler (re-allocated, seeded, in solve)
-    o.pdef->clearSolutionPaths();
-    o.pdef->clearStartStates();
-    // Reversed roles: RRT-Connect roots its start tree at every start state before the first
-    // iteration, but adds goal states one at a time as its goal tree grows, so a walled-in first
-    // goal would hide the others. The path is reversed below.
-    for (int g : usable) {
-      FromJoints(goals[g], o.goal);
-      o.pdef->addStartState(o.goal);  // copied
-    }
-    FromJoints(start, o.start);
-    auto goal_region = std::make_shared<ob::GoalState>(o.si);
-    goal_region->setState(o.start);
-    goal_region->setThreshold(1e-9);
-    o.pdef->setGoal(goal_region);
-    o.seed = OmplSeed(options_.seed);
-    const size_t max_states =
-        options_.max_tree_states > 0 ? static_cast<size_t>(options_.max_tree_states) : SIZE_MAX;
-    const TreeSizeRRTConnect& rrt = *o.planner;
-    const ob::PlannerTerminationCondition ptc([&end, &deadline, &rrt, max_states] {
-      return rrt.StartTreeSize() + rrt.GoalTreeSize() >= max_states || Clock::now() >= end ||
-             deadline.Cancelled();
-    });
-    const ob::PlannerStatus status = o.planner->solve(ptc);
-    if (status != ob::PlannerStatus::EXACT_SOLUTION || !o.pdef->hasExactSolution()) {
-      return finish(PathOutcome::kNoPathWithinDeadline,
-                    absl::StrCat("RRT-Connect found no exact path within ", budget_s,
-                                 " s (", status.asString(), ")"));
-    }
-    const auto* path = o.pdef->getSolutionPath()->as<og::PathGeometric>();
-    for (std::size_t k = path->getStateCount(); k-- > 0;) {
-      const Joints q = ToJoints(path->getState(k));
-      if (result.waypoints.empty() || !NearlyEqual(result.waypoints.back(), q)) {
-        result.waypoints.push_back(q);
+  // RRT-Connect checks its edges at tree_max_step_m; the path it returns is then checked at
+  // max_step_m, and if that finds a collision the query runs again with the edges checked at
+  // max_step_m (same seed, same bounds, within what is left of the time limit).
+  Ompl& o = *ompl_;
+  const double coarse_m = std::max(options_.tree_max_step_m, options_.max_step_m);
+  for (const double edge_step_m : {coarse_m, options_.max_step_m}) {
+    result.waypoints.clear();
+    o.edge_step_m = edge_step_m;
+    try {
+      o.planner->clear();  // drops both trees and the sampler (re-allocated, seeded, in solve)
+      o.pdef->clearSolutionPaths();
+      o.pdef->clearStartStates();
+      // Reversed roles: RRT-Connect roots its start tree at every start state before the first
+      // iteration, but adds goal states one at a time as its goal tree grows, so a walled-in
+      // first goal would hide the others. The path is reversed below.
+      for (int g : usable) {
+        FromJoints(goals[g], o.goal);
+        o.pdef->addStartState(o.goal);  // copied
       }
+      FromJoints(start, o.start);
+      auto goal_region = std::make_shared<ob::GoalState>(o.si);
+      goal_region->setState(o.start);
+      goal_region->setThreshold(1e-9);
+      o.pdef->setGoal(goal_region);
+      o.seed = OmplSeed(options_.seed);
+      const size_t max_states =
+          options_.max_tree_states > 0 ? static_cast<size_t>(options_.max_tree_states) : SIZE_MAX;
+      const TreeSizeRRTConnect& rrt = *o.planner;
+      const ob::PlannerTerminationCondition ptc([&end, &deadline, &rrt, max_states] {
+        return rrt.StartTreeSize() + rrt.GoalTreeSize() >= max_states || Clock::now() >= end ||
+               deadline.Cancelled();
+      });
+      const ob::PlannerStatus status = o.planner->solve(ptc);
+      if (status != ob::PlannerStatus::EXACT_SOLUTION || !o.pdef->hasExactSolution()) {
+        return finish(PathOutcome::kNoPathWithinDeadline,
+                      absl::StrCat("RRT-Connect found no exact path within ", budget_s,
+                                   " s (", status.asString(), ")"));
+      }
+      const auto* path = o.pdef->getSolutionPath()->as<og::PathGeometric>();
+      for (std::size_t k = path->getStateCount(); k-- > 0;) {
+        const Joints q = ToJoints(path->getState(k));
+        if (result.waypoints.empty() || !NearlyEqual(result.waypoints.back(), q)) {
+          result.waypoints.push_back(q);
+        }
+      }
+    } catch (const std::exception& e) {  // ompl::Exception and allocation failures
+      return finish(PathOutcome::kNoPathWithinDeadline, absl::StrCat("OMPL: ", e.what()));
     }
-  } catch (const std::exception& e) {  // ompl::Exception and allocation failures
-    return finish(PathOutcome::kNoPathWithinDeadline, absl::StrCat("OMPL: ", e.what()));
+    if (result.waypoints.size() < 2) {
+      return finish(PathOutcome::kNoPathWithinDeadline, "RRT-Connect returned a degenerate path");
+    }
+    // The path ends at a copy of one of the goals: find which (the nearest; copies are exact),
+    // and make the ends bit-exact so callers can chain paths.
+    double best = std::numeric_limits<double>::infinity();
+    for (int g : usable) {
+      const double d = (goals[g] - result.waypoints.back()).cwiseAbs().maxCoeff();
+      if (d < best) best = d, result.goal_index = g;
+    }
+    if (best > 1e-9) {
+      return finish(PathOutcome::kNoPathWithinDeadline, "RRT-Connect's path ends at no goal");
+    }
+    result.waypoints.front() = start;
+    result.waypoints.back() = goals[result.goal_index];
+    if (edge_step_m <= options_.max_step_m) break;  // every edge was checked at max_step_m
+    bool fine = true;
+    for (size_t k = 0; fine && k + 1 < result.waypoints.size(); ++k)
+      fine = checker_.IsMotionFree(result.waypoints[k], result.waypoints[k + 1], options_.max_step_m);
+    if (fine) break;
+    ++result.coarse_rejections;
+    if (deadline.Expired() || Clock::now() >= end) {
+      return finish(PathOutcome::kNoPathWithinDeadline,
+                    "RRT-Connect's path collided at max_step_m and no time was left to replan");
+    }
   }
-  if (result.waypoints.size() < 2) {
-    return finish(PathOutcome::kNoPathWithinDeadline, "RRT-Connect returned a degenerate path");
-  }
-  // The path ends at a copy of one of the goals: find which (the nearest; copies are exact), and
-  // make the ends bit-exact so callers can chain paths.
-  double best = std::numeric_limits<double>::infinity();
-  for (int g : usable) {
-    const double d = (goals[g] - result.waypoints.back()).cwiseAbs().maxCoeff();
-    if (d < best) best = d, result.goal_index = g;
-  }
-  if (best > 1e-9) {
-    return finish(PathOutcome::kNoPathWithinDeadline, "RRT-Connect's path ends at no goal");
-  }
-  result.waypoints.front() = start;
-  result.waypoints.back() = goals[result.goal_index];
   ShortcutPath(checker_, limits_, options_.max_step_m, options_.shortcut_rounds, options_.seed,
                deadline, result.waypoints);
   return finish(PathOutcome::kSolved, "");
