@@ -142,12 +142,18 @@ class JointNearest : public ompl::NearestNeighbors<T> {
   }
   T nearest(const T& data) const override {
     if (data_.empty()) throw ompl::Exception("JointNearest: no elements");
+    // Squared distances, with the square root taken only where one is smaller than the best so
+    // far: the sqrt of a smaller square can round to the same distance, and then OMPL keeps the
+    // earlier element, as this does.
     const double* x = Values(data);
     size_t pos = 0;
-    double dmin = Distance(0, x);
+    double sq_min = SquaredDistance(0, x), d_min = std::sqrt(sq_min);
     for (size_t i = 1; i < data_.size(); ++i) {
-      const double d = Distance(i, x);
-      if (dmin > d) dmin = d, pos = i;
+      const double sq = SquaredDistance(i, x);
+      if (sq >= sq_min) continue;
+      const double d = std::sqrt(sq);
+      if (d < d_min) pos = i, d_min = d;
+      sq_min = sq;  // a tie keeps pos, and no later element beats d_min with sq >= this
     }
     return data_[pos];
   }
@@ -167,15 +173,16 @@ class JointNearest : public ompl::NearestNeighbors<T> {
   static const double* Values(const T& data) {
     return data->state->template as<ob::RealVectorStateSpace::StateType>()->values;
   }
-  double Distance(size_t i, const double* x) const {
+  double SquaredDistance(size_t i, const double* x) const {
     const double* a = &q_[6 * i];
     double sum = 0.0;
     for (int j = 0; j < 6; ++j) {
       const double diff = a[j] - x[j];
       sum += diff * diff;
     }
-    return std::sqrt(sum);
+    return sum;
   }
+  double Distance(size_t i, const double* x) const { return std::sqrt(SquaredDistance(i, x)); }
   std::vector<std::pair<double, size_t>> Sorted(const T& data, double radius) const {
     const double* x = Values(data);
     std::vector<std::pair<double, size_t>> d;
