@@ -38,6 +38,8 @@ struct CheckerRecord {
   // Vine times on the vines the baselines also plan whole (for the speed-up).
   std::vector<double> baseline_vines_vine_s;
   int direct = 0, without_margins = 0;
+  // Wall time summed over all vines' path queries, those that found a path and those that did not.
+  double solved_paths_total_s = 0, failed_paths_total_s = 0;
   std::vector<double> median_margin_m;  // per vine, first pass (MarginSummary)
   std::map<std::string, std::vector<double>> stage_s;  // per vine
   int reachable = 0, planned = 0, passes = 0;
@@ -101,6 +103,9 @@ nlohmann::json Summary(const CheckerRecord& r) {
           {"direct_path_fraction", r.path_s.empty() ? 0.0 : double(r.direct) / r.path_s.size()},
           {"max_passes_used", r.passes},
           {"paths_without_margins", r.without_margins},
+          {"solved_paths_total_s", r.solved_paths_total_s},
+          {"failed_paths", r.path_s.size() - r.solved_path_s.size()},
+          {"failed_paths_total_s", r.failed_paths_total_s},
           {"median_margin_m", Median(r.median_margin_m)},
           {"unplanned_reasons", r.unplanned}};
 }
@@ -187,7 +192,12 @@ absl::Status RunBenchPlan(Flags& flags) {
         r.stage_s[name].push_back(value);
       for (const plan::PathRecord& p : s.paths) {
         r.path_s.push_back(p.planning_s);
-        if (p.outcome == plan::PathOutcome::kSolved) r.solved_path_s.push_back(p.planning_s);
+        if (p.outcome == plan::PathOutcome::kSolved) {
+          r.solved_path_s.push_back(p.planning_s);
+          r.solved_paths_total_s += p.planning_s;
+        } else {
+          r.failed_paths_total_s += p.planning_s;
+        }
         if (p.direct) ++r.direct;
         if (p.without_margins) ++r.without_margins;
         r.checks_per_path.push_back(static_cast<double>(p.checks));

@@ -30,6 +30,8 @@ absl::StatusOr<PlanSetup> ParsePlanSetup(Flags& flags) {
   VB_ASSIGN_OR_RETURN(const int64_t rounds, flags.Int("shortcut-rounds", o.path.shortcut_rounds));
   VB_ASSIGN_OR_RETURN(const int64_t max_states,
                       flags.Int("path-max-tree-states", o.path.max_tree_states));
+  VB_ASSIGN_OR_RETURN(o.path.tree_max_step_m,
+                      flags.Double("path-tree-max-step-m", o.path.tree_max_step_m));
   VB_ASSIGN_OR_RETURN(o.margin_fallback, flags.Bool("margin-fallback", o.margin_fallback));
   VB_ASSIGN_OR_RETURN(o.retry_unreached, flags.Bool("retry-unreached", o.retry_unreached));
   VB_ASSIGN_OR_RETURN(const int64_t passes, flags.Int("max-passes", o.max_passes));

@@ -57,24 +57,30 @@ absl::StatusOr<CollisionScene> CollisionScene::Build(const VineModel& model,
                  margin});
   };
   for (const Cane& cane : model.canes) {
-    // Each chord of the resampled cane takes the radius that encloses the cane between its ends:
-    // the larger end radius, or more where the original polyline bends away from the chord. (The
-    // distance to a segment is convex and the radius linear along each original piece, so
-    // enclosing the original vertices and the chord ends encloses the whole cane.)
+    // Chords between the points at arc lengths 0, step, 2 step, ... from the base, and the tip:
+    // a grid fixed at the base, so that a cane cut short (fallen_wood.h) keeps the very capsules
+    // it had, up to the one its cut falls in, and a trajectory checked on the uncut vine stays
+    // free on the cut one (an equally spaced resampling would move every chord of the stub).
+    // Each chord takes the radius that encloses the cane between its ends: the larger end
+    // radius, or more where the original polyline bends away from the chord. (The distance to a
+    // segment is convex and the radius linear along each original piece, so enclosing the
+    // original vertices and the chord ends encloses the whole cane.)
     const Polyline3& original = cane.polyline;
     const std::vector<double> arc = original.ArcLengths();
-    const Polyline3 line = original.Resampled(options.cane_segment_m);
-    const std::vector<double> line_arc = line.ArcLengths();
+    const double length = arc.back();
+    const double step = options.cane_segment_m;
+    std::vector<double> grid;
+    for (int k = 0; k * step < length - 1e-6; ++k) grid.push_back(k * step);
+    grid.push_back(length);
+    if (grid.size() < 2) grid.insert(grid.begin(), 0.0);  // a cane of (almost) no length
     size_t i = 0;
-    for (size_t k = 0; k + 1 < line.points.size(); ++k) {
-      double radius = std::max(line.radii[k], line.radii[k + 1]);
-      while (i < arc.size() && arc[i] <= line_arc[k]) ++i;
-      for (size_t j = i; j < arc.size() && arc[j] < line_arc[k + 1]; ++j) {
-        radius = std::max(radius, PointSegmentDistance(original.points[j], line.points[k],
-                                                       line.points[k + 1]) +
-                                      original.radii[j]);
-      }
-      add(ObstacleKind::kCane, cane.id.value, line.points[k], line.points[k + 1], radius);
+    for (size_t k = 0; k + 1 < grid.size(); ++k) {
+      const Eigen::Vector3d a = original.PointAt(grid[k]), b = original.PointAt(grid[k + 1]);
+      double radius = std::max(original.RadiusAt(grid[k]), original.RadiusAt(grid[k + 1]));
+      while (i < arc.size() && arc[i] <= grid[k]) ++i;
+      for (size_t j = i; j < arc.size() && arc[j] < grid[k + 1]; ++j)
+        radius = std::max(radius, PointSegmentDistance(original.points[j], a, b) + original.radii[j]);
+      add(ObstacleKind::kCane, cane.id.value, a, b, radius);
     }
   }
   for (const Sphere& s : model.head.spheres) add(ObstacleKind::kHead, 0, s.center, s.center, s.radius);

@@ -61,7 +61,7 @@ TEST(CollisionScene, CanesBecomeShortCapsulesInTheBaseFrame) {
       }
       ASSERT_LE(worst, 1e-9) << "cane " << cane.id.value << " s " << s;
     }
-    const int expected = std::max<int>(1, std::lround(cane.polyline.Length() / 0.03));
+    const int expected = std::max<int>(1, std::ceil(cane.polyline.Length() / 0.03 - 1e-6));
     EXPECT_EQ(count, expected) << "cane " << cane.id.value;
   }
   // The trunk's base, moved into the arm base frame by the mount's inverse, written out.
@@ -82,6 +82,54 @@ TEST(CollisionScene, CanesBecomeShortCapsulesInTheBaseFrame) {
   EXPECT_GE(wires, static_cast<int>(vine.wires.size()));
   EXPECT_EQ(posts, static_cast<int>(vine.posts.size()));
   EXPECT_EQ(platform, 3);
+}
+
+TEST(CollisionScene, ACaneCutShortKeepsItsCapsules) {
+  // Chords start from the base on a fixed grid: after a cut, the stub has the capsules it had up
+  // to the cut; only the one the cut falls in differs, and it stays within a fraction of a
+  // millimetre of the uncut cane's capsule there (its chord ends at the cut, where the cane may
+  // bend away from the uncut chord, and its radius is its thicker end's). So a motion free on
+  // the uncut vine is free on the cut one except within that fraction of a millimetre of the
+  // cut end. (With equally spaced chords every chord of the stub moved, by up to 0.7 mm.)
+  const VineModel vine = SimVine(1101);
+  const RobotModel robot = Robot();
+  const SceneOptions options;
+  auto full = CollisionScene::Build(vine, DefaultPlatform(), robot, options);
+  ASSERT_TRUE(full.ok()) << full.status();
+  auto capsules_of = [](const CollisionScene& scene, int64_t id) {
+    std::vector<Capsule> out;
+    for (const Obstacle& o : scene.obstacles)
+      if (o.kind == ObstacleKind::kCane && o.owner_id == id) out.push_back(o.capsule);
+    return out;
+  };
+  int stubs = 0;
+  for (size_t c = 0; c < vine.canes.size(); ++c) {
+    const std::vector<Capsule> whole = capsules_of(*full, vine.canes[c].id.value);
+    const double length = vine.canes[c].polyline.Length();
+    for (double f : {0.13, 0.5, 0.77}) {
+      VineModel cut = vine;
+      cut.canes[c].polyline.TruncateAt(f * length);
+      auto scene = CollisionScene::Build(cut, DefaultPlatform(), robot, options);
+      ASSERT_TRUE(scene.ok()) << scene.status();
+      const std::vector<Capsule> stub = capsules_of(*scene, vine.canes[c].id.value);
+      ASSERT_LE(stub.size(), whole.size());
+      for (size_t k = 0; k + 1 < stub.size(); ++k) {
+        EXPECT_LT((stub[k].a - whole[k].a).norm(), 1e-9);
+        EXPECT_LT((stub[k].b - whole[k].b).norm(), 1e-9);
+        EXPECT_NEAR(stub[k].radius, whole[k].radius, 1e-9);
+      }
+      // The last one: every sphere along its axis inside the uncut cane's capsule there.
+      const Capsule& last = stub.back();
+      const Capsule& around = whole[stub.size() - 1];
+      for (double t = 0; t <= 1.0; t += 0.05) {
+        const Eigen::Vector3d p = last.a + t * (last.b - last.a);
+        EXPECT_LE(PointSegmentDistance(p, around.a, around.b) + last.radius, around.radius + 1e-3)
+            << "cane " << c << " cut at " << f;
+      }
+      ++stubs;
+    }
+  }
+  EXPECT_GT(stubs, 10);
 }
 
 TEST(CollisionScene, PlanesBoundTheFreeSpace) {

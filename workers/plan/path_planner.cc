@@ -9,10 +9,12 @@
 #include <limits>
 #include <mutex>
 #include <random>
+#include <utility>
+#include <vector>
 
 #include "absl/strings/str_cat.h"
 #include "ompl/base/MotionValidator.h"
-#include "ompl/datastructures/NearestNeighborsLinear.h"
+#include "ompl/datastructures/NearestNeighbors.h"
 #include "ompl/base/ProblemDefinition.h"
 #include "ompl/base/SpaceInformation.h"
 #include "ompl/base/StateValidityChecker.h"
@@ -21,6 +23,7 @@
 #include "ompl/geometric/PathGeometric.h"
 #include "ompl/geometric/planners/rrt/RRTConnect.h"
 #include "ompl/util/Console.h"
+#include "ompl/util/Exception.h"
 #include "workers/plan/time_parameterization.h"
 
 namespace vb::plan {
@@ -71,11 +74,12 @@ class Validity : public ob::StateValidityChecker {
 
 class Motion : public ob::MotionValidator {
  public:
-  Motion(const ob::SpaceInformationPtr& si, CollisionChecker* checker, double max_step_m)
+  // *max_step_m: the resolution of the running query's edge checks.
+  Motion(const ob::SpaceInformationPtr& si, CollisionChecker* checker, const double* max_step_m)
       : ob::MotionValidator(si), checker_(checker), max_step_m_(max_step_m) {}
 
   bool checkMotion(const ob::State* s1, const ob::State* s2) const override {
-    const bool ok = checker_->IsMotionFree(ToJoints(s1), ToJoints(s2), max_step_m_);
+    const bool ok = checker_->IsMotionFree(ToJoints(s1), ToJoints(s2), *max_step_m_);
     ok ? ++valid_ : ++invalid_;
     return ok;
   }
@@ -90,7 +94,7 @@ class Motion : public ob::MotionValidator {
     Joints prev = a;
     for (int k = 1; k <= kPieces; ++k) {
       const Joints next = k == kPieces ? b : Joints(a + (b - a) * (double(k) / kPieces));
-      if (!checker_->IsMotionFree(prev, next, max_step_m_)) {
+      if (!checker_->IsMotionFree(prev, next, *max_step_m_)) {
         last_valid.second = double(k - 1) / kPieces;
         if (last_valid.first != nullptr) FromJoints(prev, last_valid.first);
         ++invalid_;
@@ -104,7 +108,95 @@ class Motion : public ob::MotionValidator {
 
  private:
   CollisionChecker* checker_;
-  double max_step_m_;
+  const double* max_step_m_;
+};
+
+// Linear nearest-neighbour search over a tree's joint vectors kept in one contiguous array:
+// OMPL's NearestNeighborsLinear calls a std::function and the state space's virtual distance per
+// element, through a pointer per state, which cost 10-15% of a path query on tuning seeds (perf).
+// Same distances as RealVectorStateSpace::distance (same order of summation, then sqrt) and the
+// same tie rule (the first of equal minima), so RRT-Connect grows exactly the same trees.
+// T is a pointer to a motion whose `state` is a RealVectorStateSpace state of dimension 6.
+template <typename T>
+class JointNearest : public ompl::NearestNeighbors<T> {
+ public:
+  bool reportsSortedResults() const override { return true; }
+  void clear() override {
+    data_.clear();
+    q_.clear();
+  }
+  void add(const T& data) override {
+    data_.push_back(data);
+    const double* v = data->state->template as<ob::RealVectorStateSpace::StateType>()->values;
+    q_.insert(q_.end(), v, v + 6);
+  }
+  bool remove(const T& data) override {
+    for (size_t i = data_.size(); i-- > 0;) {
+      if (data_[i] != data) continue;
+      data_.erase(data_.begin() + static_cast<std::ptrdiff_t>(i));
+      q_.erase(q_.begin() + static_cast<std::ptrdiff_t>(6 * i),
+               q_.begin() + static_cast<std::ptrdiff_t>(6 * i + 6));
+      return true;
+    }
+    return false;
+  }
+  T nearest(const T& data) const override {
+    if (data_.empty()) throw ompl::Exception("JointNearest: no elements");
+    // Squared distances, with the square root taken only where one is smaller than the best so
+    // far: the sqrt of a smaller square can round to the same distance, and then OMPL keeps the
+    // earlier element, as this does.
+    const double* x = Values(data);
+    size_t pos = 0;
+    double sq_min = SquaredDistance(0, x), d_min = std::sqrt(sq_min);
+    for (size_t i = 1; i < data_.size(); ++i) {
+      const double sq = SquaredDistance(i, x);
+      if (sq >= sq_min) continue;
+      const double d = std::sqrt(sq);
+      if (d < d_min) pos = i, d_min = d;
+      sq_min = sq;  // a tie keeps pos, and no later element beats d_min with sq >= this
+    }
+    return data_[pos];
+  }
+  void nearestK(const T& data, std::size_t k, std::vector<T>& nbh) const override {
+    std::vector<std::pair<double, size_t>> d = Sorted(data, std::numeric_limits<double>::infinity());
+    nbh.clear();
+    for (size_t i = 0; i < d.size() && i < k; ++i) nbh.push_back(data_[d[i].second]);
+  }
+  void nearestR(const T& data, double radius, std::vector<T>& nbh) const override {
+    nbh.clear();
+    for (const auto& [dist, i] : Sorted(data, radius)) nbh.push_back(data_[i]);
+  }
+  std::size_t size() const override { return data_.size(); }
+  void list(std::vector<T>& data) const override { data = data_; }
+
+ private:
+  static const double* Values(const T& data) {
+    return data->state->template as<ob::RealVectorStateSpace::StateType>()->values;
+  }
+  double SquaredDistance(size_t i, const double* x) const {
+    const double* a = &q_[6 * i];
+    double sum = 0.0;
+    for (int j = 0; j < 6; ++j) {
+      const double diff = a[j] - x[j];
+      sum += diff * diff;
+    }
+    return sum;
+  }
+  double Distance(size_t i, const double* x) const { return std::sqrt(SquaredDistance(i, x)); }
+  std::vector<std::pair<double, size_t>> Sorted(const T& data, double radius) const {
+    const double* x = Values(data);
+    std::vector<std::pair<double, size_t>> d;
+    for (size_t i = 0; i < data_.size(); ++i) {
+      const double dist = Distance(i, x);
+      if (dist <= radius) d.emplace_back(dist, i);
+    }
+    std::stable_sort(d.begin(), d.end(),
+                     [](const auto& a, const auto& b) { return a.first < b.first; });
+    return d;
+  }
+
+  std::vector<T> data_;
+  std::vector<double> q_;  // 6 joint values per element, in data_'s order
 };
 
 void SilenceOmpl() {
@@ -124,6 +216,9 @@ bool NearlyEqual(const Joints& a, const Joints& b) { return (a - b).cwiseAbs().m
 absl::Status PathOptions::Validate() const {
   if (!(max_step_m > 0.0) || !std::isfinite(max_step_m)) {
     return absl::InvalidArgumentError("path options: max_step_m: must be finite and > 0");
+  }
+  if (!(tree_max_step_m >= 0.0) || !std::isfinite(tree_max_step_m)) {
+    return absl::InvalidArgumentError("path options: tree_max_step_m: must be finite and >= 0");
   }
   if (!(range_rad >= 0.0) || !std::isfinite(range_rad)) {
     return absl::InvalidArgumentError("path options: range_rad: must be finite and >= 0");
@@ -168,6 +263,7 @@ struct PathPlanner::Ompl {
   std::uint_fast32_t seed = 1;  // read by the sampler allocator at every solve
   ob::State* start = nullptr;
   ob::State* goal = nullptr;
+  double edge_step_m = 0.01;  // RRT-Connect's edge-check resolution in the running query
 
   ~Ompl() {
     if (si != nullptr) {
@@ -199,7 +295,8 @@ PathPlanner::PathPlanner(CollisionChecker& checker, const JointLimits& limits,
     });
     ompl->si = std::make_shared<ob::SpaceInformation>(ompl->space);
     ompl->si->setStateValidityChecker(std::make_shared<Validity>(ompl->si, &checker_));
-    ompl->si->setMotionValidator(std::make_shared<Motion>(ompl->si, &checker_, options_.max_step_m));
+    ompl->edge_step_m = options_.max_step_m;
+    ompl->si->setMotionValidator(std::make_shared<Motion>(ompl->si, &checker_, &raw->edge_step_m));
     ompl->si->setup();
     ompl->pdef = std::make_shared<ob::ProblemDefinition>(ompl->si);
     ompl->start = ompl->si->allocState();
@@ -207,7 +304,7 @@ PathPlanner::PathPlanner(CollisionChecker& checker, const JointLimits& limits,
     ompl->planner = std::make_shared<TreeSizeRRTConnect>(ompl->si);
     if (options_.range_rad > 0.0) ompl->planner->setRange(options_.range_rad);
     ompl->planner->setProblemDefinition(ompl->pdef);
-    ompl->planner->setNearestNeighbors<ompl::NearestNeighborsLinear>();  // also runs setup()
+    ompl->planner->setNearestNeighbors<JointNearest>();  // also runs setup()
     ompl_ = std::move(ompl);
   } catch (const std::exception& e) {
     setup_status_ = absl::InternalError(absl::StrCat("path planner: OMPL setup failed: ", e.what()));
@@ -290,62 +387,80 @@ PathResult PathPlanner::PlanToAny(const Joints& start, std::span<const Joints> g
       budget_s >= 1e9 ? Clock::time_point::max()
                       : Clock::now() + std::chrono::duration_cast<Clock::duration>(
                                            std::chrono::duration<double>(budget_s));
-  try {
-    Ompl& o = *ompl_;
-    o.planner->clear();  // drops both trees and the sampler (re-allocated, seeded, in solve)
-    o.pdef->clearSolutionPaths();
-    o.pdef->clearStartStates();
-    // Reversed roles: RRT-Connect roots its start tree at every start state before the first
-    // iteration, but adds goal states one at a time as its goal tree grows, so a walled-in first
-    // goal would hide the others. The path is reversed below.
-    for (int g : usable) {
-      FromJoints(goals[g], o.goal);
-      o.pdef->addStartState(o.goal);  // copied
-    }
-    FromJoints(start, o.start);
-    auto goal_region = std::make_shared<ob::GoalState>(o.si);
-    goal_region->setState(o.start);
-    goal_region->setThreshold(1e-9);
-    o.pdef->setGoal(goal_region);
-    o.seed = OmplSeed(options_.seed);
-    const size_t max_states =
-        options_.max_tree_states > 0 ? static_cast<size_t>(options_.max_tree_states) : SIZE_MAX;
-    const TreeSizeRRTConnect& rrt = *o.planner;
-    const ob::PlannerTerminationCondition ptc([&end, &deadline, &rrt, max_states] {
-      return rrt.StartTreeSize() + rrt.GoalTreeSize() >= max_states || Clock::now() >= end ||
-             deadline.Cancelled();
-    });
-    const ob::PlannerStatus status = o.planner->solve(ptc);
-    if (status != ob::PlannerStatus::EXACT_SOLUTION || !o.pdef->hasExactSolution()) {
-      return finish(PathOutcome::kNoPathWithinDeadline,
-                    absl::StrCat("RRT-Connect found no exact path within ", budget_s,
-                                 " s (", status.asString(), ")"));
-    }
-    const auto* path = o.pdef->getSolutionPath()->as<og::PathGeometric>();
-    for (std::size_t k = path->getStateCount(); k-- > 0;) {
-      const Joints q = ToJoints(path->getState(k));
-      if (result.waypoints.empty() || !NearlyEqual(result.waypoints.back(), q)) {
-        result.waypoints.push_back(q);
+  // RRT-Connect checks its edges at tree_max_step_m; the path it returns is then checked at
+  // max_step_m, and if that finds a collision the query runs again with the edges checked at
+  // max_step_m (same seed, same bounds, within what is left of the time limit).
+  Ompl& o = *ompl_;
+  const double coarse_m = std::max(options_.tree_max_step_m, options_.max_step_m);
+  for (const double edge_step_m : {coarse_m, options_.max_step_m}) {
+    result.waypoints.clear();
+    o.edge_step_m = edge_step_m;
+    try {
+      o.planner->clear();  // drops both trees and the sampler (re-allocated, seeded, in solve)
+      o.pdef->clearSolutionPaths();
+      o.pdef->clearStartStates();
+      // Reversed roles: RRT-Connect roots its start tree at every start state before the first
+      // iteration, but adds goal states one at a time as its goal tree grows, so a walled-in
+      // first goal would hide the others. The path is reversed below.
+      for (int g : usable) {
+        FromJoints(goals[g], o.goal);
+        o.pdef->addStartState(o.goal);  // copied
       }
+      FromJoints(start, o.start);
+      auto goal_region = std::make_shared<ob::GoalState>(o.si);
+      goal_region->setState(o.start);
+      goal_region->setThreshold(1e-9);
+      o.pdef->setGoal(goal_region);
+      o.seed = OmplSeed(options_.seed);
+      const size_t max_states =
+          options_.max_tree_states > 0 ? static_cast<size_t>(options_.max_tree_states) : SIZE_MAX;
+      const TreeSizeRRTConnect& rrt = *o.planner;
+      const ob::PlannerTerminationCondition ptc([&end, &deadline, &rrt, max_states] {
+        return rrt.StartTreeSize() + rrt.GoalTreeSize() >= max_states || Clock::now() >= end ||
+               deadline.Cancelled();
+      });
+      const ob::PlannerStatus status = o.planner->solve(ptc);
+      if (status != ob::PlannerStatus::EXACT_SOLUTION || !o.pdef->hasExactSolution()) {
+        return finish(PathOutcome::kNoPathWithinDeadline,
+                      absl::StrCat("RRT-Connect found no exact path within ", budget_s,
+                                   " s (", status.asString(), ")"));
+      }
+      const auto* path = o.pdef->getSolutionPath()->as<og::PathGeometric>();
+      for (std::size_t k = path->getStateCount(); k-- > 0;) {
+        const Joints q = ToJoints(path->getState(k));
+        if (result.waypoints.empty() || !NearlyEqual(result.waypoints.back(), q)) {
+          result.waypoints.push_back(q);
+        }
+      }
+    } catch (const std::exception& e) {  // ompl::Exception and allocation failures
+      return finish(PathOutcome::kNoPathWithinDeadline, absl::StrCat("OMPL: ", e.what()));
     }
-  } catch (const std::exception& e) {  // ompl::Exception and allocation failures
-    return finish(PathOutcome::kNoPathWithinDeadline, absl::StrCat("OMPL: ", e.what()));
+    if (result.waypoints.size() < 2) {
+      return finish(PathOutcome::kNoPathWithinDeadline, "RRT-Connect returned a degenerate path");
+    }
+    // The path ends at a copy of one of the goals: find which (the nearest; copies are exact),
+    // and make the ends bit-exact so callers can chain paths.
+    double best = std::numeric_limits<double>::infinity();
+    for (int g : usable) {
+      const double d = (goals[g] - result.waypoints.back()).cwiseAbs().maxCoeff();
+      if (d < best) best = d, result.goal_index = g;
+    }
+    if (best > 1e-9) {
+      return finish(PathOutcome::kNoPathWithinDeadline, "RRT-Connect's path ends at no goal");
+    }
+    result.waypoints.front() = start;
+    result.waypoints.back() = goals[result.goal_index];
+    if (edge_step_m <= options_.max_step_m) break;  // every edge was checked at max_step_m
+    bool fine = true;
+    for (size_t k = 0; fine && k + 1 < result.waypoints.size(); ++k)
+      fine = checker_.IsMotionFree(result.waypoints[k], result.waypoints[k + 1], options_.max_step_m);
+    if (fine) break;
+    ++result.coarse_rejections;
+    if (deadline.Expired() || Clock::now() >= end) {
+      return finish(PathOutcome::kNoPathWithinDeadline,
+                    "RRT-Connect's path collided at max_step_m and no time was left to replan");
+    }
   }
-  if (result.waypoints.size() < 2) {
-    return finish(PathOutcome::kNoPathWithinDeadline, "RRT-Connect returned a degenerate path");
-  }
-  // The path ends at a copy of one of the goals: find which (the nearest; copies are exact), and
-  // make the ends bit-exact so callers can chain paths.
-  double best = std::numeric_limits<double>::infinity();
-  for (int g : usable) {
-    const double d = (goals[g] - result.waypoints.back()).cwiseAbs().maxCoeff();
-    if (d < best) best = d, result.goal_index = g;
-  }
-  if (best > 1e-9) {
-    return finish(PathOutcome::kNoPathWithinDeadline, "RRT-Connect's path ends at no goal");
-  }
-  result.waypoints.front() = start;
-  result.waypoints.back() = goals[result.goal_index];
   ShortcutPath(checker_, limits_, options_.max_step_m, options_.shortcut_rounds, options_.seed,
                deadline, result.waypoints);
   return finish(PathOutcome::kSolved, "");

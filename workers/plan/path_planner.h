@@ -33,6 +33,12 @@ namespace vb::plan {
 
 struct PathOptions {
   double max_step_m = 0.01;       // motion-check resolution: max travel of any arm point, m
+  // RRT-Connect's edges are checked at this resolution (m; <= max_step_m or 0: max_step_m); the
+  // path it finds is then checked at max_step_m, and planned again with edges at max_step_m if
+  // that check fails (PathResult::coarse_rejections). Most tree edges never reach the path, so a
+  // coarser resolution for them saves checks; the path's own segments are always checked at
+  // max_step_m.
+  double tree_max_step_m = 0.0;
   double range_rad = 1.0;         // RRT-Connect step (joint-space length); 0 = OMPL's default
   double time_limit_s = 1.0;      // planning time per call (also bounded by the deadline)
   // RRT-Connect gives up once its trees hold this many states together (0 = no bound): a bound
@@ -43,7 +49,8 @@ struct PathOptions {
   uint64_t seed = 1;              // seeds RRT-Connect's samples and the shortcuts
   bool try_direct_first = true;   // check the straight segment before running RRT-Connect
 
-  // INVALID_ARGUMENT naming the field: max_step_m <= 0 or non-finite, range_rad < 0,
+  // INVALID_ARGUMENT naming the field: max_step_m <= 0 or non-finite, tree_max_step_m < 0 or
+  // non-finite, range_rad < 0,
   // time_limit_s <= 0 or NaN, max_tree_states < 0, shortcut_rounds < 0.
   absl::Status Validate() const;
 };
@@ -68,6 +75,9 @@ struct PathResult {
   double planning_s = 0.0;          // wall time of the call
   bool direct = false;              // the straight segment start -> goal was free
   int goal_index = -1;              // on kSolved, which goal the path ends at (PlanToAny)
+  // RRT-Connect paths found with coarse edge checks (tree_max_step_m) that collided at
+  // max_step_m, so that the query was planned again (0 or 1).
+  int coarse_rejections = 0;
 };
 
 // A planning context bound to one checker and one set of limits and options: holds OMPL's state

@@ -458,3 +458,46 @@ TEST(PlanToAny, RejectsNoGoalsAndNonFiniteGoals) {
 
 }  // namespace
 }  // namespace vb::plan
+
+namespace vb::plan {
+namespace {
+
+// Thin balls that RRT-Connect's coarse edge checks (tree_max_step_m) step over: the paths found
+// that way are checked at max_step_m, and a query whose path collides there is planned again with
+// fine edge checks; so every returned segment passes the checker at max_step_m.
+TEST(PathPlanner, CoarseTreeEdgesStillGiveSegmentsFreeAtMaxStep) {
+  std::vector<std::pair<Joints, double>> balls = {{J(0), 1.0}};  // no straight path
+  std::mt19937 rng(1101);
+  std::uniform_real_distribution<double> u(-2.5, 2.5);
+  for (int k = 0; k < 3000; ++k) balls.push_back({J(u(rng), u(rng), u(rng)), 0.1});
+  SampledBallChecker checker(balls);
+  PathOptions options;
+  options.tree_max_step_m = 2.0;  // ~1.7 rad of one joint between edge checks
+  options.shortcut_rounds = 0;
+  const JointLimits limits;
+  PathPlanner planner(checker, limits, options);
+  int solved = 0, rejections = 0;
+  for (int k = 0; k < 20; ++k) {
+    const Joints start = J(-2, 0.1 * k - 1, 0.2), goal = J(2, 1 - 0.1 * k, -0.2);
+    if (!checker.IsFree(start) || !checker.IsFree(goal)) continue;
+    const PathResult r = planner.Plan(start, goal, Deadline::In(10.0));
+    if (r.outcome != PathOutcome::kSolved) continue;
+    ++solved;
+    rejections += r.coarse_rejections;
+    for (size_t i = 1; i < r.waypoints.size(); ++i) {
+      EXPECT_TRUE(checker.IsMotionFree(r.waypoints[i - 1], r.waypoints[i], options.max_step_m))
+          << k << " " << i;
+    }
+  }
+  EXPECT_GE(solved, 10);
+  EXPECT_GT(rejections, 0);  // the coarse paths did collide, so the fine check was exercised
+}
+
+TEST(PathPlanner, NegativeTreeStepIsRejected) {
+  PathOptions options;
+  options.tree_max_step_m = -0.01;
+  EXPECT_NE(options.Validate().message().find("tree_max_step_m"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace vb::plan

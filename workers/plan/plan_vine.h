@@ -77,6 +77,9 @@ struct PlanOptions {
     // Trees of 500 states: RRT-Connect's successes on tuning seeds 1110-1149 needed fewer in all
     // but a few percent of queries; failures stop there instead of at the time limit.
     o.max_tree_states = 500;
+    // Tree edges checked at 0.03 m, the path found at max_step_m (0.01 m): on tuning seeds
+    // 1110-1129 the same paths and outcomes with 23% fewer checks per path.
+    o.tree_max_step_m = 0.03;
     return o;
   }();
   // A transit that finds no path in the scene inflated by the margins is planned again in the
