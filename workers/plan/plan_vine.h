@@ -108,7 +108,10 @@ struct PlanOptions {
   // Where the arm starts and ends: folded clear of the cameras' view (DefaultHome()).
   Joints home = Joints::Zero();
   bool return_home = true;
-  int max_passes = 3;          // 1: every cut motion is planned on the uncut vine
+  // 1: every cut motion is planned on the uncut vine. 6 rather than 3 on tuning seeds 1110-1199:
+  // 0.937 -> 0.941 of reachable cuts planned, the same median time (a pass that makes no cut ends
+  // the passes, so extra passes cost only where they help).
+  int max_passes = 6;
   // The part of a mill-end sweep in wood moves at this fraction of the joint velocity limits:
   // the tool must not be driven through wood at transit speed (an estimate, not a measured feed
   // rate). In wood: TCP within the cane's radius plus cut_feed_margin_m of the cut point (covers
