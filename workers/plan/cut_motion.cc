@@ -225,7 +225,8 @@ std::optional<double> EvaluatePath(CollisionChecker& checker, const std::vector<
   if (!(clearance > must_beat)) return std::nullopt;
   for (size_t i = 0; i < end; ++i) {
     if (static_cast<int>(i) == cut_index) continue;
-    clearance = std::min(clearance, checker.Clearance(path[i]));
+    // Only whether it stays above must_beat, and then the min, matter: the checker may stop early.
+    clearance = checker.ClearanceAbove(path[i], must_beat, clearance);
     if (!(clearance > must_beat)) return std::nullopt;
   }
   for (size_t i = 1; i < end; ++i) {
@@ -500,7 +501,8 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
       if (stroke == StrokeResult::kNoIk) continue;
       ++strokes_followed;
       if (stroke == StrokeResult::kCollides) continue;
-      candidate.clearance_m = checker->Clearance(candidate.q);
+      candidate.clearance_m = checker->ClearanceAbove(candidate.q, options.min_clearance_m,
+                                                      std::numeric_limits<double>::infinity());
       // Exact (double): a batched float check may pass a configuration within ~1e-5 m of contact.
       if (!(candidate.clearance_m > options.min_clearance_m)) continue;
       free_strokes.emplace_back(candidate.clearance_m, path);
