@@ -313,6 +313,10 @@ class FlangeBodies {
         // Bounding spheres apart: the capsules are too (cheaper than the segment distance).
         const double apart = bound + o.bound;
         if ((centre - o.centre).squaredNorm() > apart * apart) continue;
+        // Tighter, still cheaper than the segment distance: the obstacle's ball against the
+        // flange capsule's segment (1e-9 m of slack against rounding; contact needs less than
+        // the radii minus kToleranceM).
+        if (PointSegmentDistance(o.centre, a, b) > c.radius + o.bound + 1e-9) continue;
         if (SegmentSegmentDistance(a, b, o.a, o.b) < c.radius + o.radius - kToleranceM) {
           return true;
         }
@@ -479,7 +483,9 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
       signed char& b = stroke_blocked[c.pose];
       if (b < 0) {
         b = 0;
-        for (size_t i = 0; i < waypoints.size() && !b; ++i) {
+        // A mirrored stroke's retract repeats its approach poses: test them once.
+        const size_t end = mirrored ? static_cast<size_t>(cut_index) : waypoints.size();
+        for (size_t i = 0; i < end && !b; ++i) {
           if (static_cast<int>(i) == cut_index) continue;
           Eigen::Isometry3d base_from_tcp = c.base_from_tcp;
           base_from_tcp.translation() += c.base_from_tcp.linear() * waypoints[i];
