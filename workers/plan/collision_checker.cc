@@ -12,6 +12,10 @@ void CollisionChecker::AreFree(std::span<const Joints> qs, std::span<bool> out) 
   for (size_t i = 0; i < qs.size() && i < out.size(); ++i) out[i] = IsFree(qs[i]);
 }
 
+double CollisionChecker::ClearanceAbove(const Joints& q, double /*floor*/, double cap) {
+  return std::min(cap, Clearance(q));
+}
+
 namespace {
 
 // Carries the cylinder about z_j that holds point p of frame `frame` (for every q_{j+1..frame})

@@ -77,6 +77,11 @@ class CollisionChecker {
   // Smallest distance between the surface of any arm body and any obstacle (inflated by its
   // margin), or between self-collision pairs; negative when they overlap. Counts one check.
   virtual double Clearance(const Joints& q) = 0;
+  // min(cap, Clearance(q)), exactly, when that exceeds `floor`; otherwise some value <= floor
+  // (the caller rejects q whatever it is). For rankings that only need the clearance below a
+  // bound already found and above a bar: implementations may skip what cannot change the answer.
+  // The default computes Clearance(q). Counts one check.
+  virtual double ClearanceAbove(const Joints& q, double floor, double cap);
 
   // The per-joint lever arms IsMotionFree interpolates with: JointLeverArms(robot) for checkers
   // built from a robot, kDefaultReachM for every joint otherwise.

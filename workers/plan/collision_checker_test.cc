@@ -94,6 +94,37 @@ TEST(PrimitiveChecker, ClearanceMatchesBruteForceOnVines) {
   }
 }
 
+// ClearanceAbove: bit for bit min(cap, Clearance) when that beats the floor, else <= floor;
+// the base class's default agrees.
+TEST(PrimitiveChecker, ClearanceAboveIsTheCappedClearanceOrBelowTheFloor) {
+  const RobotModel robot = DefaultUr5(SimpleMillEnd());
+  std::mt19937 rng(1106);
+  const CollisionScene scene = VineScene(1106, 0.01);
+  PrimitiveChecker checker(robot, scene);
+  int above = 0, below = 0, capped = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    const Joints q = RandomJoints(rng, robot.limits);
+    const double exact = checker.Clearance(q);
+    // Floors and caps about the clearance, so that every branch is taken.
+    const double floor = exact + std::uniform_real_distribution<double>(-0.05, 0.02)(rng);
+    const double cap = exact + std::uniform_real_distribution<double>(-0.02, 0.05)(rng);
+    const double got = checker.ClearanceAbove(q, floor, cap);
+    const double want = std::min(cap, exact);
+    if (want > floor) {
+      ASSERT_EQ(got, want) << "trial " << trial;
+      ++above;
+      capped += cap < exact;
+    } else {
+      ASSERT_LE(got, floor) << "trial " << trial;
+      ++below;
+    }
+    ASSERT_EQ(checker.CollisionChecker::ClearanceAbove(q, floor, cap) > floor, want > floor);
+  }
+  EXPECT_GT(above, 20);
+  EXPECT_GT(below, 20);
+  EXPECT_GT(capped, 5);
+}
+
 TEST(PrimitiveChecker, FoldedArmCollidesWithItself) {
   const RobotModel robot = DefaultUr5(SimpleMillEnd());
   const CollisionScene scene = EmptyScene();

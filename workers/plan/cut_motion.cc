@@ -225,7 +225,8 @@ std::optional<double> EvaluatePath(CollisionChecker& checker, const std::vector<
   if (!(clearance > must_beat)) return std::nullopt;
   for (size_t i = 0; i < end; ++i) {
     if (static_cast<int>(i) == cut_index) continue;
-    clearance = std::min(clearance, checker.Clearance(path[i]));
+    // Only whether it stays above must_beat, and then the min, matter: the checker may stop early.
+    clearance = checker.ClearanceAbove(path[i], must_beat, clearance);
     if (!(clearance > must_beat)) return std::nullopt;
   }
   for (size_t i = 1; i < end; ++i) {
@@ -312,6 +313,10 @@ class FlangeBodies {
         // Bounding spheres apart: the capsules are too (cheaper than the segment distance).
         const double apart = bound + o.bound;
         if ((centre - o.centre).squaredNorm() > apart * apart) continue;
+        // Tighter, still cheaper than the segment distance: the obstacle's ball against the
+        // flange capsule's segment (1e-9 m of slack against rounding; contact needs less than
+        // the radii minus kToleranceM).
+        if (PointSegmentDistance(o.centre, a, b) > c.radius + o.bound + 1e-9) continue;
         if (SegmentSegmentDistance(a, b, o.a, o.b) < c.radius + o.radius - kToleranceM) {
           return true;
         }
@@ -478,7 +483,9 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
       signed char& b = stroke_blocked[c.pose];
       if (b < 0) {
         b = 0;
-        for (size_t i = 0; i < waypoints.size() && !b; ++i) {
+        // A mirrored stroke's retract repeats its approach poses: test them once.
+        const size_t end = mirrored ? static_cast<size_t>(cut_index) : waypoints.size();
+        for (size_t i = 0; i < end && !b; ++i) {
           if (static_cast<int>(i) == cut_index) continue;
           Eigen::Isometry3d base_from_tcp = c.base_from_tcp;
           base_from_tcp.translation() += c.base_from_tcp.linear() * waypoints[i];
@@ -500,7 +507,8 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
       if (stroke == StrokeResult::kNoIk) continue;
       ++strokes_followed;
       if (stroke == StrokeResult::kCollides) continue;
-      candidate.clearance_m = checker->Clearance(candidate.q);
+      candidate.clearance_m = checker->ClearanceAbove(candidate.q, options.min_clearance_m,
+                                                      std::numeric_limits<double>::infinity());
       // Exact (double): a batched float check may pass a configuration within ~1e-5 m of contact.
       if (!(candidate.clearance_m > options.min_clearance_m)) continue;
       free_strokes.emplace_back(candidate.clearance_m, path);

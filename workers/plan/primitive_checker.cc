@@ -241,27 +241,42 @@ double PrimitiveChecker::Impl::SegClearance(const Eigen::Vector3d& a, const Eige
   for (const HalfSpace& h : planes) {
     best = std::min(best, h.offset - std::max(h.normal.dot(a), h.normal.dot(b)) - r - h.margin_m);
   }
+  // Balls first: a pair whose enclosing balls are apart by more than best (plus a slack far above
+  // the rounding) cannot lower it, and costs no segment distance. The result is unchanged.
+  constexpr double kBallSlackM = 1e-9;
+  const Eigen::Vector3d centre = 0.5 * (a + b);
+  const double reach = 0.5 * (b - a).norm() + r;
+  auto too_far = [&](const Ball& o) {
+    const double apart = best + kBallSlackM + reach + o.reach;  // +inf while best is
+    return apart > 0 && (centre - o.centre).squaredNorm() >= apart * apart;
+  };
   for (size_t l = 0; l < leaf_bounds.size(); ++l) {
+    if (too_far(leaf_balls[l])) continue;
     const double lower = CapsuleCapsuleGap(a, b, r, leaf_bounds[l].a, leaf_bounds[l].b,
                                            leaf_bounds[l].radius);
     if (lower >= best) continue;
     const int end = std::min<int>(pieces.size(), (l + 1) * kLeaf);
     for (int k = l * kLeaf; k < end; ++k) {
+      if (too_far(piece_balls[k])) continue;
       best = std::min(best, CapsuleCapsuleGap(a, b, r, pieces[k].a, pieces[k].b, pieces[k].rad));
     }
   }
   return best;
 }
 
-double PrimitiveChecker::Impl::Clearance(const Joints& q) {
+double PrimitiveChecker::Impl::Clearance(const Joints& q, double floor, double cap) {
   Place(q, /*float_trig=*/false);
-  double best = std::numeric_limits<double>::infinity();
+  // Starting from `cap` prunes more leaves (their bound >= best); min is exact, so the result
+  // is min(cap, clearance) bit for bit.
+  double best = cap;
   for (size_t i = 0; i < all.size(); ++i) {
     best = SegClearance(world_a[i], world_b[i], all[i].radius, best);
+    if (best <= floor) return best;
   }
   for (const auto& [i, j] : self_pairs) {
     best = std::min(best, CapsuleCapsuleGap(world_a[i], world_b[i], all[i].radius, world_a[j],
                                             world_b[j], all[j].radius));
+    if (best <= floor) return best;
   }
   return best;
 }
@@ -376,6 +391,12 @@ PrimitiveChecker::PrimitiveChecker(const RobotModel& robot, const CollisionScene
     }
     m.leaves.push_back(leaf);
   }
+  for (const Piece& p : m.pieces) {
+    m.piece_balls.push_back({0.5 * (p.a + p.b), 0.5 * (p.b - p.a).norm() + p.rad});
+  }
+  for (const Bound& b : m.leaf_bounds) {
+    m.leaf_balls.push_back({0.5 * (b.a + b.b), 0.5 * (b.b - b.a).norm() + b.radius});
+  }
   std::vector<Box> leaf_boxes, node_boxes;
   for (int l = 0; l < n_leaves; ++l) {
     leaf_boxes.push_back(BoxOfPieces(m.pieces, l * kLeaf, std::min(n_pieces, (l + 1) * kLeaf)));
@@ -427,7 +448,14 @@ bool PrimitiveChecker::IsFree(const Joints& q) {
 double PrimitiveChecker::Clearance(const Joints& q) {
   ++checks_;
   if (!SaneJoints(q)) return -std::numeric_limits<double>::infinity();
-  return impl_->Clearance(q);
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  return impl_->Clearance(q, -kInf, kInf);
+}
+
+double PrimitiveChecker::ClearanceAbove(const Joints& q, double floor, double cap) {
+  ++checks_;
+  if (!SaneJoints(q)) return -std::numeric_limits<double>::infinity();
+  return impl_->Clearance(q, floor, cap);
 }
 
 int PrimitiveChecker::pieces() const { return static_cast<int>(impl_->pieces.size()); }

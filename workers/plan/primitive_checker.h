@@ -46,6 +46,8 @@ class PrimitiveChecker : public CollisionChecker {
   // samples as CollisionChecker::IsMotionFree (MotionSteps with lever_m()).
   bool IsMotionFree(const Joints& a, const Joints& b, double max_step_m) override;
   double Clearance(const Joints& q) override;
+  // Branch-and-bound from `cap`, and stops once the clearance is at or below `floor`.
+  double ClearanceAbove(const Joints& q, double floor, double cap) override;
 
   // The batched checks (AreFree, IsMotionFree) run AVX2 + FMA code where the CPU has it (x86-64,
   // detected at construction); UseBaselineSimd() switches this checker to the baseline code

@@ -207,6 +207,13 @@ struct Bound {
   double radius;
 };
 
+// The ball about a capsule's centre that holds it (reach = half its axis + its radius): Clearance
+// skips a capsule pair without their segment distance when the balls are far enough apart.
+struct Ball {
+  Eigen::Vector3d centre;
+  double reach;
+};
+
 struct ArmCapsule {
   int frame;
   int body;
@@ -251,6 +258,7 @@ struct PrimitiveChecker::Impl {
 
   std::vector<prim::Piece> pieces;        // in leaf order
   std::vector<prim::Bound> leaf_bounds;   // one per leaf
+  std::vector<prim::Ball> piece_balls, leaf_balls;  // about pieces and leaf_bounds (Clearance)
   std::vector<prim::CapsuleSet> leaves;
   std::vector<prim::BoxSet> node_children;  // per node: its leaves' boxes
   std::vector<prim::BoxSet> top;            // per group of 8 nodes: the nodes' boxes
@@ -272,7 +280,8 @@ struct PrimitiveChecker::Impl {
   bool Free(const Joints& q);
   double SegClearance(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double r,
                       double best) const;
-  double Clearance(const Joints& q);
+  // min(cap, clearance at q) if above `floor`, else some value <= floor (returns early).
+  double Clearance(const Joints& q, double floor, double cap);
 
   // Batched checks (primitive_checker_batch.cc; VAMP's idea: configurations in SIMD lanes).
   std::vector<float> leaf_lo, leaf_hi;  // leaf boxes, 3 floats per leaf

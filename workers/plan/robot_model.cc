@@ -4,9 +4,12 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <deque>
 #include <limits>
+#include <mutex>
 #include <random>
 #include <string>
+#include <utility>
 
 #include "absl/strings/str_cat.h"
 
@@ -56,8 +59,43 @@ Eigen::Isometry3d DefaultPlatformFromArmBase() {
   return pose;
 }
 
+namespace {
+
+// Everything SelfCollisionPairs depends on: the bodies (frames and capsules) and the joint limits
+// (the sampling range). Compared exactly.
+std::vector<double> SelfPairsKey(const std::vector<LinkBody>& bodies, const JointLimits& limits) {
+  std::vector<double> key(limits.lower.data(), limits.lower.data() + 6);
+  key.insert(key.end(), limits.upper.data(), limits.upper.data() + 6);
+  for (const LinkBody& body : bodies) {
+    key.push_back(body.frame);
+    key.push_back(static_cast<double>(body.capsules.size()));
+    for (const Capsule& c : body.capsules) {
+      key.insert(key.end(), {c.a.x(), c.a.y(), c.a.z(), c.b.x(), c.b.y(), c.b.z(), c.radius});
+    }
+  }
+  return key;
+}
+
+}  // namespace
+
 std::vector<std::pair<int, int>> RobotModel::SelfCollisionPairs() const {
   const std::vector<LinkBody> bodies = BodiesWithTool();
+  // Every checker build asks (the cut motions build one per cut and slide): the pairs of the
+  // last few robots are kept, keyed by their inputs (thread-safe).
+  struct Entry {
+    std::vector<double> key;
+    std::vector<std::pair<int, int>> pairs;
+  };
+  static std::mutex cache_mutex;
+  static std::deque<Entry> cache;  // most recent first, at most kCached
+  constexpr size_t kCached = 8;
+  std::vector<double> key = SelfPairsKey(bodies, limits);
+  {
+    std::lock_guard<std::mutex> lock(cache_mutex);
+    for (const Entry& e : cache) {
+      if (e.key == key) return e.pairs;
+    }
+  }
   // Sample configurations (fixed seed, portable generator) to find pairs whose distance never
   // changes, e.g. wrist 2 and a straight tool: their closest points are the joint 6 axis points
   // whatever q is. Such a pair can neither come into nor leave contact, and checking it would only
@@ -98,6 +136,9 @@ std::vector<std::pair<int, int>> RobotModel::SelfCollisionPairs() const {
       if (hi - lo > 1e-9) pairs.emplace_back(i, j);
     }
   }
+  std::lock_guard<std::mutex> lock(cache_mutex);
+  cache.push_front({std::move(key), pairs});
+  if (cache.size() > kCached) cache.pop_back();
   return pairs;
 }
 

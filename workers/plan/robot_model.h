@@ -33,7 +33,8 @@ struct RobotModel {
   // pair of bodies at least two links apart along the chain, except pairs whose distance is the
   // same in every configuration (found by sampling within the limits; e.g. wrist 2 and a straight
   // tool on the joint 6 axis), which can neither come into contact nor leave it (MoveIt's
-  // "never/always in collision" pairs). Costs ~0.1 ms: call once, not per check.
+  // "never/always in collision" pairs). Costs ~0.1 ms the first time; the pairs of the last 8
+  // robots (bodies and limits compared exactly) are cached, process-wide and thread-safe.
   std::vector<std::pair<int, int>> SelfCollisionPairs() const;
   // links plus the tool as a last body in frame 6.
   std::vector<LinkBody> BodiesWithTool() const;

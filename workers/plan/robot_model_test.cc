@@ -148,6 +148,11 @@ TEST(RobotModel, SelfPairsSkipPairsAtConstantDistance) {
   ToolGeometry bent = SimpleMillEnd();
   bent.capsules.push_back({Eigen::Vector3d(0, 0, 0.05), Eigen::Vector3d(0.1, 0, -0.03), 0.02});
   EXPECT_TRUE(has_pair(DefaultUr5(bent), "wrist_2", "mill_end"));
+  // The pairs are cached per robot: asking again, after another robot, gives the first answer.
+  EXPECT_FALSE(has_pair(straight, "wrist_2", "mill_end"));
+  EXPECT_TRUE(has_pair(DefaultUr5(bent), "wrist_2", "mill_end"));
+  bent.capsules.back().b.x() = 0.0;  // back on the joint 6 axis: a different robot, pair skipped
+  EXPECT_FALSE(has_pair(DefaultUr5(bent), "wrist_2", "mill_end"));
 }
 
 TEST(RobotModel, ValidateRejectsBadGeometry) {
