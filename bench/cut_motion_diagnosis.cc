@@ -247,7 +247,9 @@ void Diagnose(const RobotModel& robot, const PlatformGeometry& platform,
         Contacts along;
         bool end_collides = false, ik_ok = true;
         Joints previous = ik.q[b];
-        for (int i = cut_index - 1; i >= 0 && ik_ok; --i) {
+        // Follows the stroke to waypoint i from `previous` (the IK branch nearest it, within
+        // max_joint_jump_rad); false where the arm would jump.
+        auto step_to = [&](size_t i) {
           Eigen::Isometry3d tcp = pose;
           tcp.translation() += pose.linear() * waypoints[i];
           const IkSolutions step = InverseKinematics(tcp * tcp_from_flange, robot.limits, &previous);
@@ -257,11 +259,13 @@ void Diagnose(const RobotModel& robot, const PlatformGeometry& platform,
             const double c = (step.q[j] - previous).cwiseAbs().maxCoeff();
             if (c <= change) change = c, nearest = j;
           }
-          if (nearest < 0) {
-            ik_ok = false;
-            break;
-          }
+          if (nearest < 0) return false;
           previous = step.q[nearest];
+          return true;
+        };
+        for (int i = cut_index - 1; i >= 0 && ik_ok; --i) {
+          ik_ok = step_to(static_cast<size_t>(i));
+          if (!ik_ok) break;
           const Contacts c = classify.At(previous);
           if (i == 0 && !c.empty()) end_collides = true;
           along.insert(c.begin(), c.end());
@@ -269,21 +273,8 @@ void Diagnose(const RobotModel& robot, const PlatformGeometry& platform,
         if (StrokeOf(robot.tool) == CutStroke::kSweep) {
           previous = ik.q[b];
           for (size_t i = cut_index + 1; i < waypoints.size() && ik_ok; ++i) {
-            Eigen::Isometry3d tcp = pose;
-            tcp.translation() += pose.linear() * waypoints[i];
-            const IkSolutions step =
-                InverseKinematics(tcp * tcp_from_flange, robot.limits, &previous);
-            int nearest = -1;
-            double change = options.max_joint_jump_rad;
-            for (int j = 0; j < step.count; ++j) {
-              const double c = (step.q[j] - previous).cwiseAbs().maxCoeff();
-              if (c <= change) change = c, nearest = j;
-            }
-            if (nearest < 0) {
-              ik_ok = false;
-              break;
-            }
-            previous = step.q[nearest];
+            ik_ok = step_to(i);
+            if (!ik_ok) break;
             const Contacts c = classify.At(previous);
             along.insert(c.begin(), c.end());
           }

@@ -12,11 +12,7 @@ namespace {
 
 using testing::JointBallChecker;
 
-Joints J(double a, double b = 0, double c = 0, double d = 0, double e = 0, double f = 0) {
-  Joints q;
-  q << a, b, c, d, e, f;
-  return q;
-}
+using testing::J;
 
 JointLimits MixedLimits() {
   JointLimits limits;

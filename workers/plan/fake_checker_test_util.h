@@ -12,6 +12,13 @@
 
 namespace vb::plan::testing {
 
+// A joint vector written inline: J(0.5, -1) is (0.5, -1, 0, 0, 0, 0).
+inline Joints J(double a, double b = 0, double c = 0, double d = 0, double e = 0, double f = 0) {
+  Joints q;
+  q << a, b, c, d, e, f;
+  return q;
+}
+
 class JointBallChecker : public CollisionChecker {
  public:
   // Blocked: inner_rad < |q - centre| < outer_rad. A solid ball has inner_rad < 0.

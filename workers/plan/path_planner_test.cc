@@ -23,11 +23,7 @@ namespace {
 
 using testing::JointBallChecker;
 
-Joints J(double a, double b = 0, double c = 0, double d = 0, double e = 0, double f = 0) {
-  Joints q;
-  q << a, b, c, d, e, f;
-  return q;
-}
+using testing::J;
 
 // Every segment of the path is free, it starts and ends where asked, and stays in the limits.
 void ExpectValidPath(JointBallChecker& checker, const JointLimits& limits, const PathResult& r,

@@ -6,15 +6,12 @@
 #include <random>
 
 #include "gtest/gtest.h"
+#include "workers/plan/fake_checker_test_util.h"
 
 namespace vb::plan {
 namespace {
 
-Joints J(double a, double b = 0, double c = 0, double d = 0, double e = 0, double f = 0) {
-  Joints q;
-  q << a, b, c, d, e, f;
-  return q;
-}
+using testing::J;
 
 TEST(MoveTime, TrapezoidMatchesClosedForm) {
   JointLimits limits;  // v = pi, a = 1.4
