@@ -20,11 +20,12 @@
 // are checked with IsMotionFree: they are what an executor interpolating the samples follows (and
 // what trajectory_check.h re-checks); the parabola stays within amax sample_dt_s^2 / 8 of them
 // (0.44 mrad at 1.4 rad/s^2 and 0.05 s; checking it too in 0.01 s chords quadrupled the timing
-// stage's cost and changed nothing on seeds 1110-1119); a colliding blend is made smaller (its deviation from the via
-// point bounded, which slows the neighbouring segments) by bisection between the largest size
-// found free and the smallest found colliding, starting with half its size, for max_shrinks
-// steps; if no smaller size was free the arm stops at that via point (the already-checked path). A run whose blended timing would be slower than stopping at each of
-// its waypoints is stopped at each of them. Thread-safe (pure functions; the checker is used by
+// stage's cost and changed nothing on seeds 1110-1119); a colliding blend is made smaller (its
+// deviation from the via point bounded, which slows the neighbouring segments) by bisection
+// between the largest size found free and the smallest found colliding, starting with half its
+// size, for max_shrinks steps; if no smaller size was free the arm stops at that via point (the
+// already-checked path). A run whose blended timing would be slower than stopping at each of its
+// waypoints is stopped at each of them. Thread-safe (pure functions; the checker is used by
 // the calling thread only).
 #pragma once
 

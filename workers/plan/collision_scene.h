@@ -35,7 +35,7 @@ struct HalfSpace {
 };
 
 struct SceneOptions {
-  double cane_segment_m = 0.03;     // canes become chords of this length from the base (tip shorter)
+  double cane_segment_m = 0.03;     // canes become chords this long from the base (tip shorter)
   double default_margin_m = 0.0;    // initial margin on every obstacle
   // INVALID_ARGUMENT naming the field.
   absl::Status Validate() const;
