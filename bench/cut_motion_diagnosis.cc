@@ -326,13 +326,19 @@ void Diagnose(const RobotModel& robot, const PlatformGeometry& platform,
 int Main(int argc, char** argv) {
   int seed_base = 1110, vines = 20;
   bool verbose = false, recheck = false;
+  int alternatives = -1;  // -1: PlanOptions' default
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--seed-base") && i + 1 < argc) seed_base = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--vines") && i + 1 < argc) vines = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--verbose")) verbose = true;
     else if (!std::strcmp(argv[i], "--recheck")) recheck = true;
+    else if (!std::strcmp(argv[i], "--cut-alternatives") && i + 1 < argc)
+      alternatives = std::atoi(argv[++i]);
     else {
-      std::fprintf(stderr, "usage: %s [--seed-base N] [--vines N] [--verbose]\n", argv[0]);
+      std::fprintf(stderr,
+                   "usage: %s [--seed-base N] [--vines N] [--verbose] [--recheck]"
+                   " [--cut-alternatives N]\n",
+                   argv[0]);
       return 2;
     }
   }
@@ -340,6 +346,7 @@ int Main(int argc, char** argv) {
   const PlatformGeometry platform = DefaultPlatform();
   PlanOptions options;
   options.home = DefaultHome();
+  if (alternatives >= 0) options.cut_motion.alternatives = alternatives;
   Totals totals;
   int cuts = 0, reachable = 0, planned = 0;
   for (int v = 0; v < vines; ++v) {
@@ -388,6 +395,28 @@ int Main(int argc, char** argv) {
         std::printf("  segment %zu (%s, cut %lld, %zu points): %d\n", i,
                     segment.kind == SegmentKind::kCut ? "cut" : "transit",
                     static_cast<long long>(segment.cut_id.value), segment.points.size(), bad[i]);
+        if (segment.kind == SegmentKind::kTransit) {
+          // The wood at the time of a transit is at least the wood after every cut before it;
+          // the way home (cut 0) runs after all of them.
+          std::vector<Cut> before;
+          for (size_t k = 0; k < i; ++k)
+            for (const Cut& c : result->cuts)
+              if (result->trajectory.segments[k].kind == SegmentKind::kCut &&
+                  c.id.value == result->trajectory.segments[k].cut_id.value)
+                before.push_back(c);
+          const auto s = CollisionScene::Build(WithoutFallenWood(scene->vine, before), platform, robot);
+          auto primitive = MakeChecker(CheckerKind::kPrimitives, robot, *s);
+          auto mesh = MakeChecker(CheckerKind::kFclMesh, robot, *s);
+          double worst = 1;
+          int mesh_bad = 0;
+          for (const TrajectoryPoint& p : segment.points) {
+            const Joints q = Eigen::Map<const Joints>(p.q.data());
+            worst = std::min(worst, primitive->Clearance(q));
+            mesh_bad += mesh->IsFree(q) ? 0 : 1;
+          }
+          std::printf("    transit after %zu cuts: primitive clearance at its samples %.6f m; "
+                      "mesh-colliding samples %d\n", before.size(), worst, mesh_bad);
+        }
         for (const Cut& c : result->cuts) {
           if (c.id.value != segment.cut_id.value) continue;
           std::vector<Cut> before;
