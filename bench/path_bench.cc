@@ -76,32 +76,42 @@ FakeWorld MakeFakeWorld(uint32_t seed) {
   return w;
 }
 
+// The path queries of one benchmark: times, outcomes and checks, and their counters.
+struct PathTally {
+  std::vector<double> times, rrt_times;
+  int solved = 0, rrt = 0, total = 0;
+  int64_t checks = 0;
+
+  void Add(const PathResult& r) {
+    times.push_back(r.planning_s);
+    solved += r.outcome == PathOutcome::kSolved;
+    rrt += !r.direct;
+    if (!r.direct) rrt_times.push_back(r.planning_s);
+    checks += r.checks;
+    ++total;
+  }
+
+  void Report(benchmark::State& state) {
+    std::sort(times.begin(), times.end());
+    std::sort(rrt_times.begin(), rrt_times.end());
+    state.counters["median_us"] = 1e6 * times[times.size() / 2];
+    state.counters["p95_us"] = 1e6 * times[times.size() * 95 / 100];
+    if (!rrt_times.empty()) state.counters["rrt_median_us"] = 1e6 * rrt_times[rrt_times.size() / 2];
+    state.counters["rrt_fraction"] = double(rrt) / total;
+    state.counters["success_rate"] = double(solved) / total;
+    state.counters["checks_per_path"] = double(checks) / total;
+  }
+};
+
 void BM_PlanPathFake(benchmark::State& state) {
   FakeWorld world = MakeFakeWorld(1200);
   PathOptions options;
   PathPlanner planner(world.checker, JointLimits(), options);
-  std::vector<double> times, rrt_times;
-  int solved = 0, rrt = 0, total = 0;
-  int64_t checks = 0;
+  PathTally tally;
   for (auto _ : state) {
-    for (const auto& [a, b] : world.queries) {
-      const PathResult r = planner.Plan(a, b, Deadline::In(1.0));
-      times.push_back(r.planning_s);
-      solved += r.outcome == PathOutcome::kSolved;
-      rrt += !r.direct;
-      if (!r.direct) rrt_times.push_back(r.planning_s);
-      checks += r.checks;
-      ++total;
-    }
+    for (const auto& [a, b] : world.queries) tally.Add(planner.Plan(a, b, Deadline::In(1.0)));
   }
-  std::sort(times.begin(), times.end());
-  state.counters["median_us"] = 1e6 * times[times.size() / 2];
-  state.counters["p95_us"] = 1e6 * times[times.size() * 95 / 100];
-  std::sort(rrt_times.begin(), rrt_times.end());
-  if (!rrt_times.empty()) state.counters["rrt_median_us"] = 1e6 * rrt_times[rrt_times.size() / 2];
-  state.counters["rrt_fraction"] = double(rrt) / total;
-  state.counters["success_rate"] = double(solved) / total;
-  state.counters["checks_per_path"] = double(checks) / total;
+  tally.Report(state);
 }
 BENCHMARK(BM_PlanPathFake)->Unit(benchmark::kMillisecond);
 
@@ -151,20 +161,14 @@ void BM_PlanPathScene(benchmark::State& state) {
   const JointLimits limits = DefaultUr5(SimpleMillEnd()).limits;
   PathOptions options;
   options.range_rad = 0.1 * static_cast<double>(state.range(0));
-  std::vector<double> times, rrt_times;
-  int solved = 0, rrt = 0, total = 0, dense_failures = 0;
-  int64_t checks = 0;
+  PathTally tally;
+  int dense_failures = 0;
   for (auto _ : state) {
     for (SceneWorld& w : worlds) {
       PathPlanner planner(*w.checker, limits, options);
       for (const auto& [a, b] : w.queries) {
         const PathResult r = planner.Plan(a, b, Deadline::In(2.0));
-        times.push_back(r.planning_s);
-        solved += r.outcome == PathOutcome::kSolved;
-        rrt += !r.direct;
-        if (!r.direct) rrt_times.push_back(r.planning_s);
-        checks += r.checks;
-        ++total;
+        tally.Add(r);
         state.PauseTiming();
         for (size_t k = 1; k < r.waypoints.size(); ++k) {
           dense_failures += !w.checker->IsMotionFree(r.waypoints[k - 1], r.waypoints[k], 0.002);
@@ -173,14 +177,7 @@ void BM_PlanPathScene(benchmark::State& state) {
       }
     }
   }
-  std::sort(times.begin(), times.end());
-  std::sort(rrt_times.begin(), rrt_times.end());
-  state.counters["median_us"] = 1e6 * times[times.size() / 2];
-  state.counters["p95_us"] = 1e6 * times[times.size() * 95 / 100];
-  if (!rrt_times.empty()) state.counters["rrt_median_us"] = 1e6 * rrt_times[rrt_times.size() / 2];
-  state.counters["rrt_fraction"] = double(rrt) / total;
-  state.counters["success_rate"] = double(solved) / total;
-  state.counters["checks_per_path"] = double(checks) / total;
+  tally.Report(state);
   state.counters["dense_failures"] = dense_failures;
 }
 // Arguments: RRT-Connect range in tenths of a radian (0: OMPL's default, 0.2 x the extent of the
