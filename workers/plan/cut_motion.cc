@@ -337,8 +337,9 @@ class FlangeBodies {
     for (const Body& body : bodies_) {
       const Capsule& c = body.capsule;
       const Eigen::Vector3d a = base_from_flange * c.a, b = base_from_flange * c.b;
-      const Eigen::Vector3d centre = 0.5 * (a + b);
-      const double bound = 0.5 * (b - a).norm() + c.radius;
+      const Eigen::Vector3d centre = 0.5 * (a + b), ab = b - a;
+      const double ab_squared = ab.squaredNorm();
+      const double bound = 0.5 * std::sqrt(ab_squared) + c.radius;
       for (const HalfSpace& h : planes_) {
         if (std::max(h.normal.dot(a), h.normal.dot(b)) + c.radius + h.margin_m >
             h.offset + kToleranceM) {
@@ -350,9 +351,12 @@ class FlangeBodies {
         const double apart = bound + o.bound;
         if ((centre - o.centre).squaredNorm() > apart * apart) continue;
         // Tighter, still cheaper than the segment distance: the obstacle's ball against the
-        // flange capsule's segment (1e-9 m of slack against rounding; contact needs less than
-        // the radii minus kToleranceM).
-        if (PointSegmentDistance(o.centre, a, b) > c.radius + o.bound + 1e-9) continue;
+        // flange capsule's segment, squared (1e-9 m of slack against rounding; contact needs
+        // less than the radii minus kToleranceM).
+        const double u =
+            ab_squared > 0 ? std::clamp((o.centre - a).dot(ab) / ab_squared, 0.0, 1.0) : 0.0;
+        const double ball = c.radius + o.bound + 1e-9;
+        if ((a + u * ab - o.centre).squaredNorm() > ball * ball) continue;
         if (SegmentSegmentDistance(a, b, o.a, o.b) < c.radius + o.radius - kToleranceM) {
           return true;
         }
