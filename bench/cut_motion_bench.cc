@@ -11,10 +11,13 @@
 // passes (--repeat R plans each pass R times and keeps the fastest), their medians, and the
 // outcomes. Run:
 //   build/bench/vb_cut_motion_bench [--seed-base 1110] [--vines 90] [--passes 6] [--repeat 1]
-//                                   [--fingerprint FILE]
+//                                   [--fingerprint FILE] [--orientations N] [--max-roll-deg D]
+//                                   [--roll-steps N] [--max-tilt-deg D] [--tilt-steps N]
+//                                   [--max-slide-m M] [--alternatives N]
 #include <time.h>
 
 #include <algorithm>
+#include <cmath>
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
@@ -66,19 +69,40 @@ uint64_t Hash(const std::vector<Joints>& path, uint64_t h) {
 int Main(int argc, char** argv) {
   int seed_base = 1110, vines = 90, passes = 6, repeat = 1;
   const char* fingerprint = nullptr;
+  PlanOptions options;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--seed-base") && i + 1 < argc) seed_base = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--vines") && i + 1 < argc) vines = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--passes") && i + 1 < argc) passes = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--repeat") && i + 1 < argc) repeat = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--fingerprint") && i + 1 < argc) fingerprint = argv[++i];
+    // Cut-motion options (default: PlanOptions').
+    else if (!std::strcmp(argv[i], "--orientations") && i + 1 < argc)
+      options.cut_motion.orientations = std::atoi(argv[++i]);
+    else if (!std::strcmp(argv[i], "--max-roll-deg") && i + 1 < argc)
+      options.cut_motion.max_roll_rad = std::atof(argv[++i]) * M_PI / 180.0;
+    else if (!std::strcmp(argv[i], "--roll-steps") && i + 1 < argc)
+      options.cut_motion.roll_steps = std::atoi(argv[++i]);
+    else if (!std::strcmp(argv[i], "--max-tilt-deg") && i + 1 < argc)
+      options.cut_motion.max_tilt_rad = std::atof(argv[++i]) * M_PI / 180.0;
+    else if (!std::strcmp(argv[i], "--tilt-steps") && i + 1 < argc)
+      options.cut_motion.tilt_steps = std::atoi(argv[++i]);
+    else if (!std::strcmp(argv[i], "--max-slide-m") && i + 1 < argc)
+      options.cut_motion.max_slide_m = std::atof(argv[++i]);
+    else if (!std::strcmp(argv[i], "--alternatives") && i + 1 < argc)
+      options.cut_motion.alternatives = std::atoi(argv[++i]);
     else {
       std::fprintf(stderr,
                    "usage: %s [--seed-base N] [--vines N] [--passes N] [--repeat N]"
-                   " [--fingerprint FILE]\n",
+                   " [--fingerprint FILE] [--orientations N] [--max-roll-deg D] [--roll-steps N]"
+                   " [--max-tilt-deg D] [--tilt-steps N] [--max-slide-m M] [--alternatives N]\n",
                    argv[0]);
       return 2;
     }
+  }
+  if (const absl::Status s = options.cut_motion.Validate(); !s.ok()) {
+    std::fprintf(stderr, "%s\n", std::string(s.message()).c_str());
+    return 2;
   }
   if (vines < 1 || passes < 1 || repeat < 1) {
     std::fprintf(stderr, "--vines, --passes and --repeat must be >= 1\n");
@@ -91,11 +115,11 @@ int Main(int argc, char** argv) {
   }
   const RobotModel robot = DefaultUr5(SecateurTool());
   const PlatformGeometry platform = DefaultPlatform();
-  const PlanOptions options;
   std::vector<double> cpu_s, wall_s;
   std::map<std::string, int> outcomes;  // final outcome of every cut
   std::map<std::string, double> cpu_by_outcome;  // CPU time of every cut motion search, by outcome
-  int cuts_total = 0, slid = 0;
+  int cuts_total = 0, slid = 0, slid_past_child = 0;
+  std::map<std::string, int> slid_by_reason;  // planned cuts by reason, head or not, and slide
   double clearance_sum = 0;
   for (int v = 0; v < vines; ++v) {
     const uint64_t seed = seed_base + v;
@@ -161,6 +185,26 @@ int Main(int argc, char** argv) {
           ++outcomes["planned"];
           clearance_sum += m.clearance_m;
           slid += m.slid_m > 0;
+          // A slide past the base of a child of the cut cane leaves that child on the vine.
+          const Polyline3& cane = model.canes[*model.IndexOf(c.cane_id)].polyline;
+          const double s_given = cane.Project(here[k].point), s_made = cane.Project(c.point);
+          for (CaneId child : model.ChildrenOf(c.cane_id)) {
+            const double at =
+                cane.Project(model.canes[*model.IndexOf(child)].polyline.points.front());
+            if (at > s_given && at <= s_made) {
+              ++slid_past_child;
+              break;
+            }
+          }
+          const Cane& cut_cane = model.canes[*model.IndexOf(c.cane_id)];
+          const bool from_head = cut_cane.parent_id.has_value() &&
+                                 model.canes[*model.IndexOf(*cut_cane.parent_id)].kind ==
+                                     CaneKind::kTrunk;
+          ++slid_by_reason[std::string(CutReasonName(c.reason)) + (from_head ? "_head" : "") +
+                           (m.slid_m > 0.1 + 1e-9   ? "_over_0.10"
+                            : m.slid_m > 0.05 + 1e-9 ? "_0.06-0.10"
+                            : m.slid_m > 0         ? "_0.01-0.05"
+                                                   : "_0")];
         } else if (m.outcome == CutMotionOutcome::kNoCollisionFreeMotion && !last) {
           retry.push_back(here[k]);
         } else {
@@ -186,6 +230,12 @@ int Main(int argc, char** argv) {
               outcomes["planned"] ? clearance_sum / outcomes["planned"] : 0.0);
   bool first = true;
   for (const auto& [name, n] : outcomes) {
+    std::printf("%s\"%s\": %d", first ? "" : ", ", name.c_str(), n);
+    first = false;
+  }
+  std::printf("}, \"slid_past_child\": %d, \"planned_by_reason_and_slide\": {", slid_past_child);
+  first = true;
+  for (const auto& [name, n] : slid_by_reason) {
     std::printf("%s\"%s\": %d", first ? "" : ", ", name.c_str(), n);
     first = false;
   }

@@ -411,6 +411,18 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
   }
   const Polyline3& cane = model.canes[*cane_index].polyline;
   const double s0 = cane.Project(cut.point);
+  // A cut is made at most up to the cane's tip, and short of the base of any child beyond the
+  // given cut: that child falls with the cut as given (its own wood has no cut), and a cut slid
+  // past its base would leave it on the vine.
+  double slide_end_s = cane.Length();
+  // (Canes from the head do not fall with a cut of the trunk: fallen_wood.h.)
+  const bool trunk = model.canes[*cane_index].kind == CaneKind::kTrunk;
+  for (CaneId child : trunk ? std::vector<CaneId>{} : model.ChildrenOf(cut.cane_id)) {
+    const std::optional<size_t> c = model.IndexOf(child);
+    if (!c.has_value() || model.canes[*c].polyline.points.empty()) continue;
+    const double at = cane.Project(model.canes[*c].polyline.points.front());
+    if (at > s0) slide_end_s = std::min(slide_end_s, at);
+  }
   const Eigen::Isometry3d base_from_platform = robot.platform_from_arm_base.inverse();
   const Eigen::Isometry3d tcp_from_flange = robot.tool.flange_from_tcp.inverse();
   int cut_index = 0;
@@ -452,6 +464,7 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
       if (k > 0) {
         const double s = s0 + k * options.slide_step_m;
         if (s > cane.Length()) break;  // slid off the tip
+        if (s >= slide_end_s) break;    // the next child would stay on the vine
         point = cane.PointAt(s);
         direction = cane.TangentAt(s);
       }
