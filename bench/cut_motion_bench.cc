@@ -14,6 +14,10 @@
 //                                   [--fingerprint FILE] [--orientations N] [--max-roll-deg D]
 //                                   [--roll-steps N] [--max-tilt-deg D] [--tilt-steps N]
 //                                   [--max-slide-m M] [--alternatives N]
+//                                   [--last-resort-max-slide-m M] [--last-resort-max-roll-deg D]
+//                                   [--last-resort-roll-steps N]
+// --last-resort-*: cuts left without a motion by a pass that plans none are tried once more with
+// those options (the rest as PlanOptions') before they are given up.
 #include <time.h>
 
 #include <algorithm>
@@ -70,6 +74,9 @@ int Main(int argc, char** argv) {
   int seed_base = 1110, vines = 90, passes = 6, repeat = 1;
   const char* fingerprint = nullptr;
   PlanOptions options;
+  // Cuts left without a motion by a pass that plans none are tried once more with these.
+  CutMotionOptions last_resort = options.cut_motion;
+  bool use_last_resort = false;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--seed-base") && i + 1 < argc) seed_base = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--vines") && i + 1 < argc) vines = std::atoi(argv[++i]);
@@ -89,13 +96,21 @@ int Main(int argc, char** argv) {
       options.cut_motion.tilt_steps = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--max-slide-m") && i + 1 < argc)
       options.cut_motion.max_slide_m = std::atof(argv[++i]);
+    else if (!std::strcmp(argv[i], "--last-resort-max-slide-m") && i + 1 < argc)
+      last_resort.max_slide_m = std::atof(argv[++i]), use_last_resort = true;
+    else if (!std::strcmp(argv[i], "--last-resort-max-roll-deg") && i + 1 < argc)
+      last_resort.max_roll_rad = std::atof(argv[++i]) * M_PI / 180.0, use_last_resort = true;
+    else if (!std::strcmp(argv[i], "--last-resort-roll-steps") && i + 1 < argc)
+      last_resort.roll_steps = std::atoi(argv[++i]), use_last_resort = true;
     else if (!std::strcmp(argv[i], "--alternatives") && i + 1 < argc)
       options.cut_motion.alternatives = std::atoi(argv[++i]);
     else {
       std::fprintf(stderr,
                    "usage: %s [--seed-base N] [--vines N] [--passes N] [--repeat N]"
                    " [--fingerprint FILE] [--orientations N] [--max-roll-deg D] [--roll-steps N]"
-                   " [--max-tilt-deg D] [--tilt-steps N] [--max-slide-m M] [--alternatives N]\n",
+                   " [--max-tilt-deg D] [--tilt-steps N] [--max-slide-m M] [--alternatives N]"
+                   " [--last-resort-max-slide-m M] [--last-resort-max-roll-deg D]"
+                   " [--last-resort-roll-steps N]\n",
                    argv[0]);
       return 2;
     }
@@ -209,6 +224,40 @@ int Main(int argc, char** argv) {
           retry.push_back(here[k]);
         } else {
           ++outcomes[std::string(CutMotionOutcomeName(m.outcome))];
+        }
+      }
+      if (made_now.empty() && use_last_resort && !retry.empty()) {
+        const double t0 = ThreadCpuS();
+        for (const Cut& c : retry) {
+          const CutMotion m = PlanCutMotions(robot, model, *collision_scene, std::span(&c, 1),
+                                             last_resort, Deadline::Infinite())[0];
+          if (out) {
+            std::fprintf(out, "%llu %d %lld last_resort_%s %.12g %.6g %d %zu\n",
+                         static_cast<unsigned long long>(seed), pass,
+                         static_cast<long long>(m.cut_id.value),
+                         std::string(CutMotionOutcomeName(m.outcome)).c_str(), m.clearance_m,
+                         m.slid_m, m.cut_index, m.alternatives.size());
+          }
+          if (m.outcome != CutMotionOutcome::kPlanned) continue;
+          Cut made_cut = c;
+          made_cut.point = m.cut_point_in_platform;
+          made_now.push_back(made_cut);
+          ++outcomes["planned"];
+          ++outcomes["planned_as_last_resort"];
+          clearance_sum += m.clearance_m;
+          slid += m.slid_m > 0;
+        }
+        cpu += ThreadCpuS() - t0;
+        std::vector<Cut> still;
+        for (const Cut& c : retry) {
+          if (std::none_of(made_now.begin(), made_now.end(),
+                           [&](const Cut& m) { return m.id == c.id; }))
+            still.push_back(c);
+        }
+        retry = still;
+        if (pass + 1 == passes) {
+          outcomes["no_collision_free_cut_motion"] += static_cast<int>(retry.size());
+          retry.clear();
         }
       }
       if (made_now.empty()) {
