@@ -16,8 +16,9 @@
 //                                   [--max-slide-m M] [--alternatives N]
 //                                   [--last-resort-max-slide-m M] [--last-resort-max-roll-deg D]
 //                                   [--last-resort-roll-steps N]
-// --last-resort-*: cuts left without a motion by a pass that plans none are tried once more with
-// those options (the rest as PlanOptions') before they are given up.
+// Cuts left without a motion by a pass that plans none are tried once more, as PlanVine does,
+// sliding up to PlanOptions' last_resort_max_slide_m (--last-resort-max-slide-m; 0: off), with
+// --last-resort-max-roll-deg / --last-resort-roll-steps wider rolls there too.
 #include <time.h>
 
 #include <algorithm>
@@ -74,9 +75,10 @@ int Main(int argc, char** argv) {
   int seed_base = 1110, vines = 90, passes = 6, repeat = 1;
   const char* fingerprint = nullptr;
   PlanOptions options;
-  // Cuts left without a motion by a pass that plans none are tried once more with these.
+  // Cuts left without a motion by a pass that plans none are tried once more with these (as
+  // PlanVine does with last_resort_max_slide_m).
   CutMotionOptions last_resort = options.cut_motion;
-  bool use_last_resort = false;
+  last_resort.max_slide_m = options.last_resort_max_slide_m;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--seed-base") && i + 1 < argc) seed_base = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--vines") && i + 1 < argc) vines = std::atoi(argv[++i]);
@@ -97,11 +99,11 @@ int Main(int argc, char** argv) {
     else if (!std::strcmp(argv[i], "--max-slide-m") && i + 1 < argc)
       options.cut_motion.max_slide_m = std::atof(argv[++i]);
     else if (!std::strcmp(argv[i], "--last-resort-max-slide-m") && i + 1 < argc)
-      last_resort.max_slide_m = std::atof(argv[++i]), use_last_resort = true;
+      last_resort.max_slide_m = std::atof(argv[++i]);
     else if (!std::strcmp(argv[i], "--last-resort-max-roll-deg") && i + 1 < argc)
-      last_resort.max_roll_rad = std::atof(argv[++i]) * M_PI / 180.0, use_last_resort = true;
+      last_resort.max_roll_rad = std::atof(argv[++i]) * M_PI / 180.0;
     else if (!std::strcmp(argv[i], "--last-resort-roll-steps") && i + 1 < argc)
-      last_resort.roll_steps = std::atoi(argv[++i]), use_last_resort = true;
+      last_resort.roll_steps = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--alternatives") && i + 1 < argc)
       options.cut_motion.alternatives = std::atoi(argv[++i]);
     else {
@@ -114,6 +116,14 @@ int Main(int argc, char** argv) {
                    argv[0]);
       return 2;
     }
+  }
+  // Off when it would search no wider than the passes (--last-resort-max-slide-m 0).
+  const bool use_last_resort = last_resort.max_slide_m > options.cut_motion.max_slide_m ||
+                               last_resort.max_roll_rad > options.cut_motion.max_roll_rad ||
+                               last_resort.roll_steps > options.cut_motion.roll_steps;
+  if (const absl::Status s = last_resort.Validate(); !s.ok()) {
+    std::fprintf(stderr, "last resort %s\n", std::string(s.message()).c_str());
+    return 2;
   }
   if (const absl::Status s = options.cut_motion.Validate(); !s.ok()) {
     std::fprintf(stderr, "%s\n", std::string(s.message()).c_str());
