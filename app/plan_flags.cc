@@ -37,6 +37,8 @@ absl::StatusOr<PlanSetup> ParsePlanSetup(Flags& flags) {
   VB_ASSIGN_OR_RETURN(const int64_t passes, flags.Int("max-passes", o.max_passes));
   VB_ASSIGN_OR_RETURN(cut.sweep_m, flags.Double("sweep-m", cut.sweep_m));
   VB_ASSIGN_OR_RETURN(cut.max_slide_m, flags.Double("max-slide-m", cut.max_slide_m));
+  VB_ASSIGN_OR_RETURN(o.last_resort_max_slide_m,
+                      flags.Double("last-resort-max-slide-m", o.last_resort_max_slide_m));
   VB_ASSIGN_OR_RETURN(const double tilt_deg,
                       flags.Double("max-tilt-deg", cut.max_tilt_rad * 180 / M_PI));
   VB_ASSIGN_OR_RETURN(const int64_t tilt_steps, flags.Int("tilt-steps", cut.tilt_steps));

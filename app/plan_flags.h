@@ -18,7 +18,8 @@ struct PlanSetup {
 
 // --tool secateur|mill_end (default secateur), --checker primitives|fcl_primitives|fcl_mesh
 // (default primitives), --max-margin-m M, --path-time-limit-s T, --path-range-rad R,
-// --shortcut-rounds N, --sweep-m S, --max-slide-m M, --max-tilt-deg D, --tilt-steps N,
+// --shortcut-rounds N, --sweep-m S, --max-slide-m M, --last-resort-max-slide-m M,
+// --max-tilt-deg D, --tilt-steps N,
 // --max-roll-deg D, --roll-steps N, --cut-alternatives N, --cut-min-clearance-m M,
 // --max-passes N, --path-max-tree-states N, --margin-fallback true|false,
 // --retry-unreached true|false, --blend-transits true|false (defaults: PlanOptions'),

@@ -110,22 +110,28 @@ std::vector<Eigen::Isometry3d> SampleCutPoses(const Eigen::Vector3d& p, const Ei
   };
   const std::vector<double> tilts = signed_steps(options.max_tilt_rad, options.tilt_steps);
   const std::vector<double> rolls = signed_steps(options.max_roll_rad, options.roll_steps);
+  // The axes about the cane, computed once (sampling is called per slide).
+  std::vector<Eigen::Vector3d> z_perpendiculars;
+  for (int i = 0; i < options.orientations; ++i) {
+    const double theta = 2.0 * M_PI * i / options.orientations;
+    z_perpendiculars.push_back(-(std::cos(theta) * e1 + std::sin(theta) * e2));
+  }
+  poses.reserve(rolls.size() * tilts.size() * z_perpendiculars.size() * options.approach_sides);
   for (double roll : rolls) {
+    const double cos_roll = std::cos(roll), sin_roll = std::sin(roll);
     for (double tilt : tilts) {
-      for (int i = 0; i < options.orientations; ++i) {
-        const double theta = 2.0 * M_PI * i / options.orientations;
-        const Eigen::Vector3d z_perpendicular = -(std::cos(theta) * e1 + std::sin(theta) * e2);
+      const double cos_tilt = std::cos(tilt), sin_tilt = std::sin(tilt);
+      for (const Eigen::Vector3d& z_perpendicular : z_perpendiculars) {
         for (int side = 0; side < options.approach_sides; ++side) {
           const Eigen::Vector3d y_along = side == 0 ? d : Eigen::Vector3d(-d);
           // Rotation by `tilt` about x = y cross z: x stays across the cane.
-          const Eigen::Vector3d y_tilted =
-              std::cos(tilt) * y_along + std::sin(tilt) * z_perpendicular;
-          const Eigen::Vector3d z = -std::sin(tilt) * y_along + std::cos(tilt) * z_perpendicular;
+          const Eigen::Vector3d y_tilted = cos_tilt * y_along + sin_tilt * z_perpendicular;
+          const Eigen::Vector3d z = -sin_tilt * y_along + cos_tilt * z_perpendicular;
           const Eigen::Vector3d x_tilted = y_tilted.cross(z);
           // Then by `roll` about z: the jaws' plane turns about the tool axis.
           Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-          pose.linear().col(0) = std::cos(roll) * x_tilted + std::sin(roll) * y_tilted;
-          pose.linear().col(1) = -std::sin(roll) * x_tilted + std::cos(roll) * y_tilted;
+          pose.linear().col(0) = cos_roll * x_tilted + sin_roll * y_tilted;
+          pose.linear().col(1) = -sin_roll * x_tilted + cos_roll * y_tilted;
           pose.linear().col(2) = z;
           pose.translation() = p;
           poses.push_back(pose);
@@ -272,51 +278,85 @@ class FlangeBodies {
     for (const LinkBody& body : robot.BodiesWithTool()) {
       if (body.frame != 6) continue;
       for (const Capsule& c : body.capsules) {
-        capsules_.push_back(c);
-        reach_m_ = std::max(reach_m_, std::max((c.a - tcp).norm(), (c.b - tcp).norm()) + c.radius);
+        // Whatever the pose, the capsule's axis stays within [near_m, far_m] of the TCP.
+        Body body;
+        body.capsule = c;
+        body.near_m = PointSegmentDistance(tcp, c.a, c.b);
+        body.far_m = std::max((c.a - tcp).norm(), (c.b - tcp).norm());
+        bodies_.push_back(std::move(body));
       }
     }
     // The tool's capsules (added last) are the likeliest to touch the vine: test them first.
-    std::reverse(capsules_.begin(), capsules_.end());
+    std::reverse(bodies_.begin(), bodies_.end());
   }
 
-  // Keeps the obstacles of `scene` that a flange body can touch while the TCP is within
-  // `tcp_travel_m` of `tcp_point`.
+  // Keeps, per flange body, the obstacles of `scene` that it can touch with the TCP on
+  // `tcp_point` (Collides(..., false)) or within `tcp_travel_m` of it (Collides(..., true)),
+  // closest to `tcp_point` first: a blocked pose is usually blocked by the wood nearest the cut.
   void Select(const CollisionScene& scene, const Eigen::Vector3d& tcp_point, double tcp_travel_m) {
-    near_.clear();
+    struct Near {
+      NearObstacle o;
+      double nearest, farthest;  // of its axis from tcp_point
+    };
+    double reach = 0;  // of any flange body from the TCP
+    for (const Body& body : bodies_) reach = std::max(reach, body.far_m + body.capsule.radius);
+    std::vector<Near> near;
     for (const Obstacle& o : scene.obstacles) {
       const double radius = o.capsule.radius + o.margin_m;
-      if (PointSegmentDistance(tcp_point, o.capsule.a, o.capsule.b) - radius <=
-          reach_m_ + tcp_travel_m) {
-        near_.push_back({o.capsule.a, o.capsule.b, 0.5 * (o.capsule.a + o.capsule.b), radius,
-                         0.5 * (o.capsule.b - o.capsule.a).norm() + radius});
+      const double nearest = PointSegmentDistance(tcp_point, o.capsule.a, o.capsule.b);
+      if (nearest - radius > reach + tcp_travel_m + 1e-9) continue;
+      near.push_back({{o.capsule.a, o.capsule.b, 0.5 * (o.capsule.a + o.capsule.b), radius,
+                       0.5 * (o.capsule.b - o.capsule.a).norm() + radius},
+                      nearest, std::max((o.capsule.a - tcp_point).norm(), (o.capsule.b - tcp_point).norm())});
+    }
+    std::stable_sort(near.begin(), near.end(),
+                     [](const Near& x, const Near& y) { return x.nearest < y.nearest; });
+    for (Body& body : bodies_) {
+      for (int travel = 0; travel < 2; ++travel) {
+        const double t = travel ? tcp_travel_m : 0.0;
+        std::vector<NearObstacle>& list = body.near[travel];
+        list.clear();
+        for (const Near& n : near) {
+          // Contact needs the axes within the radii (+1e-9 m against rounding) somewhere in the
+          // shell [near_m - t, far_m + t] about tcp_point.
+          const double reach = body.capsule.radius + n.o.radius + 1e-9;
+          if (n.nearest > body.far_m + t + reach) continue;
+          if (n.farthest < body.near_m - t - reach) continue;
+          list.push_back(n.o);
+        }
       }
     }
     planes_ = scene.planes;
   }
 
   // True if a flange body overlaps a selected obstacle or a plane by more than kToleranceM at
-  // `base_from_flange` (the TCP within the travel of the selected point). Exact, in double: a checker that works
-  // in float (the primitive checker's ~1e-6 m) rejects every such pose too.
-  bool Collides(const Eigen::Isometry3d& base_from_flange) const {
-    for (const Capsule& c : capsules_) {
+  // `base_from_flange` (the TCP on the selected point, or within the travel of it when
+  // `along_stroke`). Exact, in double: a checker that works in float (the primitive checker's
+  // ~1e-6 m) rejects every such pose too.
+  bool Collides(const Eigen::Isometry3d& base_from_flange, bool along_stroke) const {
+    for (const Body& body : bodies_) {
+      const Capsule& c = body.capsule;
       const Eigen::Vector3d a = base_from_flange * c.a, b = base_from_flange * c.b;
-      const Eigen::Vector3d centre = 0.5 * (a + b);
-      const double bound = 0.5 * (b - a).norm() + c.radius;
+      const Eigen::Vector3d centre = 0.5 * (a + b), ab = b - a;
+      const double ab_squared = ab.squaredNorm();
+      const double bound = 0.5 * std::sqrt(ab_squared) + c.radius;
       for (const HalfSpace& h : planes_) {
         if (std::max(h.normal.dot(a), h.normal.dot(b)) + c.radius + h.margin_m >
             h.offset + kToleranceM) {
           return true;
         }
       }
-      for (const NearObstacle& o : near_) {
+      for (const NearObstacle& o : body.near[along_stroke ? 1 : 0]) {
         // Bounding spheres apart: the capsules are too (cheaper than the segment distance).
         const double apart = bound + o.bound;
         if ((centre - o.centre).squaredNorm() > apart * apart) continue;
         // Tighter, still cheaper than the segment distance: the obstacle's ball against the
-        // flange capsule's segment (1e-9 m of slack against rounding; contact needs less than
-        // the radii minus kToleranceM).
-        if (PointSegmentDistance(o.centre, a, b) > c.radius + o.bound + 1e-9) continue;
+        // flange capsule's segment, squared (1e-9 m of slack against rounding; contact needs
+        // less than the radii minus kToleranceM).
+        const double u =
+            ab_squared > 0 ? std::clamp((o.centre - a).dot(ab) / ab_squared, 0.0, 1.0) : 0.0;
+        const double ball = c.radius + o.bound + 1e-9;
+        if ((a + u * ab - o.centre).squaredNorm() > ball * ball) continue;
         if (SegmentSegmentDistance(a, b, o.a, o.b) < c.radius + o.radius - kToleranceM) {
           return true;
         }
@@ -327,14 +367,17 @@ class FlangeBodies {
 
  private:
   static constexpr double kToleranceM = 1e-5;
-  std::vector<Capsule> capsules_;  // flange frame
-  double reach_m_ = 0;             // farthest flange-body surface point from the TCP
   struct NearObstacle {
     Eigen::Vector3d a, b, centre;
     double radius;  // with the margin
     double bound;   // bounding sphere about `centre`
   };
-  std::vector<NearObstacle> near_;
+  struct Body {
+    Capsule capsule;  // flange frame
+    double near_m, far_m;  // nearest and farthest point of its axis from the TCP
+    std::vector<NearObstacle> near[2];  // Select's obstacles: at the cut point, along the stroke
+  };
+  std::vector<Body> bodies_;
   std::vector<HalfSpace> planes_;
 };
 
@@ -368,6 +411,18 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
   }
   const Polyline3& cane = model.canes[*cane_index].polyline;
   const double s0 = cane.Project(cut.point);
+  // A cut is made at most up to the cane's tip, and short of the base of any child beyond the
+  // given cut: that child falls with the cut as given (its own wood has no cut), and a cut slid
+  // past its base would leave it on the vine.
+  double slide_end_s = cane.Length();
+  // (Canes from the head do not fall with a cut of the trunk: fallen_wood.h.)
+  const bool trunk = model.canes[*cane_index].kind == CaneKind::kTrunk;
+  for (CaneId child : trunk ? std::vector<CaneId>{} : model.ChildrenOf(cut.cane_id)) {
+    const std::optional<size_t> c = model.IndexOf(child);
+    if (!c.has_value() || model.canes[*c].polyline.points.empty()) continue;
+    const double at = cane.Project(model.canes[*c].polyline.points.front());
+    if (at > s0) slide_end_s = std::min(slide_end_s, at);
+  }
   const Eigen::Isometry3d base_from_platform = robot.platform_from_arm_base.inverse();
   const Eigen::Isometry3d tcp_from_flange = robot.tool.flange_from_tcp.inverse();
   int cut_index = 0;
@@ -396,49 +451,57 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
   bool reachable = false;
   int free_at_cut = 0, strokes_followed = 0;  // over all slides, for the message
   // Strokes followed includes those stopped by a collision (IK did not fail first).
+  // Per slide: the scene without the cut cane near the cut, the flange bodies' obstacles and the
+  // sampled poses, shared by its unrolled and rolled stages.
+  CollisionScene local;
+  std::vector<Eigen::Isometry3d> slide_poses;
+  Eigen::Vector3d point = cut.point;
   for (int step = 0; step < (slides + 1) * stages; ++step) {
     const int k = step / stages, stage = step % stages;
-    Eigen::Vector3d point = cut.point, direction = cut.direction;
-    if (k > 0) {
-      const double s = s0 + k * options.slide_step_m;
-      if (s > cane.Length()) break;  // slid off the tip
-      point = cane.PointAt(s);
-      direction = cane.TangentAt(s);
-    }
-    const Eigen::Vector3d point_in_base = base_from_platform * point;
-    const Eigen::Vector3d direction_in_base = base_from_platform.linear() * direction;
-    // Building a checker costs more than the checks at one slide. It is built only when some
-    // cut pose survives the flange bodies' test, and consecutive slides often free the same
-    // capsules of the cut cane: an unchanged scene keeps its checker.
-    CollisionScene local =
-        scene.WithoutCaneNear(cut.cane_id, point_in_base, options.cut_cane_free_radius_m);
-    flange_bodies.Select(local, point_in_base, stroke_travel_m);
-    if (in_throat) {
-      CollisionScene cut_cane;  // the capsules of the cut cane that `local` leaves out
-      for (const Obstacle& o : scene.obstacles) {
-        if (o.kind == ObstacleKind::kCane && o.owner_id == cut.cane_id.value &&
-            PointSegmentDistance(point_in_base, o.capsule.a, o.capsule.b) - o.capsule.radius <=
-                options.cut_cane_free_radius_m)
-          cut_cane.obstacles.push_back(o);
+    if (stage == 0) {
+      Eigen::Vector3d direction = cut.direction;
+      point = cut.point;
+      if (k > 0) {
+        const double s = s0 + k * options.slide_step_m;
+        if (s > cane.Length()) break;  // slid off the tip
+        if (s >= slide_end_s) break;    // the next child would stay on the vine
+        point = cane.PointAt(s);
+        direction = cane.TangentAt(s);
       }
-      cut_cane_bodies.Select(cut_cane, point_in_base, stroke_travel_m);
+      const Eigen::Vector3d point_in_base = base_from_platform * point;
+      const Eigen::Vector3d direction_in_base = base_from_platform.linear() * direction;
+      // Building a checker costs more than the checks at one slide. It is built only when some
+      // cut pose survives the flange bodies' test, and consecutive slides often free the same
+      // capsules of the cut cane: an unchanged scene keeps its checker.
+      local = scene.WithoutCaneNear(cut.cane_id, point_in_base, options.cut_cane_free_radius_m);
+      flange_bodies.Select(local, point_in_base, stroke_travel_m);
+      if (in_throat) {
+        CollisionScene cut_cane;  // the capsules of the cut cane that `local` leaves out
+        for (const Obstacle& o : scene.obstacles) {
+          if (o.kind == ObstacleKind::kCane && o.owner_id == cut.cane_id.value &&
+              PointSegmentDistance(point_in_base, o.capsule.a, o.capsule.b) - o.capsule.radius <=
+                  options.cut_cane_free_radius_m)
+            cut_cane.obstacles.push_back(o);
+        }
+        cut_cane_bodies.Select(cut_cane, point_in_base, stroke_travel_m);
+      }
+      slide_poses = SampleCutPoses(point_in_base, direction_in_base, options);
     }
-    // Every IK solution at every sampled pose, checked in one batch (AreFree checks several
-    // configurations at once), in sampling order.
+    // Every IK solution at every sampled pose of this stage, checked in one batch (AreFree checks
+    // several configurations at once), in sampling order.
     std::vector<Candidate> solutions;
-    std::vector<Eigen::Isometry3d> poses =
-        SampleCutPoses(point_in_base, direction_in_base, options);
+    std::span<const Eigen::Isometry3d> poses(slide_poses);
     if (stages == 2) {
-      if (stage == 0) poses.resize(unrolled_poses);
-      else poses.erase(poses.begin(), poses.begin() + unrolled_poses);
+      if (stage == 0) poses = poses.first(unrolled_poses);
+      else poses = poses.subspan(unrolled_poses);
     }
     for (int pose_index = 0; pose_index < static_cast<int>(poses.size()); ++pose_index) {
       const Eigen::Isometry3d& pose = poses[pose_index];
       if (deadline.Expired()) return Fail(motion, CutMotionOutcome::kDeadline, what + ": deadline");
       const Eigen::Isometry3d base_from_flange = pose * tcp_from_flange;
       // Reachability still needs the IK of a blocked pose, but only until one pose is reachable.
-      const bool blocked = flange_bodies.Collides(base_from_flange) ||
-                           (in_throat && cut_cane_bodies.Collides(base_from_flange));
+      const bool blocked = flange_bodies.Collides(base_from_flange, false) ||
+                           (in_throat && cut_cane_bodies.Collides(base_from_flange, false));
       if (blocked && reachable) continue;
       const IkSolutions ik = InverseKinematics(base_from_flange, robot.limits);
       reachable = reachable || ik.count > 0;
@@ -448,7 +511,7 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
     if (solutions.empty()) continue;
     if (checker == nullptr || !SameObstacles(local, checker_scene)) {
       checker = make_checker(robot, local);
-      checker_scene = std::move(local);
+      checker_scene = local;
     }
     std::vector<Joints> qs;
     qs.reserve(solutions.size());
@@ -489,8 +552,8 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
           if (static_cast<int>(i) == cut_index) continue;
           Eigen::Isometry3d base_from_tcp = c.base_from_tcp;
           base_from_tcp.translation() += c.base_from_tcp.linear() * waypoints[i];
-          b = flange_bodies.Collides(base_from_tcp * tcp_from_flange) ||
-              (in_throat && cut_cane_bodies.Collides(base_from_tcp * tcp_from_flange));
+          b = flange_bodies.Collides(base_from_tcp * tcp_from_flange, true) ||
+              (in_throat && cut_cane_bodies.Collides(base_from_tcp * tcp_from_flange, true));
         }
       }
       return b == 1;

@@ -104,7 +104,9 @@ using CheckerFactory = std::function<std::unique_ptr<CollisionChecker>(const Rob
 // cane lies between the open jaws, the flange bodies must also stay clear of the cut cane's
 // capsules left out there, at every stroke pose (exact test); keep the collision-free
 // motion with the largest clearance. If none, slide the cut outward (toward the tip) along the
-// cane of `model` by slide_step_m up to max_slide_m (and the cane's tip) and report slid_m.
+// cane of `model` by slide_step_m up to max_slide_m, the cane's tip, and short of the base of the
+// first child of the cut cane beyond the cut (which falls with the cut as given, and would stay
+// on the vine past it; the child's base projected onto the cane), and report slid_m.
 // `scene` is in the arm base frame (robot.platform_from_arm_base maps base -> platform); cuts and
 // `model` are in the platform frame. Invalid options or robot: every cut kInvalidInput. A cut with
 // non-finite numbers, a non-unit direction, or a cane id absent from `model`: that cut

@@ -466,6 +466,41 @@ TEST(CutMotion, CutAtAnObstacleSlidesOutwardAlongTheCane) {
             CutMotionOutcome::kNoCollisionFreeMotion);
 }
 
+TEST(CutMotion, SlideStopsShortOfTheBaseOfAChildBeyondTheCut) {
+  const RobotModel robot = TestRobot(MillEndTool());
+  TestWorld w = MakeWorld(robot, {Ball({0.05, 0.8, 0.85}, 0.1)});
+  const CutMotionOptions options;
+  const CutMotion free_slide = PlanCutMotions(robot, w.model, w.scene, std::span(&w.cut, 1),
+                                              options, Deadline::Infinite(), MakeBruteForce)[0];
+  ASSERT_EQ(free_slide.outcome, CutMotionOutcome::kPlanned) << free_slide.message;
+  ASSERT_GT(free_slide.slid_m, 0.0);
+  // A child of the cut cane: in the model only (the scene, which the checks use, is unchanged).
+  auto add_child = [](TestWorld world, double base_z) {
+    Cane child;
+    child.id = CaneId(7);
+    child.parent_id = CaneId(kCutCane);
+    child.polyline.points = {{0.05, 0.8, base_z}, {0.05, 0.9, base_z + 0.1}};
+    child.polyline.radii = {0.004, 0.004};
+    world.model.canes.push_back(child);
+    return world;
+  };
+  // Its base between the given cut and the first free slide: the cut would leave it on the vine.
+  const TestWorld blocked = add_child(w, 0.95 + free_slide.slid_m - 0.5 * options.slide_step_m);
+  const CutMotion stopped = PlanCutMotions(robot, blocked.model, blocked.scene,
+                                           std::span(&blocked.cut, 1), options,
+                                           Deadline::Infinite(), MakeBruteForce)[0];
+  EXPECT_EQ(stopped.outcome, CutMotionOutcome::kNoCollisionFreeMotion) << stopped.message;
+  // Its base below the cut (it stays anyway) or beyond the slide: the same motion as without.
+  for (double base_z : {0.90, 0.95 + free_slide.slid_m + 0.5 * options.slide_step_m}) {
+    const TestWorld other = add_child(w, base_z);
+    const CutMotion m = PlanCutMotions(robot, other.model, other.scene, std::span(&other.cut, 1),
+                                       options, Deadline::Infinite(), MakeBruteForce)[0];
+    ASSERT_EQ(m.outcome, CutMotionOutcome::kPlanned) << "child at z " << base_z;
+    EXPECT_EQ(m.slid_m, free_slide.slid_m) << "child at z " << base_z;
+    EXPECT_EQ(m.path, free_slide.path) << "child at z " << base_z;
+  }
+}
+
 TEST(CutMotion, BadInputGivesInvalidInputPerCut) {
   const RobotModel robot = TestRobot(MillEndTool());
   const TestWorld w = MakeWorld(robot);

@@ -55,6 +55,8 @@ absl::Status PlanOptions::Validate() const {
   VB_RETURN_IF_ERROR(prefixed("cut_motion", cut_motion.Validate()));
   VB_RETURN_IF_ERROR(prefixed("margins", margins.Validate()));
   VB_RETURN_IF_ERROR(prefixed("path", path.Validate()));
+  if (!std::isfinite(last_resort_max_slide_m) || last_resort_max_slide_m < 0)
+    return absl::InvalidArgumentError("options.last_resort_max_slide_m must be finite and >= 0");
   if (!home.allFinite()) return absl::InvalidArgumentError("options.home: non-finite joint angle");
   if (!(cut_speed_fraction > 0) || !(cut_speed_fraction <= 1))
     return absl::InvalidArgumentError("options.cut_speed_fraction must be in (0, 1]");
@@ -317,6 +319,25 @@ absl::StatusOr<std::vector<int>> PlanPass(const VineModel& model, const std::vec
   };
   std::vector<CutMotion> motions = PlanCutMotions(p.robot, model, scene, cuts, options.cut_motion,
                                                   p.deadline, make_checker);
+  if (options.last_resort_max_slide_m > options.cut_motion.max_slide_m &&
+      std::none_of(motions.begin(), motions.end(), [](const CutMotion& m) {
+        return m.outcome == CutMotionOutcome::kPlanned;
+      })) {
+    // No cut of this pass has a motion, so no wood falls and the passes end: the blocked cuts
+    // (canes at the head that block each other) are searched once more, sliding further.
+    CutMotionOptions wider = options.cut_motion;
+    wider.max_slide_m = options.last_resort_max_slide_m;
+    std::vector<Cut> blocked;
+    std::vector<size_t> blocked_at;
+    for (size_t k = 0; k < motions.size(); ++k) {
+      if (motions[k].outcome != CutMotionOutcome::kNoCollisionFreeMotion) continue;
+      blocked.push_back(cuts[k]);
+      blocked_at.push_back(k);
+    }
+    std::vector<CutMotion> again =
+        PlanCutMotions(p.robot, model, scene, blocked, wider, p.deadline, make_checker);
+    for (size_t i = 0; i < again.size(); ++i) motions[blocked_at[i]] = std::move(again[i]);
+  }
   stats.cut_motions_s += Seconds(t);
   std::vector<int> planned, retry;  // indices into cuts / motions; into plan.cuts
   for (size_t k = 0; k < motions.size(); ++k) {

@@ -7,6 +7,8 @@
 #include "gtest/gtest.h"
 #include "sim/vine_generator.h"
 #include "workers/decide/decide.h"
+#include "workers/plan/collision_scene.h"
+#include "workers/plan/cut_motion.h"
 #include "workers/plan/tool.h"
 #include "workers/plan/trajectory_check.h"
 
@@ -297,6 +299,56 @@ TEST(PlanVine, ACutThatWallsTheArmInIsUndone) {
         << "seed " << seed;
   }
   EXPECT_GT(undone, 0);
+}
+
+// A cut that no motion frees without sliding, alone in its plan: its only pass plans no motion,
+// so with last_resort_max_slide_m it is searched again, sliding, and made; without, given up.
+TEST(PlanVine, ACutThatNoPassFreesSlidesFurtherAsALastResort) {
+  const RobotModel robot = DefaultUr5(SecateurTool());
+  const PlatformGeometry platform = DefaultPlatform();
+  PlanOptions options = Options();
+  options.cut_motion.max_slide_m = 0;
+  CutMotionOptions sliding = options.cut_motion;
+  sliding.max_slide_m = 0.10;
+  for (uint64_t seed : {1100, 1101, 1102, 1103}) {
+    const Stop stop = SimStop(seed);
+    const auto scene = CollisionScene::Build(stop.model, platform, robot);
+    ASSERT_TRUE(scene.ok()) << scene.status();
+    for (const Cut& cut : stop.plan.cuts) {
+      const std::span<const Cut> one(&cut, 1);
+      if (PlanCutMotions(robot, stop.model, *scene, one, options.cut_motion,
+                         Deadline::Infinite())[0].outcome !=
+              CutMotionOutcome::kNoCollisionFreeMotion ||
+          PlanCutMotions(robot, stop.model, *scene, one, sliding, Deadline::Infinite())[0]
+                  .outcome != CutMotionOutcome::kPlanned)
+        continue;
+      CutPlan plan = stop.plan;
+      plan.cuts = {cut};
+      options.last_resort_max_slide_m = 0.10;
+      auto result = PlanVine(stop.model, plan, robot, platform, options);
+      ASSERT_TRUE(result.ok()) << result.status();
+      for (const UnplannedCut& u : result->trajectory.unplanned)
+        EXPECT_NE(u.reason, "no_collision_free_cut_motion") << "seed " << seed;
+      if (result->cuts.empty()) continue;  // no path to it: try another cut
+      EXPECT_GT((result->cuts[0].point - cut.point).norm(), 0.005) << "seed " << seed;
+      EXPECT_FALSE(result->stats.notes.empty());
+      options.last_resort_max_slide_m = 0;
+      result = PlanVine(stop.model, plan, robot, platform, options);
+      ASSERT_TRUE(result.ok()) << result.status();
+      ASSERT_EQ(result->trajectory.unplanned.size(), 1u);
+      EXPECT_EQ(result->trajectory.unplanned[0].reason, "no_collision_free_cut_motion");
+      return;
+    }
+  }
+  FAIL() << "no cut on seeds 1100-1103 needs a slide and is reached";
+}
+
+TEST(PlanVine, RejectsANegativeLastResortSlide) {
+  PlanOptions options = Options();
+  options.last_resort_max_slide_m = -0.1;
+  const absl::Status status = options.Validate();
+  EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(status.message().find("last_resort_max_slide_m"), std::string::npos);
 }
 
 }  // namespace
