@@ -48,6 +48,15 @@ struct PathOptions {
   int shortcut_rounds = 60;       // random shortcut attempts after RRT-Connect (0 = none)
   uint64_t seed = 1;              // seeds RRT-Connect's samples and the shortcuts
   bool try_direct_first = true;   // check the straight segment before running RRT-Connect
+  // Remember the two trees of every query that RRT-Connect gave up on at max_tree_states (not
+  // one stopped by time or the deadline), and fail a later query of the same planner at once,
+  // before RRT-Connect, when its start joins such a query's start-side tree and every one of its
+  // goals the goal-side tree (PathResult::repeated_failure): it would search the same two
+  // regions again. A configuration joins a tree when it is one of its states or the straight
+  // segment to one of the tree's two nearest states (within range_rad) is free at the tree-edge
+  // resolution. Makes results depend on the planner's earlier queries; meant for the queries of
+  // one scene (ForgetFailures() when the checker's scene changes).
+  bool remember_failures = false;
 
   // INVALID_ARGUMENT naming the field: max_step_m <= 0 or non-finite, tree_max_step_m < 0 or
   // non-finite, range_rad < 0,
@@ -78,6 +87,9 @@ struct PathResult {
   // RRT-Connect paths found with coarse edge checks (tree_max_step_m) that collided at
   // max_step_m, so that the query was planned again (0 or 1).
   int coarse_rejections = 0;
+  // kNoPathWithinDeadline without running RRT-Connect: the start and goals join the trees of an
+  // earlier failed query (PathOptions::remember_failures).
+  bool repeated_failure = false;
 };
 
 // A planning context bound to one checker and one set of limits and options: holds OMPL's state
@@ -113,13 +125,29 @@ class PathPlanner {
 
   const PathOptions& options() const { return options_; }
 
+  // Drops the remembered failed queries (remember_failures); needed when the checker's scene
+  // changes, since they were grown in the old one.
+  void ForgetFailures() { failures_.clear(); }
+  // How many failed queries are remembered.
+  int remembered_failures() const { return static_cast<int>(failures_.size()); }
+
  private:
   struct Ompl;  // OMPL objects, defined in the .cc
+  // The trees of a query RRT-Connect gave up on: rooted at its start and at its goals.
+  struct FailedQuery {
+    std::vector<Joints> start_side, goal_side;
+  };
+  // Whether q joins `tree` (see PathOptions::remember_failures).
+  bool Joins(const Joints& q, const std::vector<Joints>& tree);
+  // The index of a remembered failed query whose trees the start and every usable goal join, or -1.
+  int RepeatsFailure(const Joints& start, std::span<const Joints> goals,
+                     const std::vector<int>& usable);
   CollisionChecker& checker_;
   JointLimits limits_;
   PathOptions options_;
   absl::Status setup_status_;
   std::unique_ptr<Ompl> ompl_;
+  std::vector<FailedQuery> failures_;
 };
 
 // One-shot form: builds a PathPlanner and plans once (OMPL setup included in planning_s).
