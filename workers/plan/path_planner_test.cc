@@ -495,5 +495,104 @@ TEST(PathPlanner, NegativeTreeStepIsRejected) {
   EXPECT_NE(options.Validate().message().find("tree_max_step_m"), std::string::npos);
 }
 
+// remember_failures: the pocket around J(2) is walled in by a shell; the start region is outside.
+PathOptions RememberingOptions() {
+  PathOptions options;
+  options.time_limit_s = 60.0;  // the bound on states, not time, stops the failed queries
+  options.max_tree_states = 300;
+  options.remember_failures = true;
+  return options;
+}
+
+TEST(RememberFailures, RepeatedHopelessQueryFailsAtOnce) {
+  JointBallChecker checker;
+  checker.AddShell(J(2), 0.5, 0.8);
+  PathPlanner planner(checker, JointLimits(), RememberingOptions());
+  const PathResult first = planner.Plan(J(-2), J(2), Deadline::Infinite());
+  ASSERT_EQ(first.outcome, PathOutcome::kNoPathWithinDeadline) << first.message;
+  EXPECT_FALSE(first.repeated_failure);
+  EXPECT_EQ(planner.remembered_failures(), 1);
+  // From another start in the same region, to another goal in the same pocket and to the first
+  // goal among both: each fails before RRT-Connect, for a fraction of the first query's checks.
+  const std::vector<Joints> goals = {J(2, 0.2), J(2)};
+  const PathResult again = planner.PlanToAny(J(-2.3, 0.4), goals, Deadline::Infinite());
+  EXPECT_EQ(again.outcome, PathOutcome::kNoPathWithinDeadline);
+  EXPECT_TRUE(again.repeated_failure);
+  EXPECT_TRUE(again.waypoints.empty());
+  EXPECT_NE(again.message.find("like failed query 0"), std::string::npos) << again.message;
+  EXPECT_LT(again.checks * 10, first.checks);
+  EXPECT_EQ(planner.remembered_failures(), 1);  // a refused query adds nothing
+  // Forgotten, the same query runs RRT-Connect again (and fails, and is remembered again).
+  planner.ForgetFailures();
+  EXPECT_EQ(planner.remembered_failures(), 0);
+  const PathResult fresh = planner.PlanToAny(J(-2.3, 0.4), goals, Deadline::Infinite());
+  EXPECT_EQ(fresh.outcome, PathOutcome::kNoPathWithinDeadline);
+  EXPECT_FALSE(fresh.repeated_failure);
+  EXPECT_GT(fresh.checks, 10 * again.checks);
+  EXPECT_EQ(planner.remembered_failures(), 1);
+}
+
+TEST(RememberFailures, ReachableQueriesAreStillPlanned) {
+  JointBallChecker checker;
+  checker.AddShell(J(2), 0.5, 0.8);
+  checker.AddBall(J(-0.5, 2), 0.7);
+  const JointLimits limits;
+  PathPlanner planner(checker, limits, RememberingOptions());
+  ASSERT_EQ(planner.Plan(J(-2), J(2), Deadline::Infinite()).outcome,
+            PathOutcome::kNoPathWithinDeadline);
+  ASSERT_EQ(planner.remembered_failures(), 1);
+  // A goal outside the pocket behind a ball (RRT-Connect needed): a valid path.
+  const Joints start = J(-2, 2.1), goal = J(1, 2, 0.1);
+  ASSERT_FALSE(checker.IsMotionFree(start, goal, 0.01));
+  const PathResult r = planner.Plan(start, goal, Deadline::Infinite());
+  ExpectValidPath(checker, limits, r, start, goal);
+  EXPECT_FALSE(r.repeated_failure);
+  // Goals of which one lies outside the failed query's pocket: the query runs and reaches it.
+  const std::vector<Joints> goals = {J(2), goal};
+  const PathResult any = planner.PlanToAny(start, goals, Deadline::Infinite());
+  ASSERT_EQ(any.outcome, PathOutcome::kSolved) << any.message;
+  EXPECT_EQ(any.goal_index, 1);
+  ExpectValidPath(checker, limits, any, start, goal);
+}
+
+TEST(RememberFailures, AStartTheFailedTreesDoNotJoinIsNotRefused) {
+  JointBallChecker checker;
+  checker.AddShell(J(2), 0.5, 0.8);
+  // A second, larger pocket around the second start (its tree fills the bound on states).
+  checker.AddShell(J(-4, 0, 3), 2.0, 2.3);
+  PathOptions options = RememberingOptions();
+  options.max_tree_states = 60;
+  PathPlanner planner(checker, JointLimits(), options);
+  ASSERT_EQ(planner.Plan(J(-2), J(2), Deadline::Infinite()).outcome,
+            PathOutcome::kNoPathWithinDeadline);
+  ASSERT_EQ(planner.remembered_failures(), 1);
+  const PathResult r = planner.Plan(J(-4, 0, 3), J(2), Deadline::Infinite());
+  EXPECT_EQ(r.outcome, PathOutcome::kNoPathWithinDeadline);
+  EXPECT_FALSE(r.repeated_failure);  // RRT-Connect ran
+  EXPECT_EQ(planner.remembered_failures(), 2);
+}
+
+TEST(RememberFailures, OffByDefaultAndNotForTimeLimitedQueries) {
+  JointBallChecker checker;
+  checker.AddShell(J(2), 0.5, 0.8);
+  PathOptions options = RememberingOptions();
+  options.remember_failures = false;
+  PathPlanner off(checker, JointLimits(), options);
+  const PathResult a = off.Plan(J(-2), J(2), Deadline::Infinite());
+  const PathResult b = off.Plan(J(-2), J(2), Deadline::Infinite());
+  EXPECT_EQ(off.remembered_failures(), 0);
+  EXPECT_FALSE(b.repeated_failure);
+  EXPECT_EQ(a.checks, b.checks);  // the same work again
+  EXPECT_FALSE(PathOptions().remember_failures);
+  // Stopped by the time limit (no bound on states): no evidence, nothing remembered.
+  PathOptions timed;
+  timed.time_limit_s = 0.05;
+  timed.remember_failures = true;
+  PathPlanner by_time(checker, JointLimits(), timed);
+  EXPECT_EQ(by_time.Plan(J(-2), J(2), Deadline::Infinite()).outcome,
+            PathOutcome::kNoPathWithinDeadline);
+  EXPECT_EQ(by_time.remembered_failures(), 0);
+}
+
 }  // namespace
 }  // namespace vb::plan
