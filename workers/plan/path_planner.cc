@@ -32,7 +32,6 @@ namespace ob = ompl::base;
 namespace og = ompl::geometric;
 
 namespace {
-
 using Clock = std::chrono::steady_clock;
 
 double SecondsSince(Clock::time_point t0) {
@@ -211,11 +210,20 @@ std::uint_fast32_t OmplSeed(uint64_t seed) {
 
 bool NearlyEqual(const Joints& a, const Joints& b) { return (a - b).cwiseAbs().maxCoeff() < 1e-12; }
 
+// Whether a -> b is a segment of `path` (consecutive waypoints, bit-exact): shortcutting keeps
+// such segments as they are and checks every segment it makes.
+bool IsTreeSegment(const std::vector<Joints>& path, const Joints& a, const Joints& b) {
+  for (size_t k = 0; k + 1 < path.size(); ++k) {
+    if (path[k] == a && path[k + 1] == b) return true;
+  }
+  return false;
+}
+
 // Failed queries a planner remembers (PathOptions::remember_failures); later ones are not kept.
 constexpr size_t kMaxRememberedFailures = 32;
 // A configuration joins a remembered tree through one of its kJoinNearest nearest states within
 // kJoinRange * range_rad (PathOptions::remember_failures).
-constexpr int kJoinNearest = 4;
+constexpr int kJoinNearest = 8;
 constexpr double kJoinRange = 3.0;
 
 }  // namespace
@@ -484,10 +492,20 @@ PathResult PathPlanner::PlanToAny(const Joints& start, std::span<const Joints> g
     }
     result.waypoints.front() = start;
     result.waypoints.back() = goals[result.goal_index];
+    // Shortcut first: every segment shortcutting makes is checked at max_step_m, so only the
+    // tree's own segments that remain need the check at max_step_m (most are shortcut away).
+    const std::vector<Joints> tree_path =
+        edge_step_m > options_.max_step_m ? result.waypoints : std::vector<Joints>();
+    ShortcutPath(checker_, limits_, options_.max_step_m, options_.shortcut_rounds, options_.seed,
+                 deadline, result.waypoints);
     if (edge_step_m <= options_.max_step_m) break;  // every edge was checked at max_step_m
     bool fine = true;
-    for (size_t k = 0; fine && k + 1 < result.waypoints.size(); ++k)
-      fine = checker_.IsMotionFree(result.waypoints[k], result.waypoints[k + 1], options_.max_step_m);
+    for (size_t k = 0; fine && k + 1 < result.waypoints.size(); ++k) {
+      if (IsTreeSegment(tree_path, result.waypoints[k], result.waypoints[k + 1])) {
+        fine = checker_.IsMotionFree(result.waypoints[k], result.waypoints[k + 1],
+                                     options_.max_step_m);
+      }
+    }
     if (fine) break;
     ++result.coarse_rejections;
     if (deadline.Expired() || Clock::now() >= end) {
@@ -495,8 +513,6 @@ PathResult PathPlanner::PlanToAny(const Joints& start, std::span<const Joints> g
                     "RRT-Connect's path collided at max_step_m and no time was left to replan");
     }
   }
-  ShortcutPath(checker_, limits_, options_.max_step_m, options_.shortcut_rounds, options_.seed,
-               deadline, result.waypoints);
   return finish(PathOutcome::kSolved, "");
 }
 

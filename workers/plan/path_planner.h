@@ -34,10 +34,11 @@ namespace vb::plan {
 struct PathOptions {
   double max_step_m = 0.01;       // motion-check resolution: max travel of any arm point, m
   // RRT-Connect's edges are checked at this resolution (m; <= max_step_m or 0: max_step_m); the
-  // path it finds is then checked at max_step_m, and planned again with edges at max_step_m if
-  // that check fails (PathResult::coarse_rejections). Most tree edges never reach the path, so a
-  // coarser resolution for them saves checks; the path's own segments are always checked at
-  // max_step_m.
+  // path it finds is shortcut (every new segment checked at max_step_m), then its segments that
+  // shortcutting kept are checked at max_step_m, and the query is planned again with edges at
+  // max_step_m if that check fails (PathResult::coarse_rejections). Most tree edges never reach
+  // the path, and most of the path's are shortcut away, so a coarser resolution for them saves
+  // checks; the returned segments are always checked at max_step_m.
   double tree_max_step_m = 0.0;
   double range_rad = 1.0;         // RRT-Connect step (joint-space length); 0 = OMPL's default
   double time_limit_s = 1.0;      // planning time per call (also bounded by the deadline)
@@ -53,7 +54,7 @@ struct PathOptions {
   // before RRT-Connect, when its start joins such a query's start-side tree and every one of its
   // goals the goal-side tree (PathResult::repeated_failure): it would search the same two
   // regions again. A configuration joins a tree when it is one of its states or the straight
-  // segment to one of the tree's two nearest states (within range_rad) is free at the tree-edge
+  // segment to one of the tree's eight nearest states (within 3 range_rad) is free at the tree-edge
   // resolution. Makes results depend on the planner's earlier queries; meant for the queries of
   // one scene (ForgetFailures() when the checker's scene changes).
   bool remember_failures = false;
@@ -84,8 +85,8 @@ struct PathResult {
   double planning_s = 0.0;          // wall time of the call
   bool direct = false;              // the straight segment start -> goal was free
   int goal_index = -1;              // on kSolved, which goal the path ends at (PlanToAny)
-  // RRT-Connect paths found with coarse edge checks (tree_max_step_m) that collided at
-  // max_step_m, so that the query was planned again (0 or 1).
+  // RRT-Connect paths found with coarse edge checks (tree_max_step_m) whose segments left after
+  // shortcutting collided at max_step_m, so that the query was planned again (0 or 1).
   int coarse_rejections = 0;
   // kNoPathWithinDeadline without running RRT-Connect: the start and goals join the trees of an
   // earlier failed query (PathOptions::remember_failures).
@@ -158,7 +159,9 @@ PathResult PlanPath(CollisionChecker& checker, const JointLimits& limits, const 
 // path (anywhere along its segments, drawn from `seed`) are joined by a straight segment when
 // IsMotionFree(max_step_m) and the path's total MoveTimeS drops; then waypoints that can be
 // skipped are removed greedily (each new segment checked). Stops early at the deadline. Returns
-// the number of shortcuts taken. The input segments are assumed already checked.
+// the number of shortcuts taken. Input segments are not checked: those it keeps are returned
+// bit-exact (same consecutive waypoints), and every segment it makes (the remnants of input
+// segments cut at a new point included) has passed IsMotionFree(max_step_m).
 int ShortcutPath(CollisionChecker& checker, const JointLimits& limits, double max_step_m,
                  int rounds, uint64_t seed, const Deadline& deadline,
                  std::vector<Joints>& waypoints);

@@ -267,6 +267,33 @@ class SampledBallChecker : public CollisionChecker {
   std::vector<std::pair<Joints, double>> balls_;
 };
 
+// A SampledBallChecker that records the segments found free, with their resolution.
+class RecordingBallChecker : public SampledBallChecker {
+ public:
+  using SampledBallChecker::SampledBallChecker;
+  bool IsMotionFree(const Joints& a, const Joints& b, double max_step_m) override {
+    const bool free = SampledBallChecker::IsMotionFree(a, b, max_step_m);
+    if (free) passed_.push_back({a, b, max_step_m});
+    return free;
+  }
+  // Whether a -> b (either way) was found free at a resolution of at most step_m (exactly
+  // step_m when `exactly`).
+  bool Passed(const Joints& a, const Joints& b, double step_m, bool exactly = false) const {
+    for (const Segment& s : passed_) {
+      const bool step = exactly ? s.step_m == step_m : s.step_m <= step_m;
+      if (step && ((s.a == a && s.b == b) || (s.a == b && s.b == a))) return true;
+    }
+    return false;
+  }
+
+ private:
+  struct Segment {
+    Joints a, b;
+    double step_m;
+  };
+  std::vector<Segment> passed_;
+};
+
 TEST(PathPlanner, EverySegmentPassesASampledChecker) {
   SampledBallChecker checker({{J(0), 1.0}, {J(1.5, 1.2), 0.5}, {J(-1, -1, 1), 0.7}});
   const JointLimits limits;
@@ -466,27 +493,53 @@ TEST(PathPlanner, CoarseTreeEdgesStillGiveSegmentsFreeAtMaxStep) {
   std::mt19937 rng(1101);
   std::uniform_real_distribution<double> u(-2.5, 2.5);
   for (int k = 0; k < 3000; ++k) balls.push_back({J(u(rng), u(rng), u(rng)), 0.1});
-  SampledBallChecker checker(balls);
+  RecordingBallChecker checker(balls);
   PathOptions options;
   options.tree_max_step_m = 2.0;  // ~1.7 rad of one joint between edge checks
   options.shortcut_rounds = 0;
   const JointLimits limits;
   PathPlanner planner(checker, limits, options);
-  int solved = 0, rejections = 0;
+  int solved = 0;
   for (int k = 0; k < 20; ++k) {
     const Joints start = J(-2, 0.1 * k - 1, 0.2), goal = J(2, 1 - 0.1 * k, -0.2);
     if (!checker.IsFree(start) || !checker.IsFree(goal)) continue;
     const PathResult r = planner.Plan(start, goal, Deadline::In(10.0));
     if (r.outcome != PathOutcome::kSolved) continue;
     ++solved;
-    rejections += r.coarse_rejections;
     for (size_t i = 1; i < r.waypoints.size(); ++i) {
-      EXPECT_TRUE(checker.IsMotionFree(r.waypoints[i - 1], r.waypoints[i], options.max_step_m))
-          << k << " " << i;
+      const Joints& a = r.waypoints[i - 1];
+      const Joints& b = r.waypoints[i];
+      EXPECT_TRUE(checker.IsMotionFree(a, b, options.max_step_m)) << k << " " << i;
+      // The planner itself checked it at max_step_m.
+      EXPECT_TRUE(checker.Passed(a, b, options.max_step_m)) << k << " " << i;
     }
   }
   EXPECT_GE(solved, 10);
-  EXPECT_GT(rejections, 0);  // the coarse paths did collide, so the fine check was exercised
+}
+
+TEST(PathPlanner, TreeEdgesKeptByShortcuttingAreCheckedAtMaxStep) {
+  // One ball, no thin ones: greedy skipping cannot straighten a path around it entirely, so
+  // some returned segments are RRT-Connect's own edges (checked at tree_max_step_m); each must
+  // also have been checked at max_step_m.
+  RecordingBallChecker checker({{J(0), 1.0}});
+  PathOptions options;
+  options.tree_max_step_m = 0.5;
+  options.shortcut_rounds = 0;
+  const JointLimits limits;
+  PathPlanner planner(checker, limits, options);
+  int tree_segments = 0;
+  for (int k = 0; k < 20; ++k) {
+    const Joints start = J(-1.5, 0.05 * k - 0.5, 0.2), goal = J(1.5, 0.5 - 0.05 * k, -0.2);
+    const PathResult r = planner.Plan(start, goal, Deadline::In(10.0));
+    ASSERT_EQ(r.outcome, PathOutcome::kSolved) << r.message;
+    for (size_t i = 1; i < r.waypoints.size(); ++i) {
+      const Joints& a = r.waypoints[i - 1];
+      const Joints& b = r.waypoints[i];
+      EXPECT_TRUE(checker.Passed(a, b, options.max_step_m)) << k << " " << i;
+      if (checker.Passed(a, b, options.tree_max_step_m, /*exactly=*/true)) ++tree_segments;
+    }
+  }
+  EXPECT_GT(tree_segments, 0);
 }
 
 TEST(PathPlanner, NegativeTreeStepIsRejected) {
