@@ -32,6 +32,7 @@ namespace ob = ompl::base;
 namespace og = ompl::geometric;
 
 namespace {
+
 using Clock = std::chrono::steady_clock;
 
 double SecondsSince(Clock::time_point t0) {

@@ -8,7 +8,8 @@
 //
 // Determinism: a result depends only on the checker, limits, start, goal and options (the seed
 // included) — not on earlier calls or other planners in the process — as long as the planning
-// time limit is not reached. OMPL's global seed (ompl::RNG::setSeed) is not used: the random
+// time limit is not reached, and, with PathOptions::remember_failures, on the planner's earlier
+// failed queries (which it may refuse to search again). OMPL's global seed (ompl::RNG::setSeed) is not used: the random
 // samples RRT-Connect draws come from our own state sampler seeded from options.seed on every
 // call, and shortcutting uses its own generator. A plan cut short by the time limit or deadline
 // depends on timing, and so cannot be reproduced.
