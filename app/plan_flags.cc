@@ -32,6 +32,8 @@ absl::StatusOr<PlanSetup> ParsePlanSetup(Flags& flags) {
                       flags.Int("path-max-tree-states", o.path.max_tree_states));
   VB_ASSIGN_OR_RETURN(o.path.tree_max_step_m,
                       flags.Double("path-tree-max-step-m", o.path.tree_max_step_m));
+  VB_ASSIGN_OR_RETURN(o.path.remember_failures,
+                      flags.Bool("path-remember-failures", o.path.remember_failures));
   VB_ASSIGN_OR_RETURN(o.margin_fallback, flags.Bool("margin-fallback", o.margin_fallback));
   VB_ASSIGN_OR_RETURN(o.retry_unreached, flags.Bool("retry-unreached", o.retry_unreached));
   VB_ASSIGN_OR_RETURN(const int64_t passes, flags.Int("max-passes", o.max_passes));

@@ -21,7 +21,8 @@ struct PlanSetup {
 // --shortcut-rounds N, --sweep-m S, --max-slide-m M, --last-resort-max-slide-m M,
 // --max-tilt-deg D, --tilt-steps N,
 // --max-roll-deg D, --roll-steps N, --cut-alternatives N, --cut-min-clearance-m M,
-// --max-passes N, --path-max-tree-states N, --margin-fallback true|false,
+// --max-passes N, --path-max-tree-states N, --path-remember-failures true|false,
+// --margin-fallback true|false,
 // --retry-unreached true|false, --blend-transits true|false (defaults: PlanOptions'),
 // --jaw-opening-m W
 // (the secateur's, SecateurOptions' default), --joint-acceleration A (rad/s^2 for every joint;

@@ -12,6 +12,8 @@
 //    per vine (within +-1.2 rad of a working pose, or anywhere in [-pi, pi]; the UR5's limits,
 //    elbow +-pi); same counters, plus dense_failures: returned
 //    segments that fail a re-check at 2 mm (the planner checks at 10 mm).
+//  - BM_RepeatedHopelessQueries/0, /1: 20 queries from nearby starts to one walled-in goal on the
+//    fake checker, without and with PathOptions::remember_failures (refused_fraction).
 //  - BM_PlanPathOneShot / BM_PlanPathReused: one query needing RRT-Connect, with and without the
 //    OMPL setup (PlanPath vs PathPlanner::Plan).
 // Run (JSON: the console printer of Debian's Google Benchmark garbles counters below 1):
@@ -209,6 +211,33 @@ void BM_PlanPathReused(benchmark::State& state) {
 BENCHMARK(BM_PlanPathReused)->Unit(benchmark::kMicrosecond);
 
 // OMPL setup alone (a PathPlanner built and destroyed, no query).
+// Hopeless queries asked again (remember_failures = state.range(0)): a goal walled in by a
+// joint-space shell and 20 starts around one region outside it, one planner for all (a pass's
+// queries); a fresh planner per iteration, so every iteration fails the first query in full.
+void BM_RepeatedHopelessQueries(benchmark::State& state) {
+  testing::JointBallChecker checker;
+  checker.AddShell(testing::J(2), 0.5, 0.8);
+  PathOptions options;
+  options.max_tree_states = 500;
+  options.tree_max_step_m = 0.03;
+  options.remember_failures = state.range(0) != 0;
+  std::vector<Joints> starts;
+  for (int k = 0; k < 20; ++k) starts.push_back(testing::J(-2, 0.05 * k, -0.05 * k));
+  PathTally tally;
+  int refused = 0;
+  for (auto _ : state) {
+    PathPlanner planner(checker, JointLimits(), options);
+    for (const Joints& start : starts) {
+      const PathResult r = planner.Plan(start, testing::J(2), Deadline::In(10.0));
+      refused += r.repeated_failure;
+      tally.Add(r);
+    }
+  }
+  tally.Report(state);
+  state.counters["refused_fraction"] = double(refused) / tally.total;
+}
+BENCHMARK(BM_RepeatedHopelessQueries)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+
 void BM_PlannerSetup(benchmark::State& state) {
   testing::JointBallChecker checker;
   for (auto _ : state) {

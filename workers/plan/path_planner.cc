@@ -211,6 +211,22 @@ std::uint_fast32_t OmplSeed(uint64_t seed) {
 
 bool NearlyEqual(const Joints& a, const Joints& b) { return (a - b).cwiseAbs().maxCoeff() < 1e-12; }
 
+// Whether a -> b is a segment of `path` (consecutive waypoints, bit-exact): shortcutting keeps
+// such segments as they are and checks every segment it makes.
+bool IsTreeSegment(const std::vector<Joints>& path, const Joints& a, const Joints& b) {
+  for (size_t k = 0; k + 1 < path.size(); ++k) {
+    if (path[k] == a && path[k + 1] == b) return true;
+  }
+  return false;
+}
+
+// Failed queries a planner remembers (PathOptions::remember_failures); later ones are not kept.
+constexpr size_t kMaxRememberedFailures = 32;
+// A configuration joins a remembered tree through one of its kJoinNearest nearest states within
+// kJoinRange * range_rad (PathOptions::remember_failures).
+constexpr int kJoinNearest = 8;
+constexpr double kJoinRange = 3.0;
+
 }  // namespace
 
 absl::Status PathOptions::Validate() const {
@@ -253,6 +269,17 @@ class TreeSizeRRTConnect : public og::RRTConnect {
   using og::RRTConnect::RRTConnect;
   size_t StartTreeSize() const { return tStart_ ? tStart_->size() : 0; }
   size_t GoalTreeSize() const { return tGoal_ ? tGoal_->size() : 0; }
+  // The joint vectors of the start tree (start_tree) or the goal tree.
+  std::vector<Joints> TreeStates(bool start_tree) const {
+    std::vector<Joints> out;
+    const TreeData& tree = start_tree ? tStart_ : tGoal_;
+    if (!tree) return out;
+    std::vector<Motion*> motions;
+    tree->list(motions);
+    out.reserve(motions.size());
+    for (const Motion* m : motions) out.push_back(ToJoints(m->state));
+    return out;
+  }
 };
 
 struct PathPlanner::Ompl {
@@ -381,6 +408,16 @@ PathResult PathPlanner::PlanToAny(const Joints& start, std::span<const Joints> g
   if (deadline.Expired()) {
     return finish(PathOutcome::kNoPathWithinDeadline, "deadline expired before RRT-Connect");
   }
+  if (options_.remember_failures) {
+    if (const int f = RepeatsFailure(start, goals, usable); f >= 0) {
+      result.repeated_failure = true;
+      return finish(PathOutcome::kNoPathWithinDeadline,
+                    absl::StrCat("like failed query ", f, " of this planner: the start joins its "
+                                 "start's tree and every goal its goals' tree (",
+                                 failures_[f].start_side.size(), " and ",
+                                 failures_[f].goal_side.size(), " states)"));
+    }
+  }
 
   const double budget_s = std::min(options_.time_limit_s, deadline.RemainingS());
   const Clock::time_point end =
@@ -421,6 +458,12 @@ PathResult PathPlanner::PlanToAny(const Joints& start, std::span<const Joints> g
       });
       const ob::PlannerStatus status = o.planner->solve(ptc);
       if (status != ob::PlannerStatus::EXACT_SOLUTION || !o.pdef->hasExactSolution()) {
+        // Only a query stopped by the bound on states is remembered: one stopped by time says
+        // nothing reproducible. Roles are reversed: OMPL's start tree is rooted at our goals.
+        if (options_.remember_failures && failures_.size() < kMaxRememberedFailures &&
+            rrt.StartTreeSize() + rrt.GoalTreeSize() >= max_states) {
+          failures_.push_back({rrt.TreeStates(false), rrt.TreeStates(true)});
+        }
         return finish(PathOutcome::kNoPathWithinDeadline,
                       absl::StrCat("RRT-Connect found no exact path within ", budget_s,
                                    " s (", status.asString(), ")"));
@@ -450,10 +493,20 @@ PathResult PathPlanner::PlanToAny(const Joints& start, std::span<const Joints> g
     }
     result.waypoints.front() = start;
     result.waypoints.back() = goals[result.goal_index];
+    // Shortcut first: every segment shortcutting makes is checked at max_step_m, so only the
+    // tree's own segments that remain need the check at max_step_m (most are shortcut away).
+    const std::vector<Joints> tree_path =
+        edge_step_m > options_.max_step_m ? result.waypoints : std::vector<Joints>();
+    ShortcutPath(checker_, limits_, options_.max_step_m, options_.shortcut_rounds, options_.seed,
+                 deadline, result.waypoints);
     if (edge_step_m <= options_.max_step_m) break;  // every edge was checked at max_step_m
     bool fine = true;
-    for (size_t k = 0; fine && k + 1 < result.waypoints.size(); ++k)
-      fine = checker_.IsMotionFree(result.waypoints[k], result.waypoints[k + 1], options_.max_step_m);
+    for (size_t k = 0; fine && k + 1 < result.waypoints.size(); ++k) {
+      if (IsTreeSegment(tree_path, result.waypoints[k], result.waypoints[k + 1])) {
+        fine = checker_.IsMotionFree(result.waypoints[k], result.waypoints[k + 1],
+                                     options_.max_step_m);
+      }
+    }
     if (fine) break;
     ++result.coarse_rejections;
     if (deadline.Expired() || Clock::now() >= end) {
@@ -461,9 +514,49 @@ PathResult PathPlanner::PlanToAny(const Joints& start, std::span<const Joints> g
                     "RRT-Connect's path collided at max_step_m and no time was left to replan");
     }
   }
-  ShortcutPath(checker_, limits_, options_.max_step_m, options_.shortcut_rounds, options_.seed,
-               deadline, result.waypoints);
   return finish(PathOutcome::kSolved, "");
+}
+
+bool PathPlanner::Joins(const Joints& q, const std::vector<Joints>& tree) {
+  // The kJoinNearest nearest states (squared distances); a state equal to q (up to rounding:
+  // a goal shifted by whole turns again) joins at once.
+  constexpr int kNearest = kJoinNearest;
+  std::pair<double, int> best[kNearest];
+  for (auto& b : best) b = {std::numeric_limits<double>::infinity(), -1};
+  for (size_t i = 0; i < tree.size(); ++i) {
+    const double d = (tree[i] - q).squaredNorm();
+    if (d < 1e-18) return true;
+    if (d < best[kNearest - 1].first) {
+      best[kNearest - 1] = {d, static_cast<int>(i)};
+      for (int k = kNearest - 1; k > 0 && best[k].first < best[k - 1].first; --k)
+        std::swap(best[k], best[k - 1]);
+    }
+  }
+  const double range = options_.range_rad > 0.0 ? options_.range_rad
+                                                : std::numeric_limits<double>::infinity();
+  const double step_m = std::max(options_.tree_max_step_m, options_.max_step_m);
+  for (const auto& [d, i] : best) {
+    if (i < 0 || std::sqrt(d) > kJoinRange * range) continue;
+    if (checker_.IsMotionFree(q, tree[i], step_m)) return true;
+  }
+  return false;
+}
+
+int PathPlanner::RepeatsFailure(const Joints& start, std::span<const Joints> goals,
+                                const std::vector<int>& usable) {
+  for (size_t f = 0; f < failures_.size(); ++f) {
+    const FailedQuery& failed = failures_[f];
+    // Goals first: they repeat exactly when a cut is tried again from another start.
+    bool all = true;
+    for (int g : usable) {
+      if (!Joins(goals[g], failed.goal_side)) {
+        all = false;
+        break;
+      }
+    }
+    if (all && Joins(start, failed.start_side)) return static_cast<int>(f);
+  }
+  return -1;
 }
 
 PathResult PlanPath(CollisionChecker& checker, const JointLimits& limits, const Joints& start,

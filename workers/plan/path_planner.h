@@ -8,7 +8,8 @@
 //
 // Determinism: a result depends only on the checker, limits, start, goal and options (the seed
 // included) — not on earlier calls or other planners in the process — as long as the planning
-// time limit is not reached. OMPL's global seed (ompl::RNG::setSeed) is not used: the random
+// time limit is not reached, and, with PathOptions::remember_failures, on the planner's earlier
+// failed queries (which it may refuse to search again). OMPL's global seed (ompl::RNG::setSeed) is not used: the random
 // samples RRT-Connect draws come from our own state sampler seeded from options.seed on every
 // call, and shortcutting uses its own generator. A plan cut short by the time limit or deadline
 // depends on timing, and so cannot be reproduced.
@@ -34,10 +35,11 @@ namespace vb::plan {
 struct PathOptions {
   double max_step_m = 0.01;       // motion-check resolution: max travel of any arm point, m
   // RRT-Connect's edges are checked at this resolution (m; <= max_step_m or 0: max_step_m); the
-  // path it finds is then checked at max_step_m, and planned again with edges at max_step_m if
-  // that check fails (PathResult::coarse_rejections). Most tree edges never reach the path, so a
-  // coarser resolution for them saves checks; the path's own segments are always checked at
-  // max_step_m.
+  // path it finds is shortcut (every new segment checked at max_step_m), then its segments that
+  // shortcutting kept are checked at max_step_m, and the query is planned again with edges at
+  // max_step_m if that check fails (PathResult::coarse_rejections). Most tree edges never reach
+  // the path, and most of the path's are shortcut away, so a coarser resolution for them saves
+  // checks; the returned segments are always checked at max_step_m.
   double tree_max_step_m = 0.0;
   double range_rad = 1.0;         // RRT-Connect step (joint-space length); 0 = OMPL's default
   double time_limit_s = 1.0;      // planning time per call (also bounded by the deadline)
@@ -48,6 +50,15 @@ struct PathOptions {
   int shortcut_rounds = 60;       // random shortcut attempts after RRT-Connect (0 = none)
   uint64_t seed = 1;              // seeds RRT-Connect's samples and the shortcuts
   bool try_direct_first = true;   // check the straight segment before running RRT-Connect
+  // Remember the two trees of every query that RRT-Connect gave up on at max_tree_states (not
+  // one stopped by time or the deadline), and fail a later query of the same planner at once,
+  // before RRT-Connect, when its start joins such a query's start-side tree and every one of its
+  // goals the goal-side tree (PathResult::repeated_failure): it would search the same two
+  // regions again. A configuration joins a tree when it is one of its states or the straight
+  // segment to one of the tree's eight nearest states (within 3 range_rad) is free at the tree-edge
+  // resolution. Makes results depend on the planner's earlier queries; meant for the queries of
+  // one scene (ForgetFailures() when the checker's scene changes).
+  bool remember_failures = false;
 
   // INVALID_ARGUMENT naming the field: max_step_m <= 0 or non-finite, tree_max_step_m < 0 or
   // non-finite, range_rad < 0,
@@ -75,9 +86,12 @@ struct PathResult {
   double planning_s = 0.0;          // wall time of the call
   bool direct = false;              // the straight segment start -> goal was free
   int goal_index = -1;              // on kSolved, which goal the path ends at (PlanToAny)
-  // RRT-Connect paths found with coarse edge checks (tree_max_step_m) that collided at
-  // max_step_m, so that the query was planned again (0 or 1).
+  // RRT-Connect paths found with coarse edge checks (tree_max_step_m) whose segments left after
+  // shortcutting collided at max_step_m, so that the query was planned again (0 or 1).
   int coarse_rejections = 0;
+  // kNoPathWithinDeadline without running RRT-Connect: the start and goals join the trees of an
+  // earlier failed query (PathOptions::remember_failures).
+  bool repeated_failure = false;
 };
 
 // A planning context bound to one checker and one set of limits and options: holds OMPL's state
@@ -113,13 +127,29 @@ class PathPlanner {
 
   const PathOptions& options() const { return options_; }
 
+  // Drops the remembered failed queries (remember_failures); needed when the checker's scene
+  // changes, since they were grown in the old one.
+  void ForgetFailures() { failures_.clear(); }
+  // How many failed queries are remembered.
+  int remembered_failures() const { return static_cast<int>(failures_.size()); }
+
  private:
   struct Ompl;  // OMPL objects, defined in the .cc
+  // The trees of a query RRT-Connect gave up on: rooted at its start and at its goals.
+  struct FailedQuery {
+    std::vector<Joints> start_side, goal_side;
+  };
+  // Whether q joins `tree` (see PathOptions::remember_failures).
+  bool Joins(const Joints& q, const std::vector<Joints>& tree);
+  // The index of a remembered failed query whose trees the start and every usable goal join, or -1.
+  int RepeatsFailure(const Joints& start, std::span<const Joints> goals,
+                     const std::vector<int>& usable);
   CollisionChecker& checker_;
   JointLimits limits_;
   PathOptions options_;
   absl::Status setup_status_;
   std::unique_ptr<Ompl> ompl_;
+  std::vector<FailedQuery> failures_;
 };
 
 // One-shot form: builds a PathPlanner and plans once (OMPL setup included in planning_s).
@@ -130,7 +160,9 @@ PathResult PlanPath(CollisionChecker& checker, const JointLimits& limits, const 
 // path (anywhere along its segments, drawn from `seed`) are joined by a straight segment when
 // IsMotionFree(max_step_m) and the path's total MoveTimeS drops; then waypoints that can be
 // skipped are removed greedily (each new segment checked). Stops early at the deadline. Returns
-// the number of shortcuts taken. The input segments are assumed already checked.
+// the number of shortcuts taken. Input segments are not checked: those it keeps are returned
+// bit-exact (same consecutive waypoints), and every segment it makes (the remnants of input
+// segments cut at a new point included) has passed IsMotionFree(max_step_m).
 int ShortcutPath(CollisionChecker& checker, const JointLimits& limits, double max_step_m,
                  int rounds, uint64_t seed, const Deadline& deadline,
                  std::vector<Joints>& waypoints);

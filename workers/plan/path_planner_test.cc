@@ -267,6 +267,33 @@ class SampledBallChecker : public CollisionChecker {
   std::vector<std::pair<Joints, double>> balls_;
 };
 
+// A SampledBallChecker that records the segments found free, with their resolution.
+class RecordingBallChecker : public SampledBallChecker {
+ public:
+  using SampledBallChecker::SampledBallChecker;
+  bool IsMotionFree(const Joints& a, const Joints& b, double max_step_m) override {
+    const bool free = SampledBallChecker::IsMotionFree(a, b, max_step_m);
+    if (free) passed_.push_back({a, b, max_step_m});
+    return free;
+  }
+  // Whether a -> b (either way) was found free at a resolution of at most step_m (exactly
+  // step_m when `exactly`).
+  bool Passed(const Joints& a, const Joints& b, double step_m, bool exactly = false) const {
+    for (const Segment& s : passed_) {
+      const bool step = exactly ? s.step_m == step_m : s.step_m <= step_m;
+      if (step && ((s.a == a && s.b == b) || (s.a == b && s.b == a))) return true;
+    }
+    return false;
+  }
+
+ private:
+  struct Segment {
+    Joints a, b;
+    double step_m;
+  };
+  std::vector<Segment> passed_;
+};
+
 TEST(PathPlanner, EverySegmentPassesASampledChecker) {
   SampledBallChecker checker({{J(0), 1.0}, {J(1.5, 1.2), 0.5}, {J(-1, -1, 1), 0.7}});
   const JointLimits limits;
@@ -466,33 +493,158 @@ TEST(PathPlanner, CoarseTreeEdgesStillGiveSegmentsFreeAtMaxStep) {
   std::mt19937 rng(1101);
   std::uniform_real_distribution<double> u(-2.5, 2.5);
   for (int k = 0; k < 3000; ++k) balls.push_back({J(u(rng), u(rng), u(rng)), 0.1});
-  SampledBallChecker checker(balls);
+  RecordingBallChecker checker(balls);
   PathOptions options;
   options.tree_max_step_m = 2.0;  // ~1.7 rad of one joint between edge checks
   options.shortcut_rounds = 0;
   const JointLimits limits;
   PathPlanner planner(checker, limits, options);
-  int solved = 0, rejections = 0;
+  int solved = 0;
   for (int k = 0; k < 20; ++k) {
     const Joints start = J(-2, 0.1 * k - 1, 0.2), goal = J(2, 1 - 0.1 * k, -0.2);
     if (!checker.IsFree(start) || !checker.IsFree(goal)) continue;
     const PathResult r = planner.Plan(start, goal, Deadline::In(10.0));
     if (r.outcome != PathOutcome::kSolved) continue;
     ++solved;
-    rejections += r.coarse_rejections;
     for (size_t i = 1; i < r.waypoints.size(); ++i) {
-      EXPECT_TRUE(checker.IsMotionFree(r.waypoints[i - 1], r.waypoints[i], options.max_step_m))
-          << k << " " << i;
+      const Joints& a = r.waypoints[i - 1];
+      const Joints& b = r.waypoints[i];
+      EXPECT_TRUE(checker.IsMotionFree(a, b, options.max_step_m)) << k << " " << i;
+      // The planner itself checked it at max_step_m.
+      EXPECT_TRUE(checker.Passed(a, b, options.max_step_m)) << k << " " << i;
     }
   }
   EXPECT_GE(solved, 10);
-  EXPECT_GT(rejections, 0);  // the coarse paths did collide, so the fine check was exercised
+}
+
+TEST(PathPlanner, TreeEdgesKeptByShortcuttingAreCheckedAtMaxStep) {
+  // One ball, no thin ones: greedy skipping cannot straighten a path around it entirely, so
+  // some returned segments are RRT-Connect's own edges (checked at tree_max_step_m); each must
+  // also have been checked at max_step_m.
+  RecordingBallChecker checker({{J(0), 1.0}});
+  PathOptions options;
+  options.tree_max_step_m = 0.5;
+  options.shortcut_rounds = 0;
+  const JointLimits limits;
+  PathPlanner planner(checker, limits, options);
+  int tree_segments = 0;
+  for (int k = 0; k < 20; ++k) {
+    const Joints start = J(-1.5, 0.05 * k - 0.5, 0.2), goal = J(1.5, 0.5 - 0.05 * k, -0.2);
+    const PathResult r = planner.Plan(start, goal, Deadline::In(10.0));
+    ASSERT_EQ(r.outcome, PathOutcome::kSolved) << r.message;
+    for (size_t i = 1; i < r.waypoints.size(); ++i) {
+      const Joints& a = r.waypoints[i - 1];
+      const Joints& b = r.waypoints[i];
+      EXPECT_TRUE(checker.Passed(a, b, options.max_step_m)) << k << " " << i;
+      if (checker.Passed(a, b, options.tree_max_step_m, /*exactly=*/true)) ++tree_segments;
+    }
+  }
+  EXPECT_GT(tree_segments, 0);
 }
 
 TEST(PathPlanner, NegativeTreeStepIsRejected) {
   PathOptions options;
   options.tree_max_step_m = -0.01;
   EXPECT_NE(options.Validate().message().find("tree_max_step_m"), std::string::npos);
+}
+
+// remember_failures: the pocket around J(2) is walled in by a shell; the start region is outside.
+PathOptions RememberingOptions() {
+  PathOptions options;
+  options.time_limit_s = 60.0;  // the bound on states, not time, stops the failed queries
+  options.max_tree_states = 300;
+  options.remember_failures = true;
+  return options;
+}
+
+TEST(RememberFailures, RepeatedHopelessQueryFailsAtOnce) {
+  JointBallChecker checker;
+  checker.AddShell(J(2), 0.5, 0.8);
+  PathPlanner planner(checker, JointLimits(), RememberingOptions());
+  const PathResult first = planner.Plan(J(-2), J(2), Deadline::Infinite());
+  ASSERT_EQ(first.outcome, PathOutcome::kNoPathWithinDeadline) << first.message;
+  EXPECT_FALSE(first.repeated_failure);
+  EXPECT_EQ(planner.remembered_failures(), 1);
+  // From another start in the same region, to another goal in the same pocket and to the first
+  // goal among both: each fails before RRT-Connect, for a fraction of the first query's checks.
+  const std::vector<Joints> goals = {J(2, 0.2), J(2)};
+  const PathResult again = planner.PlanToAny(J(-2.3, 0.4), goals, Deadline::Infinite());
+  EXPECT_EQ(again.outcome, PathOutcome::kNoPathWithinDeadline);
+  EXPECT_TRUE(again.repeated_failure);
+  EXPECT_TRUE(again.waypoints.empty());
+  EXPECT_NE(again.message.find("like failed query 0"), std::string::npos) << again.message;
+  EXPECT_LT(again.checks * 10, first.checks);
+  EXPECT_EQ(planner.remembered_failures(), 1);  // a refused query adds nothing
+  // Forgotten, the same query runs RRT-Connect again (and fails, and is remembered again).
+  planner.ForgetFailures();
+  EXPECT_EQ(planner.remembered_failures(), 0);
+  const PathResult fresh = planner.PlanToAny(J(-2.3, 0.4), goals, Deadline::Infinite());
+  EXPECT_EQ(fresh.outcome, PathOutcome::kNoPathWithinDeadline);
+  EXPECT_FALSE(fresh.repeated_failure);
+  EXPECT_GT(fresh.checks, 10 * again.checks);
+  EXPECT_EQ(planner.remembered_failures(), 1);
+}
+
+TEST(RememberFailures, ReachableQueriesAreStillPlanned) {
+  JointBallChecker checker;
+  checker.AddShell(J(2), 0.5, 0.8);
+  checker.AddBall(J(-0.5, 2), 0.7);
+  const JointLimits limits;
+  PathPlanner planner(checker, limits, RememberingOptions());
+  ASSERT_EQ(planner.Plan(J(-2), J(2), Deadline::Infinite()).outcome,
+            PathOutcome::kNoPathWithinDeadline);
+  ASSERT_EQ(planner.remembered_failures(), 1);
+  // A goal outside the pocket behind a ball (RRT-Connect needed): a valid path.
+  const Joints start = J(-2, 2.1), goal = J(1, 2, 0.1);
+  ASSERT_FALSE(checker.IsMotionFree(start, goal, 0.01));
+  const PathResult r = planner.Plan(start, goal, Deadline::Infinite());
+  ExpectValidPath(checker, limits, r, start, goal);
+  EXPECT_FALSE(r.repeated_failure);
+  // Goals of which one lies outside the failed query's pocket: the query runs and reaches it.
+  const std::vector<Joints> goals = {J(2), goal};
+  const PathResult any = planner.PlanToAny(start, goals, Deadline::Infinite());
+  ASSERT_EQ(any.outcome, PathOutcome::kSolved) << any.message;
+  EXPECT_EQ(any.goal_index, 1);
+  ExpectValidPath(checker, limits, any, start, goal);
+}
+
+TEST(RememberFailures, AStartTheFailedTreesDoNotJoinIsNotRefused) {
+  JointBallChecker checker;
+  checker.AddShell(J(2), 0.5, 0.8);
+  // A second, larger pocket around the second start (its tree fills the bound on states).
+  checker.AddShell(J(-4, 0, 3), 2.0, 2.3);
+  PathOptions options = RememberingOptions();
+  options.max_tree_states = 60;
+  PathPlanner planner(checker, JointLimits(), options);
+  ASSERT_EQ(planner.Plan(J(-2), J(2), Deadline::Infinite()).outcome,
+            PathOutcome::kNoPathWithinDeadline);
+  ASSERT_EQ(planner.remembered_failures(), 1);
+  const PathResult r = planner.Plan(J(-4, 0, 3), J(2), Deadline::Infinite());
+  EXPECT_EQ(r.outcome, PathOutcome::kNoPathWithinDeadline);
+  EXPECT_FALSE(r.repeated_failure);  // RRT-Connect ran
+  EXPECT_EQ(planner.remembered_failures(), 2);
+}
+
+TEST(RememberFailures, OffByDefaultAndNotForTimeLimitedQueries) {
+  JointBallChecker checker;
+  checker.AddShell(J(2), 0.5, 0.8);
+  PathOptions options = RememberingOptions();
+  options.remember_failures = false;
+  PathPlanner off(checker, JointLimits(), options);
+  const PathResult a = off.Plan(J(-2), J(2), Deadline::Infinite());
+  const PathResult b = off.Plan(J(-2), J(2), Deadline::Infinite());
+  EXPECT_EQ(off.remembered_failures(), 0);
+  EXPECT_FALSE(b.repeated_failure);
+  EXPECT_EQ(a.checks, b.checks);  // the same work again
+  EXPECT_FALSE(PathOptions().remember_failures);
+  // Stopped by the time limit (no bound on states): no evidence, nothing remembered.
+  PathOptions timed;
+  timed.time_limit_s = 0.05;
+  timed.remember_failures = true;
+  PathPlanner by_time(checker, JointLimits(), timed);
+  EXPECT_EQ(by_time.Plan(J(-2), J(2), Deadline::Infinite()).outcome,
+            PathOutcome::kNoPathWithinDeadline);
+  EXPECT_EQ(by_time.remembered_failures(), 0);
 }
 
 }  // namespace

@@ -86,6 +86,9 @@ struct PlanOptions {
     // Tree edges checked at 0.03 m, the path found at max_step_m (0.01 m): on tuning seeds
     // 1110-1129 the same paths and outcomes with 23% fewer checks per path.
     o.tree_max_step_m = 0.03;
+    // A query like one the pass's planner already failed (same regions) fails at once: each
+    // pass has its own planners (docs/plan.md "Paths", remembered failures).
+    o.remember_failures = true;
     return o;
   }();
   // A transit that finds no path in the scene inflated by the margins is planned again in the
