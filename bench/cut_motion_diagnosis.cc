@@ -416,6 +416,20 @@ int Main(int argc, char** argv) {
           }
           std::printf("    transit after %zu cuts: primitive clearance at its samples %.6f m; "
                       "mesh-colliding samples %d\n", before.size(), worst, mesh_bad);
+          // What its samples touch: obstacle kind:owner#chord (a cane's chords from its base).
+          std::vector<std::string> names;
+          std::map<int64_t, int> chords;
+          for (const Obstacle& o : s->obstacles)
+            names.push_back(std::to_string(static_cast<int>(o.kind)) + ":" +
+                            std::to_string(o.owner_id) + "#" +
+                            std::to_string(o.kind == ObstacleKind::kCane ? chords[o.owner_id]++ : 0));
+          const Classifier who(robot, *s, names);
+          Contacts all;
+          for (const TrajectoryPoint& p : segment.points) {
+            const Contacts c = who.At(Eigen::Map<const Joints>(p.q.data()));
+            all.insert(c.begin(), c.end());
+          }
+          for (const auto& [o, body] : all) std::printf("    touches %s with %s\n", o.c_str(), body.c_str());
         }
         for (const Cut& c : result->cuts) {
           if (c.id.value != segment.cut_id.value) continue;

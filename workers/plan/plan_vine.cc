@@ -210,6 +210,36 @@ std::vector<Joints> ShiftedForReach(const std::vector<Joints>& path, const Joint
   return path;
 }
 
+// Drops the motions of `motion` (its path and alternatives) that touch `scene` along their
+// configurations, checked as PlanCutMotions checks them; the first free alternative replaces a
+// path that touches it. False (and `motion` unchanged) if every one does.
+bool KeepMotionsFreeOf(const CollisionScene& scene, const PlanOptions& options,
+                       const RobotModel& robot, CutMotion* motion) {
+  const std::unique_ptr<CollisionChecker> checker = MakeChecker(options.checker, robot, scene);
+  auto free = [&](const std::vector<Joints>& path) {
+    if (path.empty() || !checker->IsFree(path.front())) return false;
+    for (size_t i = 1; i < path.size(); ++i)
+      if (!checker->IsMotionFree(path[i - 1], path[i], options.cut_motion.max_step_m)) return false;
+    return true;
+  };
+  const bool path_free = free(motion->path);
+  std::vector<bool> alternative_free;
+  for (const std::vector<Joints>& alternative : motion->alternatives)
+    alternative_free.push_back(free(alternative));
+  if (path_free && std::all_of(alternative_free.begin(), alternative_free.end(),
+                               [](bool f) { return f; }))
+    return true;
+  std::vector<std::vector<Joints>> kept;
+  if (path_free) kept.push_back(std::move(motion->path));
+  for (size_t a = 0; a < alternative_free.size(); ++a)
+    if (alternative_free[a]) kept.push_back(std::move(motion->alternatives[a]));
+  if (kept.empty()) return false;
+  motion->path = std::move(kept.front());
+  motion->alternatives.assign(std::make_move_iterator(kept.begin() + 1),
+                              std::make_move_iterator(kept.end()));
+  return true;
+}
+
 // A planned cut: the transit that reaches it and its cut motion.
 struct Leg {
   std::vector<Joints> transit;
@@ -220,6 +250,7 @@ struct Leg {
 
 // What the passes share.
 struct Planning {
+  const VineModel& vine;  // uncut
   const CutPlan& plan;
   const RobotModel& robot;
   const PlatformGeometry& platform;
@@ -317,7 +348,6 @@ absl::StatusOr<std::vector<int>> PlanPass(const VineModel& model, const std::vec
   };
   std::vector<CutMotion> motions = PlanCutMotions(p.robot, model, scene, cuts, options.cut_motion,
                                                   p.deadline, make_checker);
-  stats.cut_motions_s += Seconds(t);
   std::vector<int> planned, retry;  // indices into cuts / motions; into plan.cuts
   for (size_t k = 0; k < motions.size(); ++k) {
     const CutMotionOutcome outcome = motions[k].outcome;
@@ -330,15 +360,58 @@ absl::StatusOr<std::vector<int>> PlanPass(const VineModel& model, const std::vec
       p.Unplanned(cuts[k].id, CutMotionReason(outcome));
     }
   }
+  // The stubs of the pass's cuts (StubChords): the transits, blends and strokes of the pass run
+  // on the vine after any of its cuts made before them, so each must be free of all of them (a
+  // stroke of those of the other cuts). A cut whose every motion touches another's stub waits for
+  // the next pass, where that stub is part of the vine.
+  std::vector<Cut> made_before;
+  for (const Leg& leg : p.legs) made_before.push_back(leg.cut);
+  std::vector<std::vector<Obstacle>> stubs(motions.size());
+  for (int k : planned) {
+    Cut made = cuts[k];
+    made.point = motions[k].cut_point_in_platform;
+    VB_ASSIGN_OR_RETURN(stubs[k], StubChords(p.vine, made_before, made, p.robot, options.scene));
+  }
+  const Eigen::Isometry3d base_from_platform = p.robot.platform_from_arm_base.inverse();
+  std::vector<int> free_of_stubs;
+  for (int k : planned) {
+    CollisionScene others;
+    for (int j : planned)
+      if (j != k) others.obstacles.insert(others.obstacles.end(), stubs[j].begin(), stubs[j].end());
+    if (!others.obstacles.empty()) {
+      others = others.WithoutCaneNear(cuts[k].cane_id,
+                                      base_from_platform * motions[k].cut_point_in_platform,
+                                      options.cut_motion.cut_cane_free_radius_m);
+    }
+    const size_t options_before = 1 + motions[k].alternatives.size();
+    const bool kept = others.obstacles.empty() ||
+                      KeepMotionsFreeOf(others, options, p.robot, &motions[k]);
+    const size_t options_after = kept ? 1 + motions[k].alternatives.size() : 0;
+    if (options_after < options_before)
+      stats.notes.push_back(absl::StrCat("cut ", cuts[k].id.value, ": ",
+                                         options_before - options_after, " of ", options_before,
+                                         " motions touch the stub of another cut of the pass"));
+    if (!kept) {
+      if (last_pass)
+        p.Unplanned(cuts[k].id, "no_collision_free_cut_motion");
+      else
+        retry.push_back(pending_here[k]);
+      continue;
+    }
+    free_of_stubs.push_back(k);
+  }
+  planned = std::move(free_of_stubs);
+  stats.cut_motions_s += Seconds(t);
   if (planned.empty()) {
     for (int i : retry) p.Unplanned(p.plan.cuts[i].id, "no_collision_free_cut_motion");
     return std::vector<int>{};
   }
+  for (int k : planned)
+    scene.obstacles.insert(scene.obstacles.end(), stubs[k].begin(), stubs[k].end());
   ++stats.passes;
 
   // Margins around where the arm is, home, and every chosen cut motion of this pass.
   t = std::chrono::steady_clock::now();
-  const Eigen::Isometry3d base_from_platform = p.robot.platform_from_arm_base.inverse();
   std::vector<ProtectedMotion> protect;
   protect.push_back({{options.home, p.At()}, CaneId{0}, Eigen::Vector3d::Zero(), 0.0});
   for (int k : planned) {
@@ -561,7 +634,7 @@ absl::StatusOr<PlanResult> PlanVine(const VineModel& model, const CutPlan& plan,
   }
   VB_RETURN_IF_ERROR(deadline.Check("plan"));
 
-  Planning p{plan, robot, platform, options, deadline, result};
+  Planning p{model, plan, robot, platform, options, deadline, result};
   p.self_checker = MakeChecker(options.checker, robot, CollisionScene{});
   std::vector<int> pending(plan.cuts.size());
   for (size_t i = 0; i < pending.size(); ++i) pending[i] = static_cast<int>(i);

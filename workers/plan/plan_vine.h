@@ -17,7 +17,11 @@
 //      once and tried again at the end of the pass;
 //   6. passes: cuts with no collision-free cut motion or no path are tried again on the vine as
 //      the cuts made so far leave it (their wood has fallen, fallen_wood.h), after those cuts, up
-//      to max_passes times -- near the head the canes that block a cut are mostly canes that go;
+//      to max_passes times -- near the head the canes that block a cut are mostly canes that go.
+//      A pass's transits and blends are planned in the vine at its start joined with the stub
+//      each of its cuts leaves (collision_scene.h StubChords), which holds the vine after any of
+//      them; a cut motion that touches another cut's stub is dropped (a cut left without any
+//      waits for the next pass);
 //   7. time parameterisation within the joint velocity and acceleration limits, home -> cuts ->
 //      home: transits blended through their waypoints where the blends are free (blend.h),
 //      strokes along their dense path, slow only in wood (time_parameterization.h).
