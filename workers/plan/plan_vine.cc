@@ -12,6 +12,7 @@
 #include "absl/strings/str_cat.h"
 #include "core/status_macros.h"
 #include "workers/plan/blend.h"
+#include "workers/plan/motion_prover.h"
 #include "workers/plan/cut_order.h"
 #include "workers/plan/fallen_wood.h"
 #include "workers/plan/motion_choice.h"
@@ -89,16 +90,19 @@ void AppendSegment(SegmentKind kind, CutId cut_id, const std::vector<TimedJoints
 }
 
 // A transit from rest to rest, blended through its waypoints where the blends are free in
-// `checker` (the scene it was planned in), or stopping at each of them.
+// `checker` (the scene it was planned in) and the blended trajectory is proven free in `proof`
+// (the scene without margins; MotionProver between its samples, as it is re-checked), or
+// stopping at each of them (on the waypoints' segments, which were proven free).
 absl::Status AppendTransit(std::span<const Joints> waypoints, CollisionChecker* checker,
-                           const PlanOptions& options, const JointLimits& limits, PlanStats& stats,
-                           Trajectory* out) {
-  if (!options.blend_transits) {
+                           MotionProver* proof, const PlanOptions& options,
+                           const JointLimits& limits, PlanStats& stats, Trajectory* out) {
+  auto stop_at_each = [&]() -> absl::Status {
     VB_ASSIGN_OR_RETURN(const std::vector<TimedJoints> timed,
                         TimeParameterize(waypoints, limits, out->duration_s, options.sample_dt_s));
     AppendSegment(SegmentKind::kTransit, CutId{0}, timed, out);
     return absl::OkStatus();
-  }
+  };
+  if (!options.blend_transits) return stop_at_each();
   BlendOptions blend = options.blend;
   blend.max_step_m = options.path.max_step_m;
   VB_ASSIGN_OR_RETURN(const BlendedPath path,
@@ -108,6 +112,18 @@ absl::Status AppendTransit(std::span<const Joints> waypoints, CollisionChecker* 
   stats.blend_stops += path.stops;
   stats.blend_shrinks += path.shrinks;
   stats.checks += path.checks;
+  if (path.vias > path.stops) {
+    std::vector<Joints> samples;
+    samples.reserve(path.samples.size());
+    for (const TimedJoints& p : path.samples) samples.push_back(p.q);
+    const int64_t checks = proof->checks();
+    const bool proven = proof->IsPathFree(samples);
+    stats.checks += proof->checks() - checks;
+    if (!proven) {
+      ++stats.unproven_blends;
+      return stop_at_each();
+    }
+  }
   AppendSegment(SegmentKind::kTransit, CutId{0}, path.samples, out);
   return absl::OkStatus();
 }
@@ -246,7 +262,11 @@ struct Leg {
   CutMotion motion;
   Cut cut;  // as made (a slid cut's point is where the tool cuts)
   std::shared_ptr<CollisionChecker> checker;  // the transit's scene (blends are checked in it)
+  std::shared_ptr<MotionProver> proof;  // that scene without margins (blends proven in it)
 };
+
+// Edges of paths planned again when a path found at options.path.max_step_m is not proven free.
+constexpr double kFineStepM = 0.002;
 
 // What the passes share.
 struct Planning {
@@ -261,11 +281,13 @@ struct Planning {
   // The last pass's inflated scene, its checker and its path planner (for the way home).
   std::shared_ptr<CollisionChecker> checker;
   std::unique_ptr<PathPlanner> planner;
-  // The same pass's scene without margins; its checker and planner are built at the first
-  // transit that needs them (options.margin_fallback).
+  // The same pass's scene without margins; its checker (which proves paths free) is built at the
+  // pass's first transit, its planner at the first that needs it (options.margin_fallback).
   std::optional<CollisionScene> plain_scene;
   std::shared_ptr<CollisionChecker> plain_checker;
   std::unique_ptr<PathPlanner> plain_planner;
+  std::unique_ptr<PathPlanner> fine_planner;  // the same at kFineStepM, for unproven paths
+  std::shared_ptr<MotionProver> prover;        // proves transits free of the same scene
   std::unique_ptr<CollisionChecker> self_checker;  // the arm alone (ShiftedForReach)
 
   const Joints& At() const { return legs.empty() ? options.home : legs.back().motion.path.back(); }
@@ -274,21 +296,34 @@ struct Planning {
     planner.reset();
     checker = MakeChecker(options.checker, robot, inflated);
     planner = std::make_unique<PathPlanner>(*checker, robot.limits, options.path);
+    fine_planner.reset();
     plain_planner.reset();
     plain_checker.reset();
+    prover.reset();
     plain_scene = plain;
   }
 
   // A transit from where the arm is to any of `goals` (one query, PlanToAny): in the inflated
-  // scene, then, if no path is found there, in the scene without margins. Every query is
-  // recorded.
+  // scene, then, if no path is found there, in the scene without margins. A path is accepted only
+  // once proven free of the pass's scene without margins (MotionProver: the planners check
+  // edges at max_step_m, between which an edge may cross a cane by a fraction of a millimetre);
+  // one that is not is tried again without margins, then at a finer step. Every query is
+  // recorded (an unproven path as no path, PathRecord::unproven).
   struct Reached {
     std::vector<Joints> waypoints;
     int goal_index = 0;
     std::shared_ptr<CollisionChecker> checker;  // of the scene the path was found in
+    std::shared_ptr<MotionProver> proof;        // the pass's scene without margins
   };
   std::optional<Reached> Path(std::vector<Joints> goals, CutId to) {
-    PathResult path = planner->PlanToAny(At(), goals, deadline);
+    if (!plain_checker) plain_checker = MakeChecker(options.checker, robot, *plain_scene);
+    if (!prover) {
+      prover = std::make_shared<MotionProver>(*plain_scene, [this](const CollisionScene& s) {
+        return MakeChecker(options.checker, robot, s);
+      });
+    }
+    ProvenPath path{planner->PlanToAny(At(), goals, deadline)};
+    Prove(path);
     Record(path, to, goals, false);
     std::shared_ptr<CollisionChecker> used = checker;
     // Start in collision: a cut of an earlier pass, whose stroke this pass's margins did not
@@ -296,22 +331,53 @@ struct Planning {
     if ((path.outcome == PathOutcome::kNoPathWithinDeadline ||
          path.outcome == PathOutcome::kStartInCollision) &&
         options.margin_fallback &&
-        options.margins.max_margin_m > 0 && plain_scene && !deadline.Expired()) {
-      if (!plain_planner) {
-        plain_checker = MakeChecker(options.checker, robot, *plain_scene);
+        options.margins.max_margin_m > 0 && !deadline.Expired()) {
+      if (!plain_planner)
         plain_planner = std::make_unique<PathPlanner>(*plain_checker, robot.limits, options.path);
+      path = ProvenPath{plain_planner->PlanToAny(At(), goals, deadline)};
+      Prove(path);
+      Record(path, to, goals, true);
+      used = plain_checker;
+    }
+    if (path.unproven && !deadline.Expired()) {
+      if (!fine_planner) {
+        PathOptions fine = options.path;
+        fine.max_step_m = std::min(fine.max_step_m, kFineStepM);
+        fine.tree_max_step_m = std::min(fine.tree_max_step_m, 3 * kFineStepM);
+        fine_planner = std::make_unique<PathPlanner>(*plain_checker, robot.limits, fine);
       }
-      path = plain_planner->PlanToAny(At(), goals, deadline);
+      path = ProvenPath{fine_planner->PlanToAny(At(), goals, deadline)};
+      Prove(path);
       Record(path, to, goals, true);
       used = plain_checker;
     }
     if (path.outcome != PathOutcome::kSolved) return std::nullopt;
-    return Reached{std::move(path.waypoints), path.goal_index, std::move(used)};
+    return Reached{std::move(path.waypoints), path.goal_index, std::move(used), prover};
   }
 
-  void Record(const PathResult& path, CutId to, const std::vector<Joints>& goals, bool plain) {
+  // A solved path whose waypoint segments are not proven free becomes kNoPathWithinDeadline
+  // (unproven); the proof's time and checks count as the query's.
+  struct ProvenPath : PathResult {
+    bool unproven = false;
+  };
+  void Prove(ProvenPath& path) {
+    if (path.outcome != PathOutcome::kSolved) return;
+    const auto start = std::chrono::steady_clock::now();
+    const int64_t checks = prover->checks();
+    const bool proven = prover->IsPathFree(path.waypoints);
+    path.planning_s += Seconds(start);
+    path.checks += prover->checks() - checks;
+    if (proven) return;
+    path.unproven = true;
+    path.outcome = PathOutcome::kNoPathWithinDeadline;
+    path.message = "the path found is not proven free of the vine";
+    ++result.stats.unproven_paths;
+  }
+
+  void Record(const ProvenPath& path, CutId to, const std::vector<Joints>& goals, bool plain) {
     PathRecord record{to, path.outcome, path.planning_s, path.checks, path.direct, plain, At(),
                       goals[std::max(path.goal_index, 0)], goals};
+    record.unproven = path.unproven;
     result.stats.paths.push_back(std::move(record));
   }
 
@@ -580,7 +646,8 @@ absl::StatusOr<std::vector<int>> PlanPass(const VineModel& model, const std::vec
     Cut made = cuts[k];
     made.point = motions[k].cut_point_in_platform;
     p.legs.push_back(
-        {std::move(reached->waypoints), std::move(motions[k]), made, std::move(reached->checker)});
+        {std::move(reached->waypoints), std::move(motions[k]), made, std::move(reached->checker),
+         std::move(reached->proof)});
     leg_nodes.push_back(node);
   }
   for (const auto& [failed_node, outcome] : failed) give_up(failed_node, outcome);
@@ -653,11 +720,13 @@ absl::StatusOr<PlanResult> PlanVine(const VineModel& model, const CutPlan& plan,
   auto t = std::chrono::steady_clock::now();
   std::vector<Joints> home_path;
   std::shared_ptr<CollisionChecker> home_checker;  // of the scene the way home was found in
+  std::shared_ptr<MotionProver> home_proof;        // that scene without margins
   while (options.return_home && !p.legs.empty()) {
     auto path = p.Path({options.home}, CutId{0});
     if (path) {
       home_path = std::move(path->waypoints);
       home_checker = std::move(path->checker);
+      home_proof = std::move(path->proof);
       break;
     }
     const CutId id = p.legs.back().cut.id;
@@ -673,14 +742,15 @@ absl::StatusOr<PlanResult> PlanVine(const VineModel& model, const CutPlan& plan,
   t = std::chrono::steady_clock::now();
   Trajectory& trajectory = result.trajectory;
   for (const Leg& leg : p.legs) {
-    VB_RETURN_IF_ERROR(AppendTransit(leg.transit, leg.checker.get(), options, robot.limits, stats,
-                                     &trajectory));
+    VB_RETURN_IF_ERROR(AppendTransit(leg.transit, leg.checker.get(), leg.proof.get(), options,
+                                     robot.limits, stats, &trajectory));
     VB_RETURN_IF_ERROR(AppendStroke(leg.motion, leg.cut, robot, options, &trajectory));
     result.cuts.push_back(leg.cut);
   }
   if (!home_path.empty()) {
     VB_RETURN_IF_ERROR(
-        AppendTransit(home_path, home_checker.get(), options, robot.limits, stats, &trajectory));
+        AppendTransit(home_path, home_checker.get(), home_proof.get(), options, robot.limits, stats,
+                      &trajectory));
   }
   stats.timing_s = Seconds(t);
   stats.planned = static_cast<int>(result.cuts.size());

@@ -147,6 +147,9 @@ struct PathRecord {
   // alternative motions), goal the one reached (the first when none was).
   Joints start = Joints::Zero(), goal = Joints::Zero();
   std::vector<Joints> goals;
+  // A path was found but not proven free of the pass's scene without margins
+  // (motion_prover.h): outcome kNoPathWithinDeadline, and the query was run again.
+  bool unproven = false;
 };
 
 struct PlanStats {
@@ -159,6 +162,9 @@ struct PlanStats {
   // Transit timing: interior waypoints, those where the arm stops (a blend collided at every
   // size) and blend halvings.
   int blend_vias = 0, blend_stops = 0, blend_shrinks = 0;
+  // Paths found but not proven free (PathRecord::unproven), and blended transits not proven free
+  // between their samples, timed to stop at each waypoint instead.
+  int unproven_paths = 0, unproven_blends = 0;
   std::vector<PathRecord> paths;
   MarginSummary margins;
   // Estimated move time (s) of the transits in the chosen order, the given order and the
