@@ -263,6 +263,7 @@ struct Leg {
   Cut cut;  // as made (a slid cut's point is where the tool cuts)
   std::shared_ptr<CollisionChecker> checker;  // the transit's scene (blends are checked in it)
   std::shared_ptr<MotionProver> proof;  // that scene without margins (blends proven in it)
+  int pass = 0;                         // PlanStats::passes when it was planned
 };
 
 // Edges of paths planned again when a path found at options.path.max_step_m is not proven free.
@@ -289,6 +290,9 @@ struct Planning {
   std::unique_ptr<PathPlanner> fine_planner;  // the same at kFineStepM, for unproven paths
   std::shared_ptr<MotionProver> prover;        // proves transits free of the same scene
   std::unique_ptr<CollisionChecker> self_checker;  // the arm alone (ShiftedForReach)
+  // The scenes in use take every leg of the passes before this one as made (and hold the stubs
+  // of this one's).
+  int scene_pass = 0;
 
   const Joints& At() const { return legs.empty() ? options.home : legs.back().motion.path.back(); }
 
@@ -497,6 +501,7 @@ absl::StatusOr<std::vector<int>> PlanPass(const VineModel& model, const std::vec
   const MarginSummary margins = InflateMargins(p.robot, protect, options.margins, &inflated);
   if (stats.passes == 1) stats.margins = margins;
   p.UsePassScenes(scene, inflated);
+  p.scene_pass = stats.passes;
   stats.margins_s += Seconds(t);
 
   // The options of each planned cut: its motion, alternatives and their rolled twins (the same
@@ -647,7 +652,7 @@ absl::StatusOr<std::vector<int>> PlanPass(const VineModel& model, const std::vec
     made.point = motions[k].cut_point_in_platform;
     p.legs.push_back(
         {std::move(reached->waypoints), std::move(motions[k]), made, std::move(reached->checker),
-         std::move(reached->proof)});
+         std::move(reached->proof), stats.passes});
     leg_nodes.push_back(node);
   }
   for (const auto& [failed_node, outcome] : failed) give_up(failed_node, outcome);
@@ -733,7 +738,19 @@ absl::StatusOr<PlanResult> PlanVine(const VineModel& model, const CutPlan& plan,
     p.Unplanned(id, "no_path_home_within_deadline");
     stats.notes.push_back(
         absl::StrCat("cut ", id.value, ": dropped, no path home from it within the deadline"));
+    const int dropped_pass = p.legs.back().pass;
     p.legs.pop_back();
+    if (!p.legs.empty() && dropped_pass < p.scene_pass) {
+      // The scenes in use took that cut, of an earlier pass, as made (its wood fallen): the way
+      // home from the cuts before it is planned on the vine exactly as they leave it.
+      std::vector<Cut> made;
+      for (const Leg& leg : p.legs) made.push_back(leg.cut);
+      VB_ASSIGN_OR_RETURN(const CollisionScene scene,
+                          CollisionScene::Build(WithoutFallenWood(model, made), platform, robot,
+                                                options.scene));
+      p.UsePassScenes(scene, scene);
+      p.scene_pass = dropped_pass + 1;  // it takes every leg left as made
+    }
   }
   stats.paths_s += Seconds(t);
 

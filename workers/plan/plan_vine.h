@@ -23,8 +23,12 @@
 //      them; a cut motion that touches another cut's stub is dropped (a cut left without any
 //      waits for the next pass);
 //   7. time parameterisation within the joint velocity and acceleration limits, home -> cuts ->
-//      home: transits blended through their waypoints where the blends are free (blend.h),
-//      strokes along their dense path, slow only in wood (time_parameterization.h).
+//      home: transits blended through their waypoints where the blends are free (blend.h) and
+//      proven free without margins (motion_prover.h), strokes along their dense path, slow only
+//      in wood (time_parameterization.h).
+// Every transit is accepted only once proven free of its pass's scene without margins
+// (motion_prover.h); a cut given up for want of a way home takes the scenes back to the vine as
+// the cuts left make it when it was made in an earlier pass than theirs.
 // Every cut ends planned or with its reason in Trajectory::unplanned. Thread-safe (pure function).
 #pragma once
 
