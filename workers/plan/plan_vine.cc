@@ -12,10 +12,10 @@
 #include "absl/strings/str_cat.h"
 #include "core/status_macros.h"
 #include "workers/plan/blend.h"
-#include "workers/plan/motion_prover.h"
 #include "workers/plan/cut_order.h"
 #include "workers/plan/fallen_wood.h"
 #include "workers/plan/motion_choice.h"
+#include "workers/plan/planning.h"
 #include "workers/plan/time_parameterization.h"
 #include "workers/plan/tool.h"
 
@@ -68,10 +68,6 @@ absl::Status PlanOptions::Validate() const {
 }
 
 namespace {
-
-double Seconds(std::chrono::steady_clock::time_point since) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
-}
 
 // Appends timed samples to the trajectory as one segment.
 void AppendSegment(SegmentKind kind, CutId cut_id, const std::vector<TimedJoints>& timed,
@@ -255,140 +251,6 @@ bool KeepMotionsFreeOf(const CollisionScene& scene, const PlanOptions& options,
                               std::make_move_iterator(kept.end()));
   return true;
 }
-
-// A planned cut: the transit that reaches it and its cut motion.
-struct Leg {
-  std::vector<Joints> transit;
-  CutMotion motion;
-  Cut cut;  // as made (a slid cut's point is where the tool cuts)
-  std::shared_ptr<CollisionChecker> checker;  // the transit's scene (blends are checked in it)
-  std::shared_ptr<MotionProver> proof;  // that scene without margins (blends proven in it)
-  int pass = 0;                         // PlanStats::passes when it was planned
-};
-
-// Edges of paths planned again when a path found at options.path.max_step_m is not proven free.
-constexpr double kFineStepM = 0.002;
-
-// What the passes share.
-struct Planning {
-  const VineModel& vine;  // uncut
-  const CutPlan& plan;
-  const RobotModel& robot;
-  const PlatformGeometry& platform;
-  const PlanOptions& options;
-  const Deadline& deadline;
-  PlanResult& result;
-  std::vector<Leg> legs;
-  // The last pass's inflated scene, its checker and its path planner (for the way home).
-  std::shared_ptr<CollisionChecker> checker;
-  std::unique_ptr<PathPlanner> planner;
-  // The same pass's scene without margins; its checker (which proves paths free) is built at the
-  // pass's first transit, its planner at the first that needs it (options.margin_fallback).
-  std::optional<CollisionScene> plain_scene;
-  std::shared_ptr<CollisionChecker> plain_checker;
-  std::unique_ptr<PathPlanner> plain_planner;
-  std::unique_ptr<PathPlanner> fine_planner;  // the same at kFineStepM, for unproven paths
-  std::shared_ptr<MotionProver> prover;        // proves transits free of the same scene
-  std::unique_ptr<CollisionChecker> self_checker;  // the arm alone (ShiftedForReach)
-  // The scenes in use take every leg of the passes before this one as made (and hold the stubs
-  // of this one's).
-  int scene_pass = 0;
-
-  const Joints& At() const { return legs.empty() ? options.home : legs.back().motion.path.back(); }
-
-  void UsePassScenes(const CollisionScene& plain, const CollisionScene& inflated) {
-    planner.reset();
-    checker = MakeChecker(options.checker, robot, inflated);
-    planner = std::make_unique<PathPlanner>(*checker, robot.limits, options.path);
-    fine_planner.reset();
-    plain_planner.reset();
-    plain_checker.reset();
-    prover.reset();
-    plain_scene = plain;
-  }
-
-  // A transit from where the arm is to any of `goals` (one query, PlanToAny): in the inflated
-  // scene, then, if no path is found there, in the scene without margins. A path is accepted only
-  // once proven free of the pass's scene without margins (MotionProver: the planners check
-  // edges at max_step_m, between which an edge may cross a cane by a fraction of a millimetre);
-  // one that is not is tried again without margins, then at a finer step. Every query is
-  // recorded (an unproven path as no path, PathRecord::unproven).
-  struct Reached {
-    std::vector<Joints> waypoints;
-    int goal_index = 0;
-    std::shared_ptr<CollisionChecker> checker;  // of the scene the path was found in
-    std::shared_ptr<MotionProver> proof;        // the pass's scene without margins
-  };
-  std::optional<Reached> Path(std::vector<Joints> goals, CutId to) {
-    if (!plain_checker) plain_checker = MakeChecker(options.checker, robot, *plain_scene);
-    if (!prover) {
-      prover = std::make_shared<MotionProver>(*plain_scene, [this](const CollisionScene& s) {
-        return MakeChecker(options.checker, robot, s);
-      });
-    }
-    ProvenPath path{planner->PlanToAny(At(), goals, deadline)};
-    Prove(path);
-    Record(path, to, goals, false);
-    std::shared_ptr<CollisionChecker> used = checker;
-    // Start in collision: a cut of an earlier pass, whose stroke this pass's margins did not
-    // protect (the way home after a cut is given up); it is free without margins.
-    if ((path.outcome == PathOutcome::kNoPathWithinDeadline ||
-         path.outcome == PathOutcome::kStartInCollision) &&
-        options.margin_fallback &&
-        options.margins.max_margin_m > 0 && !deadline.Expired()) {
-      if (!plain_planner)
-        plain_planner = std::make_unique<PathPlanner>(*plain_checker, robot.limits, options.path);
-      path = ProvenPath{plain_planner->PlanToAny(At(), goals, deadline)};
-      Prove(path);
-      Record(path, to, goals, true);
-      used = plain_checker;
-    }
-    if (path.unproven && !deadline.Expired()) {
-      if (!fine_planner) {
-        PathOptions fine = options.path;
-        fine.max_step_m = std::min(fine.max_step_m, kFineStepM);
-        fine.tree_max_step_m = std::min(fine.tree_max_step_m, 3 * kFineStepM);
-        fine_planner = std::make_unique<PathPlanner>(*plain_checker, robot.limits, fine);
-      }
-      path = ProvenPath{fine_planner->PlanToAny(At(), goals, deadline)};
-      Prove(path);
-      Record(path, to, goals, true);
-      used = plain_checker;
-    }
-    if (path.outcome != PathOutcome::kSolved) return std::nullopt;
-    return Reached{std::move(path.waypoints), path.goal_index, std::move(used), prover};
-  }
-
-  // A solved path whose waypoint segments are not proven free becomes kNoPathWithinDeadline
-  // (unproven); the proof's time and checks count as the query's.
-  struct ProvenPath : PathResult {
-    bool unproven = false;
-  };
-  void Prove(ProvenPath& path) {
-    if (path.outcome != PathOutcome::kSolved) return;
-    const auto start = std::chrono::steady_clock::now();
-    const int64_t checks = prover->checks();
-    const bool proven = prover->IsPathFree(path.waypoints);
-    path.planning_s += Seconds(start);
-    path.checks += prover->checks() - checks;
-    if (proven) return;
-    path.unproven = true;
-    path.outcome = PathOutcome::kNoPathWithinDeadline;
-    path.message = "the path found is not proven free of the vine";
-    ++result.stats.unproven_paths;
-  }
-
-  void Record(const ProvenPath& path, CutId to, const std::vector<Joints>& goals, bool plain) {
-    PathRecord record{to, path.outcome, path.planning_s, path.checks, path.direct, plain, At(),
-                      goals[std::max(path.goal_index, 0)], goals};
-    record.unproven = path.unproven;
-    result.stats.paths.push_back(std::move(record));
-  }
-
-  void Unplanned(CutId id, std::string_view reason) {
-    result.trajectory.unplanned.push_back({id, std::string(reason)});
-  }
-};
 
 // One pass on the vine as `model` leaves it: cut motions for `pending` (indices into plan.cuts),
 // margins, order, paths. Appends legs; returns the cuts to try again on the vine after them.
