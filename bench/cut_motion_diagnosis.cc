@@ -349,6 +349,7 @@ int Main(int argc, char** argv) {
   if (alternatives >= 0) options.cut_motion.alternatives = alternatives;
   Totals totals;
   int cuts = 0, reachable = 0, planned = 0;
+  int unproven_paths = 0, unproven_blends = 0, stub_notes = 0;  // PlanStats, over the vines
   for (int v = 0; v < vines; ++v) {
     const uint64_t seed = seed_base + v;
     const auto scene = sim::GenerateScene(seed, 1);
@@ -364,6 +365,10 @@ int Main(int argc, char** argv) {
     cuts += result->stats.cuts;
     reachable += result->stats.cuts - result->stats.unreachable;
     planned += result->stats.planned;
+    unproven_paths += result->stats.unproven_paths;
+    unproven_blends += result->stats.unproven_blends;
+    for (const std::string& note : result->stats.notes)
+      stub_notes += note.find("touch the stub") != std::string::npos;
     if (recheck) {
       // A slid cut must not pass the base of a child of its cane (that child would stay).
       for (const Cut& made : result->cuts) {
@@ -416,6 +421,20 @@ int Main(int argc, char** argv) {
           }
           std::printf("    transit after %zu cuts: primitive clearance at its samples %.6f m; "
                       "mesh-colliding samples %d\n", before.size(), worst, mesh_bad);
+          // What its samples touch: obstacle kind:owner#chord (a cane's chords from its base).
+          std::vector<std::string> names;
+          std::map<int64_t, int> chords;
+          for (const Obstacle& o : s->obstacles)
+            names.push_back(std::to_string(static_cast<int>(o.kind)) + ":" +
+                            std::to_string(o.owner_id) + "#" +
+                            std::to_string(o.kind == ObstacleKind::kCane ? chords[o.owner_id]++ : 0));
+          const Classifier who(robot, *s, names);
+          Contacts all;
+          for (const TrajectoryPoint& p : segment.points) {
+            const Contacts c = who.At(Eigen::Map<const Joints>(p.q.data()));
+            all.insert(c.begin(), c.end());
+          }
+          for (const auto& [o, body] : all) std::printf("    touches %s with %s\n", o.c_str(), body.c_str());
         }
         for (const Cut& c : result->cuts) {
           if (c.id.value != segment.cut_id.value) continue;
@@ -474,6 +493,8 @@ int Main(int argc, char** argv) {
   }
   std::printf("\n%d cuts, %d reachable, %d planned; %d without a collision-free cut motion\n",
               cuts, reachable, planned, totals.cuts);
+  std::printf("  paths not proven free %d, blends not proven free %d, cuts with motions touching "
+              "another cut's stub %d\n", unproven_paths, unproven_blends, stub_notes);
   std::printf("  no collision-free cut configuration at any slide: %d; free cut configurations "
               "but every stroke collides: %d\n",
               totals.no_free_cut_config, totals.free_cut_config_stroke_collides);

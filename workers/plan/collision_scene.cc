@@ -3,9 +3,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <string>
 
 #include "absl/strings/str_cat.h"
+#include "workers/plan/fallen_wood.h"
 
 namespace vb::plan {
 
@@ -18,6 +20,45 @@ absl::Status SceneOptions::Validate() const {
   }
   return absl::OkStatus();
 }
+
+namespace {
+
+// Chords between the points at arc lengths 0, step, 2 step, ... from the base, and the tip: a grid
+// fixed at the base, so that a cane cut short (fallen_wood.h) keeps the very capsules it had, up
+// to the one its cut falls in, and a trajectory checked on the uncut vine stays free on the cut
+// one there (an equally spaced resampling would move every chord of the stub). Each chord takes
+// the radius that encloses the cane between its ends: the larger end radius, or more where the
+// original polyline bends away from the chord. (The distance to a segment is convex and the radius
+// linear along each original piece, so enclosing the original vertices and the chord ends
+// encloses the whole cane.)
+void AppendCaneChords(const Cane& cane, const Eigen::Isometry3d& base_from_platform, double step,
+                      double margin, std::vector<Obstacle>* out) {
+  const Polyline3& original = cane.polyline;
+  const std::vector<double> arc = original.ArcLengths();
+  const double length = arc.back();
+  std::vector<double> grid;
+  for (int k = 0; k * step < length - 1e-6; ++k) grid.push_back(k * step);
+  grid.push_back(length);
+  if (grid.size() < 2) grid.insert(grid.begin(), 0.0);  // a cane of (almost) no length
+  size_t i = 0;
+  for (size_t k = 0; k + 1 < grid.size(); ++k) {
+    const Eigen::Vector3d a = original.PointAt(grid[k]), b = original.PointAt(grid[k + 1]);
+    double radius = std::max(original.RadiusAt(grid[k]), original.RadiusAt(grid[k + 1]));
+    while (i < arc.size() && arc[i] <= grid[k]) ++i;
+    for (size_t j = i; j < arc.size() && arc[j] < grid[k + 1]; ++j)
+      radius = std::max(radius, PointSegmentDistance(original.points[j], a, b) + original.radii[j]);
+    out->push_back(Obstacle{ObstacleKind::kCane, cane.id.value,
+                            Capsule{base_from_platform * a, base_from_platform * b, radius},
+                            margin});
+  }
+}
+
+bool SameObstacle(const Obstacle& x, const Obstacle& y) {
+  return x.kind == y.kind && x.owner_id == y.owner_id && x.capsule.a == y.capsule.a &&
+         x.capsule.b == y.capsule.b && x.capsule.radius == y.capsule.radius;
+}
+
+}  // namespace
 
 absl::StatusOr<CollisionScene> CollisionScene::Build(const VineModel& model,
                                                      const PlatformGeometry& platform,
@@ -56,33 +97,8 @@ absl::StatusOr<CollisionScene> CollisionScene::Build(const VineModel& model,
         Obstacle{kind, owner, Capsule{base_from_platform * a, base_from_platform * b, radius},
                  margin});
   };
-  for (const Cane& cane : model.canes) {
-    // Chords between the points at arc lengths 0, step, 2 step, ... from the base, and the tip:
-    // a grid fixed at the base, so that a cane cut short (fallen_wood.h) keeps the very capsules
-    // it had, up to the one its cut falls in, and a trajectory checked on the uncut vine stays
-    // free on the cut one (an equally spaced resampling would move every chord of the stub).
-    // Each chord takes the radius that encloses the cane between its ends: the larger end
-    // radius, or more where the original polyline bends away from the chord. (The distance to a
-    // segment is convex and the radius linear along each original piece, so enclosing the
-    // original vertices and the chord ends encloses the whole cane.)
-    const Polyline3& original = cane.polyline;
-    const std::vector<double> arc = original.ArcLengths();
-    const double length = arc.back();
-    const double step = options.cane_segment_m;
-    std::vector<double> grid;
-    for (int k = 0; k * step < length - 1e-6; ++k) grid.push_back(k * step);
-    grid.push_back(length);
-    if (grid.size() < 2) grid.insert(grid.begin(), 0.0);  // a cane of (almost) no length
-    size_t i = 0;
-    for (size_t k = 0; k + 1 < grid.size(); ++k) {
-      const Eigen::Vector3d a = original.PointAt(grid[k]), b = original.PointAt(grid[k + 1]);
-      double radius = std::max(original.RadiusAt(grid[k]), original.RadiusAt(grid[k + 1]));
-      while (i < arc.size() && arc[i] <= grid[k]) ++i;
-      for (size_t j = i; j < arc.size() && arc[j] < grid[k + 1]; ++j)
-        radius = std::max(radius, PointSegmentDistance(original.points[j], a, b) + original.radii[j]);
-      add(ObstacleKind::kCane, cane.id.value, a, b, radius);
-    }
-  }
+  for (const Cane& cane : model.canes)
+    AppendCaneChords(cane, base_from_platform, options.cane_segment_m, margin, &scene.obstacles);
   for (const Sphere& s : model.head.spheres) add(ObstacleKind::kHead, 0, s.center, s.center, s.radius);
   for (const Wire& w : model.wires) {
     for (size_t k = 0; k + 1 < w.points.size(); ++k) {
@@ -122,6 +138,35 @@ CollisionScene CollisionScene::WithoutCaneNear(CaneId cane_id,
             radius_m;
     if (!near) out.obstacles.push_back(o);
   }
+  return out;
+}
+
+absl::StatusOr<std::vector<Obstacle>> StubChords(const VineModel& model, std::span<const Cut> made,
+                                                 const Cut& cut, const RobotModel& robot,
+                                                 const SceneOptions& options) {
+  if (auto s = options.Validate(); !s.ok()) return s;
+  if (auto s = model.Validate(); !s.ok()) return s;
+  if (auto s = robot.Validate(); !s.ok()) return s;
+  if (!cut.point.allFinite()) return absl::InvalidArgumentError("cut.point: non-finite");
+  const VineModel before = WithoutFallenWood(model, made);
+  const std::optional<size_t> i = before.IndexOf(cut.cane_id);
+  if (!i) return std::vector<Obstacle>{};
+  std::vector<Cut> with_cut(made.begin(), made.end());
+  with_cut.push_back(cut);
+  const VineModel after = WithoutFallenWood(model, with_cut);
+  const std::optional<size_t> j = after.IndexOf(cut.cane_id);
+  if (!j) return std::vector<Obstacle>{};  // it falls whole
+  const Eigen::Isometry3d base_from_platform = robot.platform_from_arm_base.inverse();
+  std::vector<Obstacle> uncut, stub;
+  AppendCaneChords(before.canes[*i], base_from_platform, options.cane_segment_m,
+                   options.default_margin_m, &uncut);
+  AppendCaneChords(after.canes[*j], base_from_platform, options.cane_segment_m,
+                   options.default_margin_m, &stub);
+  std::vector<Obstacle> out;
+  for (const Obstacle& o : stub)
+    if (std::none_of(uncut.begin(), uncut.end(),
+                     [&](const Obstacle& u) { return SameObstacle(o, u); }))
+      out.push_back(o);
   return out;
 }
 

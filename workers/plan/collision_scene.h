@@ -6,9 +6,11 @@
 #pragma once
 
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "absl/status/statusor.h"
+#include "core/cut_plan.h"
 #include "core/geometry.h"
 #include "core/ids.h"
 #include "core/vine_model.h"
@@ -57,5 +59,24 @@ struct CollisionScene {
   CollisionScene WithoutCaneNear(CaneId cane_id, const Eigen::Vector3d& point_in_base,
                                  double radius_m) const;
 };
+
+// The chords (kCane obstacles, arm base frame, margin options.default_margin_m) of the stub that
+// `cut` leaves of its cane when made after the cuts `made` on `model` -- the cane in
+// WithoutFallenWood(model, made + {cut}) (fallen_wood.h) -- except those identical to a chord of
+// the cane in WithoutFallenWood(model, made): in practice the one chord the cut falls in, whose
+// end is now the cut. It may bulge a fraction of a millimetre outside the uncut cane's capsule
+// there (the cane may bend away from the uncut chord at the cut, and the stub chord takes its
+// thicker end's radius), so a motion free on the uncut vine can touch it. Empty when the cane is
+// absent after `made` or falls whole with the cut.
+//
+// Conservative union: for cuts C, Build(WithoutFallenWood(model, made)) plus StubChords(model,
+// made, c) for every c in C contains (identically) every obstacle of
+// Build(WithoutFallenWood(model, made + S)) for every subset S of C, made in any order: more cuts
+// only make more wood fall, and a cane that stays is cut short at the lowest cut on it -- one of
+// `made`, leaving its chords as they were, or some c in S, leaving the chords it leaves alone.
+// INVALID_ARGUMENT naming the field for bad options, model or robot, or a non-finite cut point.
+absl::StatusOr<std::vector<Obstacle>> StubChords(const VineModel& model, std::span<const Cut> made,
+                                                 const Cut& cut, const RobotModel& robot,
+                                                 const SceneOptions& options = {});
 
 }  // namespace vb::plan

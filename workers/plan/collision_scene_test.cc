@@ -3,9 +3,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <random>
 
 #include "gtest/gtest.h"
 #include "sim/vine_generator.h"
+#include "workers/plan/fallen_wood.h"
 
 namespace vb::plan {
 namespace {
@@ -204,6 +206,135 @@ TEST(CollisionScene, BuildRejectsBadInput) {
   PlatformGeometry platform = DefaultPlatform();
   platform.roof_z_m = 0.0;
   EXPECT_FALSE(CollisionScene::Build(SimVine(1103), platform, robot).ok());
+}
+
+
+// Overlap depth of a point with the scene's capsules (> 0: inside one).
+double Depth(const CollisionScene& scene, const Eigen::Vector3d& p) {
+  double depth = -1e9;
+  for (const Obstacle& o : scene.obstacles)
+    depth = std::max(depth, o.capsule.radius - PointSegmentDistance(p, o.capsule.a, o.capsule.b));
+  return depth;
+}
+
+bool Holds(const std::vector<Obstacle>& in, const Obstacle& o) {
+  return std::any_of(in.begin(), in.end(), [&](const Obstacle& x) {
+    return x.kind == o.kind && x.owner_id == o.owner_id && x.capsule.a == o.capsule.a &&
+           x.capsule.b == o.capsule.b && x.capsule.radius == o.capsule.radius;
+  });
+}
+
+TEST(StubChords, AStubChordThatBulgesOutOfTheUncutCaneIsInTheUnion) {
+  // A thick cane kinked 3 mm up between two grid points (0.03 m chords), cut at the kink: the
+  // stub's last chord ends there with the radius of its thick end, so it reaches a point 7 mm
+  // above the kink that the uncut chord (radius 8 mm about its axis, 10 mm away) leaves free. A
+  // motion planned on the uncut vine may pass there and touch the stub once the cut is made.
+  const RobotModel robot = Robot();
+  const Eigen::Vector3d base(0.0, 0.5, 1.0);
+  VineModel vine;
+  Cane trunk;
+  trunk.id = CaneId{1};
+  trunk.kind = CaneKind::kTrunk;
+  trunk.polyline.points = {Eigen::Vector3d(0, 0.5, 0), base};
+  trunk.polyline.radii = {0.02, 0.02};
+  Cane cane;
+  cane.id = CaneId{2};
+  cane.parent_id = trunk.id;
+  const Eigen::Vector3d kink = base + Eigen::Vector3d(0.045, 0, 0.003);
+  cane.polyline.points = {base, base + Eigen::Vector3d(0.03, 0, 0), kink,
+                          base + Eigen::Vector3d(0.06, 0, 0), base + Eigen::Vector3d(0.3, 0, 0)};
+  cane.polyline.radii = {0.009, 0.008, 0.004, 0.004, 0.003};
+  vine.canes = {trunk, cane};
+  Cut cut;
+  cut.id = CutId{1};
+  cut.cane_id = cane.id;
+  cut.point = kink;
+  cut.direction = Eigen::Vector3d::UnitX();
+  const Eigen::Isometry3d base_from_platform = robot.platform_from_arm_base.inverse();
+  const Eigen::Vector3d p = base_from_platform * (kink + Eigen::Vector3d(0, 0, 0.007));
+
+  auto uncut = CollisionScene::Build(vine, DefaultPlatform(), robot);
+  auto after = CollisionScene::Build(WithoutFallenWood(vine, {&cut, 1}), DefaultPlatform(), robot);
+  ASSERT_TRUE(uncut.ok() && after.ok());
+  EXPECT_LT(Depth(*uncut, p), -0.001);  // free by a millimetre on the uncut vine
+  EXPECT_GT(Depth(*after, p), 0.0005);  // inside the stub once the cut is made
+
+  auto stub = StubChords(vine, {}, cut, robot);
+  ASSERT_TRUE(stub.ok()) << stub.status();
+  ASSERT_EQ(stub->size(), 1u);  // only the chord the cut falls in differs
+  CollisionScene pass = *uncut;
+  pass.obstacles.insert(pass.obstacles.end(), stub->begin(), stub->end());
+  EXPECT_GT(Depth(pass, p), 0.0005);
+  for (const Obstacle& o : after->obstacles) EXPECT_TRUE(Holds(pass.obstacles, o));
+
+  // A cut at the very base takes the whole cane: no stub.
+  Cut at_base = cut;
+  at_base.point = base;
+  auto none = StubChords(vine, {}, at_base, robot);
+  ASSERT_TRUE(none.ok());
+  EXPECT_TRUE(none->empty());
+}
+
+TEST(StubChords, TheSceneAndTheStubsHoldEveryStateOfThePass) {
+  // Cuts at 30% and 60% of every cane of simulated vines; a third of them made before the pass.
+  // The scene of the vine after those, with the stubs of the rest, holds every obstacle of the
+  // vine after any subset of the rest; the scene alone does not.
+  const RobotModel robot = Robot();
+  std::mt19937 rng(1104);
+  int missing_without_stubs = 0, states = 0;
+  for (uint64_t seed : {1100, 1101, 1102}) {
+    const VineModel vine = SimVine(seed);
+    std::vector<Cut> made, pass;
+    int id = 0;
+    for (const Cane& cane : vine.canes) {
+      if (cane.kind == CaneKind::kTrunk) continue;
+      for (double f : {0.3, 0.6}) {
+        Cut cut;
+        cut.id = CutId{++id};
+        cut.cane_id = cane.id;
+        cut.point = cane.polyline.PointAt(f * cane.polyline.Length());
+        (id % 3 == 0 ? made : pass).push_back(cut);
+      }
+    }
+    auto start = CollisionScene::Build(WithoutFallenWood(vine, made), DefaultPlatform(), robot);
+    ASSERT_TRUE(start.ok()) << start.status();
+    CollisionScene union_scene = *start;
+    for (const Cut& cut : pass) {
+      auto stub = StubChords(vine, made, cut, robot);
+      ASSERT_TRUE(stub.ok()) << stub.status();
+      union_scene.obstacles.insert(union_scene.obstacles.end(), stub->begin(), stub->end());
+    }
+    for (int trial = 0; trial < 12; ++trial) {
+      std::vector<Cut> now = made;
+      for (const Cut& cut : pass)
+        if (std::bernoulli_distribution(trial < 2 ? 1.0 : 0.3)(rng)) now.push_back(cut);
+      auto scene = CollisionScene::Build(WithoutFallenWood(vine, now), DefaultPlatform(), robot);
+      ASSERT_TRUE(scene.ok()) << scene.status();
+      ++states;
+      for (const Obstacle& o : scene->obstacles) {
+        EXPECT_TRUE(Holds(union_scene.obstacles, o)) << "seed " << seed << " cane " << o.owner_id;
+        missing_without_stubs += !Holds(start->obstacles, o);
+      }
+    }
+  }
+  EXPECT_EQ(states, 36);
+  EXPECT_GT(missing_without_stubs, 0);
+}
+
+TEST(StubChords, RejectsBadInput) {
+  const RobotModel robot = Robot();
+  const VineModel vine = SimVine(1103);
+  Cut cut;
+  cut.cane_id = vine.canes.back().id;
+  cut.point = Eigen::Vector3d(0, std::nan(""), 0);
+  auto result = StubChords(vine, {}, cut, robot);
+  EXPECT_EQ(result.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(result.status().message().find("cut.point"), std::string::npos);
+  cut.point = vine.canes.back().polyline.points.front();
+  SceneOptions options;
+  options.cane_segment_m = -1;
+  EXPECT_NE(StubChords(vine, {}, cut, robot, options).status().message().find("cane_segment_m"),
+            std::string::npos);
 }
 
 }  // namespace

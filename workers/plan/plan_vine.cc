@@ -15,6 +15,7 @@
 #include "workers/plan/cut_order.h"
 #include "workers/plan/fallen_wood.h"
 #include "workers/plan/motion_choice.h"
+#include "workers/plan/planning.h"
 #include "workers/plan/time_parameterization.h"
 #include "workers/plan/tool.h"
 
@@ -70,10 +71,6 @@ absl::Status PlanOptions::Validate() const {
 
 namespace {
 
-double Seconds(std::chrono::steady_clock::time_point since) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
-}
-
 // Appends timed samples to the trajectory as one segment.
 void AppendSegment(SegmentKind kind, CutId cut_id, const std::vector<TimedJoints>& timed,
                    Trajectory* out) {
@@ -91,16 +88,19 @@ void AppendSegment(SegmentKind kind, CutId cut_id, const std::vector<TimedJoints
 }
 
 // A transit from rest to rest, blended through its waypoints where the blends are free in
-// `checker` (the scene it was planned in), or stopping at each of them.
+// `checker` (the scene it was planned in) and the blended trajectory is proven free in `proof`
+// (the scene without margins; MotionProver between its samples, as it is re-checked), or
+// stopping at each of them (on the waypoints' segments, which were proven free).
 absl::Status AppendTransit(std::span<const Joints> waypoints, CollisionChecker* checker,
-                           const PlanOptions& options, const JointLimits& limits, PlanStats& stats,
-                           Trajectory* out) {
-  if (!options.blend_transits) {
+                           MotionProver* proof, const PlanOptions& options,
+                           const JointLimits& limits, PlanStats& stats, Trajectory* out) {
+  auto stop_at_each = [&]() -> absl::Status {
     VB_ASSIGN_OR_RETURN(const std::vector<TimedJoints> timed,
                         TimeParameterize(waypoints, limits, out->duration_s, options.sample_dt_s));
     AppendSegment(SegmentKind::kTransit, CutId{0}, timed, out);
     return absl::OkStatus();
-  }
+  };
+  if (!options.blend_transits) return stop_at_each();
   BlendOptions blend = options.blend;
   blend.max_step_m = options.path.max_step_m;
   VB_ASSIGN_OR_RETURN(const BlendedPath path,
@@ -110,6 +110,18 @@ absl::Status AppendTransit(std::span<const Joints> waypoints, CollisionChecker* 
   stats.blend_stops += path.stops;
   stats.blend_shrinks += path.shrinks;
   stats.checks += path.checks;
+  if (path.vias > path.stops) {
+    std::vector<Joints> samples;
+    samples.reserve(path.samples.size());
+    for (const TimedJoints& p : path.samples) samples.push_back(p.q);
+    const int64_t checks = proof->checks();
+    const bool proven = proof->IsPathFree(samples);
+    stats.checks += proof->checks() - checks;
+    if (!proven) {
+      ++stats.unproven_blends;
+      return stop_at_each();
+    }
+  }
   AppendSegment(SegmentKind::kTransit, CutId{0}, path.samples, out);
   return absl::OkStatus();
 }
@@ -212,84 +224,35 @@ std::vector<Joints> ShiftedForReach(const std::vector<Joints>& path, const Joint
   return path;
 }
 
-// A planned cut: the transit that reaches it and its cut motion.
-struct Leg {
-  std::vector<Joints> transit;
-  CutMotion motion;
-  Cut cut;  // as made (a slid cut's point is where the tool cuts)
-  std::shared_ptr<CollisionChecker> checker;  // the transit's scene (blends are checked in it)
-};
-
-// What the passes share.
-struct Planning {
-  const CutPlan& plan;
-  const RobotModel& robot;
-  const PlatformGeometry& platform;
-  const PlanOptions& options;
-  const Deadline& deadline;
-  PlanResult& result;
-  std::vector<Leg> legs;
-  // The last pass's inflated scene, its checker and its path planner (for the way home).
-  std::shared_ptr<CollisionChecker> checker;
-  std::unique_ptr<PathPlanner> planner;
-  // The same pass's scene without margins; its checker and planner are built at the first
-  // transit that needs them (options.margin_fallback).
-  std::optional<CollisionScene> plain_scene;
-  std::shared_ptr<CollisionChecker> plain_checker;
-  std::unique_ptr<PathPlanner> plain_planner;
-  std::unique_ptr<CollisionChecker> self_checker;  // the arm alone (ShiftedForReach)
-
-  const Joints& At() const { return legs.empty() ? options.home : legs.back().motion.path.back(); }
-
-  void UsePassScenes(const CollisionScene& plain, const CollisionScene& inflated) {
-    planner.reset();
-    checker = MakeChecker(options.checker, robot, inflated);
-    planner = std::make_unique<PathPlanner>(*checker, robot.limits, options.path);
-    plain_planner.reset();
-    plain_checker.reset();
-    plain_scene = plain;
-  }
-
-  // A transit from where the arm is to any of `goals` (one query, PlanToAny): in the inflated
-  // scene, then, if no path is found there, in the scene without margins. Every query is
-  // recorded.
-  struct Reached {
-    std::vector<Joints> waypoints;
-    int goal_index = 0;
-    std::shared_ptr<CollisionChecker> checker;  // of the scene the path was found in
+// Drops the motions of `motion` (its path and alternatives) that touch `scene` along their
+// configurations, checked as PlanCutMotions checks them; the first free alternative replaces a
+// path that touches it. False (and `motion` unchanged) if every one does.
+bool KeepMotionsFreeOf(const CollisionScene& scene, const PlanOptions& options,
+                       const RobotModel& robot, CutMotion* motion) {
+  const std::unique_ptr<CollisionChecker> checker = MakeChecker(options.checker, robot, scene);
+  auto free = [&](const std::vector<Joints>& path) {
+    if (path.empty() || !checker->IsFree(path.front())) return false;
+    for (size_t i = 1; i < path.size(); ++i)
+      if (!checker->IsMotionFree(path[i - 1], path[i], options.cut_motion.max_step_m)) return false;
+    return true;
   };
-  std::optional<Reached> Path(std::vector<Joints> goals, CutId to) {
-    PathResult path = planner->PlanToAny(At(), goals, deadline);
-    Record(path, to, goals, false);
-    std::shared_ptr<CollisionChecker> used = checker;
-    // Start in collision: a cut of an earlier pass, whose stroke this pass's margins did not
-    // protect (the way home after a cut is given up); it is free without margins.
-    if ((path.outcome == PathOutcome::kNoPathWithinDeadline ||
-         path.outcome == PathOutcome::kStartInCollision) &&
-        options.margin_fallback &&
-        options.margins.max_margin_m > 0 && plain_scene && !deadline.Expired()) {
-      if (!plain_planner) {
-        plain_checker = MakeChecker(options.checker, robot, *plain_scene);
-        plain_planner = std::make_unique<PathPlanner>(*plain_checker, robot.limits, options.path);
-      }
-      path = plain_planner->PlanToAny(At(), goals, deadline);
-      Record(path, to, goals, true);
-      used = plain_checker;
-    }
-    if (path.outcome != PathOutcome::kSolved) return std::nullopt;
-    return Reached{std::move(path.waypoints), path.goal_index, std::move(used)};
-  }
-
-  void Record(const PathResult& path, CutId to, const std::vector<Joints>& goals, bool plain) {
-    PathRecord record{to, path.outcome, path.planning_s, path.checks, path.direct, plain, At(),
-                      goals[std::max(path.goal_index, 0)], goals};
-    result.stats.paths.push_back(std::move(record));
-  }
-
-  void Unplanned(CutId id, std::string_view reason) {
-    result.trajectory.unplanned.push_back({id, std::string(reason)});
-  }
-};
+  const bool path_free = free(motion->path);
+  std::vector<bool> alternative_free;
+  for (const std::vector<Joints>& alternative : motion->alternatives)
+    alternative_free.push_back(free(alternative));
+  if (path_free && std::all_of(alternative_free.begin(), alternative_free.end(),
+                               [](bool f) { return f; }))
+    return true;
+  std::vector<std::vector<Joints>> kept;
+  if (path_free) kept.push_back(std::move(motion->path));
+  for (size_t a = 0; a < alternative_free.size(); ++a)
+    if (alternative_free[a]) kept.push_back(std::move(motion->alternatives[a]));
+  if (kept.empty()) return false;
+  motion->path = std::move(kept.front());
+  motion->alternatives.assign(std::make_move_iterator(kept.begin() + 1),
+                              std::make_move_iterator(kept.end()));
+  return true;
+}
 
 // One pass on the vine as `model` leaves it: cut motions for `pending` (indices into plan.cuts),
 // margins, order, paths. Appends legs; returns the cuts to try again on the vine after them.
@@ -338,7 +301,6 @@ absl::StatusOr<std::vector<int>> PlanPass(const VineModel& model, const std::vec
         PlanCutMotions(p.robot, model, scene, blocked, wider, p.deadline, make_checker);
     for (size_t i = 0; i < again.size(); ++i) motions[blocked_at[i]] = std::move(again[i]);
   }
-  stats.cut_motions_s += Seconds(t);
   std::vector<int> planned, retry;  // indices into cuts / motions; into plan.cuts
   for (size_t k = 0; k < motions.size(); ++k) {
     const CutMotionOutcome outcome = motions[k].outcome;
@@ -351,15 +313,58 @@ absl::StatusOr<std::vector<int>> PlanPass(const VineModel& model, const std::vec
       p.Unplanned(cuts[k].id, CutMotionReason(outcome));
     }
   }
+  // The stubs of the pass's cuts (StubChords): the transits, blends and strokes of the pass run
+  // on the vine after any of its cuts made before them, so each must be free of all of them (a
+  // stroke of those of the other cuts). A cut whose every motion touches another's stub waits for
+  // the next pass, where that stub is part of the vine.
+  std::vector<Cut> made_before;
+  for (const Leg& leg : p.legs) made_before.push_back(leg.cut);
+  std::vector<std::vector<Obstacle>> stubs(motions.size());
+  for (int k : planned) {
+    Cut made = cuts[k];
+    made.point = motions[k].cut_point_in_platform;
+    VB_ASSIGN_OR_RETURN(stubs[k], StubChords(p.vine, made_before, made, p.robot, options.scene));
+  }
+  const Eigen::Isometry3d base_from_platform = p.robot.platform_from_arm_base.inverse();
+  std::vector<int> free_of_stubs;
+  for (int k : planned) {
+    CollisionScene others;
+    for (int j : planned)
+      if (j != k) others.obstacles.insert(others.obstacles.end(), stubs[j].begin(), stubs[j].end());
+    if (!others.obstacles.empty()) {
+      others = others.WithoutCaneNear(cuts[k].cane_id,
+                                      base_from_platform * motions[k].cut_point_in_platform,
+                                      options.cut_motion.cut_cane_free_radius_m);
+    }
+    const size_t options_before = 1 + motions[k].alternatives.size();
+    const bool kept = others.obstacles.empty() ||
+                      KeepMotionsFreeOf(others, options, p.robot, &motions[k]);
+    const size_t options_after = kept ? 1 + motions[k].alternatives.size() : 0;
+    if (options_after < options_before)
+      stats.notes.push_back(absl::StrCat("cut ", cuts[k].id.value, ": ",
+                                         options_before - options_after, " of ", options_before,
+                                         " motions touch the stub of another cut of the pass"));
+    if (!kept) {
+      if (last_pass)
+        p.Unplanned(cuts[k].id, "no_collision_free_cut_motion");
+      else
+        retry.push_back(pending_here[k]);
+      continue;
+    }
+    free_of_stubs.push_back(k);
+  }
+  planned = std::move(free_of_stubs);
+  stats.cut_motions_s += Seconds(t);
   if (planned.empty()) {
     for (int i : retry) p.Unplanned(p.plan.cuts[i].id, "no_collision_free_cut_motion");
     return std::vector<int>{};
   }
+  for (int k : planned)
+    scene.obstacles.insert(scene.obstacles.end(), stubs[k].begin(), stubs[k].end());
   ++stats.passes;
 
   // Margins around where the arm is, home, and every chosen cut motion of this pass.
   t = std::chrono::steady_clock::now();
-  const Eigen::Isometry3d base_from_platform = p.robot.platform_from_arm_base.inverse();
   std::vector<ProtectedMotion> protect;
   protect.push_back({{options.home, p.At()}, CaneId{0}, Eigen::Vector3d::Zero(), 0.0});
   for (int k : planned) {
@@ -379,6 +384,7 @@ absl::StatusOr<std::vector<int>> PlanPass(const VineModel& model, const std::vec
   const MarginSummary margins = InflateMargins(p.robot, protect, options.margins, &inflated);
   if (stats.passes == 1) stats.margins = margins;
   p.UsePassScenes(scene, inflated);
+  p.scene_pass = stats.passes;
   stats.margins_s += Seconds(t);
 
   // The options of each planned cut: its motion, alternatives and their rolled twins (the same
@@ -528,7 +534,8 @@ absl::StatusOr<std::vector<int>> PlanPass(const VineModel& model, const std::vec
     Cut made = cuts[k];
     made.point = motions[k].cut_point_in_platform;
     p.legs.push_back(
-        {std::move(reached->waypoints), std::move(motions[k]), made, std::move(reached->checker)});
+        {std::move(reached->waypoints), std::move(motions[k]), made, std::move(reached->checker),
+         std::move(reached->proof), stats.passes});
     leg_nodes.push_back(node);
   }
   for (const auto& [failed_node, outcome] : failed) give_up(failed_node, outcome);
@@ -582,7 +589,7 @@ absl::StatusOr<PlanResult> PlanVine(const VineModel& model, const CutPlan& plan,
   }
   VB_RETURN_IF_ERROR(deadline.Check("plan"));
 
-  Planning p{plan, robot, platform, options, deadline, result};
+  Planning p{model, plan, robot, platform, options, deadline, result};
   p.self_checker = MakeChecker(options.checker, robot, CollisionScene{});
   std::vector<int> pending(plan.cuts.size());
   for (size_t i = 0; i < pending.size(); ++i) pending[i] = static_cast<int>(i);
@@ -601,18 +608,32 @@ absl::StatusOr<PlanResult> PlanVine(const VineModel& model, const CutPlan& plan,
   auto t = std::chrono::steady_clock::now();
   std::vector<Joints> home_path;
   std::shared_ptr<CollisionChecker> home_checker;  // of the scene the way home was found in
+  std::shared_ptr<MotionProver> home_proof;        // that scene without margins
   while (options.return_home && !p.legs.empty()) {
     auto path = p.Path({options.home}, CutId{0});
     if (path) {
       home_path = std::move(path->waypoints);
       home_checker = std::move(path->checker);
+      home_proof = std::move(path->proof);
       break;
     }
     const CutId id = p.legs.back().cut.id;
     p.Unplanned(id, "no_path_home_within_deadline");
     stats.notes.push_back(
         absl::StrCat("cut ", id.value, ": dropped, no path home from it within the deadline"));
+    const int dropped_pass = p.legs.back().pass;
     p.legs.pop_back();
+    if (!p.legs.empty() && dropped_pass < p.scene_pass) {
+      // The scenes in use took that cut, of an earlier pass, as made (its wood fallen): the way
+      // home from the cuts before it is planned on the vine exactly as they leave it.
+      std::vector<Cut> made;
+      for (const Leg& leg : p.legs) made.push_back(leg.cut);
+      VB_ASSIGN_OR_RETURN(const CollisionScene scene,
+                          CollisionScene::Build(WithoutFallenWood(model, made), platform, robot,
+                                                options.scene));
+      p.UsePassScenes(scene, scene);
+      p.scene_pass = dropped_pass + 1;  // it takes every leg left as made
+    }
   }
   stats.paths_s += Seconds(t);
 
@@ -621,14 +642,15 @@ absl::StatusOr<PlanResult> PlanVine(const VineModel& model, const CutPlan& plan,
   t = std::chrono::steady_clock::now();
   Trajectory& trajectory = result.trajectory;
   for (const Leg& leg : p.legs) {
-    VB_RETURN_IF_ERROR(AppendTransit(leg.transit, leg.checker.get(), options, robot.limits, stats,
-                                     &trajectory));
+    VB_RETURN_IF_ERROR(AppendTransit(leg.transit, leg.checker.get(), leg.proof.get(), options,
+                                     robot.limits, stats, &trajectory));
     VB_RETURN_IF_ERROR(AppendStroke(leg.motion, leg.cut, robot, options, &trajectory));
     result.cuts.push_back(leg.cut);
   }
   if (!home_path.empty()) {
     VB_RETURN_IF_ERROR(
-        AppendTransit(home_path, home_checker.get(), options, robot.limits, stats, &trajectory));
+        AppendTransit(home_path, home_checker.get(), home_proof.get(), options, robot.limits, stats,
+                      &trajectory));
   }
   stats.timing_s = Seconds(t);
   stats.planned = static_cast<int>(result.cuts.size());

@@ -9,6 +9,8 @@
 #include "workers/decide/decide.h"
 #include "workers/plan/collision_scene.h"
 #include "workers/plan/cut_motion.h"
+#include "workers/plan/fallen_wood.h"
+#include "workers/plan/motion_prover.h"
 #include "workers/plan/tool.h"
 #include "workers/plan/trajectory_check.h"
 
@@ -349,6 +351,37 @@ TEST(PlanVine, RejectsANegativeLastResortSlide) {
   const absl::Status status = options.Validate();
   EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument);
   EXPECT_NE(status.message().find("last_resort_max_slide_m"), std::string::npos);
+}
+
+TEST(PlanVine, EveryTransitIsProvenFreeOfTheVineAsItIsThen) {
+  // Stronger than the sampled re-check: each transit, between its samples, is proven free
+  // (MotionProver) of the vine after the cuts before it -- stubs included, margins not.
+  const RobotModel robot = DefaultUr5(SecateurTool());
+  const PlatformGeometry platform = DefaultPlatform();
+  int transits = 0;
+  for (uint64_t seed : {1100, 1103}) {
+    const Stop stop = SimStop(seed);
+    auto result = PlanVine(stop.model, stop.plan, robot, platform, Options());
+    ASSERT_TRUE(result.ok()) << result.status();
+    std::vector<Cut> made;
+    for (const TrajectorySegment& segment : result->trajectory.segments) {
+      if (segment.kind == SegmentKind::kCut) {
+        for (const Cut& c : result->cuts)
+          if (c.id.value == segment.cut_id.value) made.push_back(c);
+        continue;
+      }
+      auto scene = CollisionScene::Build(WithoutFallenWood(stop.model, made), platform, robot);
+      ASSERT_TRUE(scene.ok()) << scene.status();
+      MotionProver prover(*scene, [&](const CollisionScene& s) {
+        return MakeChecker(CheckerKind::kPrimitives, robot, s);
+      });
+      std::vector<Joints> samples;
+      for (const TrajectoryPoint& p : segment.points) samples.push_back(At(p));
+      EXPECT_TRUE(prover.IsPathFree(samples)) << "seed " << seed << " after " << made.size();
+      ++transits;
+    }
+  }
+  EXPECT_GT(transits, 10);
 }
 
 }  // namespace

@@ -1,0 +1,85 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "workers/plan/planning.h"
+
+#include <algorithm>
+#include <utility>
+
+namespace vb::plan {
+
+double Seconds(std::chrono::steady_clock::time_point since) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
+}
+
+void Planning::UsePassScenes(const CollisionScene& plain, const CollisionScene& inflated) {
+  planner.reset();
+  checker = MakeChecker(options.checker, robot, inflated);
+  planner = std::make_unique<PathPlanner>(*checker, robot.limits, options.path);
+  fine_planner.reset();
+  plain_planner.reset();
+  plain_checker.reset();
+  prover.reset();
+  plain_scene = plain;
+}
+
+std::optional<Planning::Reached> Planning::Path(std::vector<Joints> goals, CutId to) {
+  if (!plain_checker) plain_checker = MakeChecker(options.checker, robot, *plain_scene);
+  if (!prover) {
+    prover = std::make_shared<MotionProver>(*plain_scene, [this](const CollisionScene& s) {
+      return MakeChecker(options.checker, robot, s);
+    });
+  }
+  ProvenPath path{planner->PlanToAny(At(), goals, deadline)};
+  Prove(path);
+  Record(path, to, goals, false);
+  std::shared_ptr<CollisionChecker> used = checker;
+  // Start in collision: a cut of an earlier pass, whose stroke this pass's margins did not
+  // protect (the way home after a cut is given up); it is free without margins.
+  if ((path.outcome == PathOutcome::kNoPathWithinDeadline ||
+       path.outcome == PathOutcome::kStartInCollision) &&
+      options.margin_fallback &&
+      options.margins.max_margin_m > 0 && !deadline.Expired()) {
+    if (!plain_planner)
+      plain_planner = std::make_unique<PathPlanner>(*plain_checker, robot.limits, options.path);
+    path = ProvenPath{plain_planner->PlanToAny(At(), goals, deadline)};
+    Prove(path);
+    Record(path, to, goals, true);
+    used = plain_checker;
+  }
+  if (path.unproven && !deadline.Expired()) {
+    if (!fine_planner) {
+      PathOptions fine = options.path;
+      fine.max_step_m = std::min(fine.max_step_m, kFineStepM);
+      fine.tree_max_step_m = std::min(fine.tree_max_step_m, 3 * kFineStepM);
+      fine_planner = std::make_unique<PathPlanner>(*plain_checker, robot.limits, fine);
+    }
+    path = ProvenPath{fine_planner->PlanToAny(At(), goals, deadline)};
+    Prove(path);
+    Record(path, to, goals, true);
+    used = plain_checker;
+  }
+  if (path.outcome != PathOutcome::kSolved) return std::nullopt;
+  return Reached{std::move(path.waypoints), path.goal_index, std::move(used), prover};
+}
+
+void Planning::Prove(ProvenPath& path) {
+  if (path.outcome != PathOutcome::kSolved) return;
+  const auto start = std::chrono::steady_clock::now();
+  const int64_t checks = prover->checks();
+  const bool proven = prover->IsPathFree(path.waypoints);
+  path.planning_s += Seconds(start);
+  path.checks += prover->checks() - checks;
+  if (proven) return;
+  path.unproven = true;
+  path.outcome = PathOutcome::kNoPathWithinDeadline;
+  path.message = "the path found is not proven free of the vine";
+  ++result.stats.unproven_paths;
+}
+
+void Planning::Record(const ProvenPath& path, CutId to, const std::vector<Joints>& goals, bool plain) {
+  PathRecord record{to, path.outcome, path.planning_s, path.checks, path.direct, plain, At(),
+                    goals[std::max(path.goal_index, 0)], goals};
+  record.unproven = path.unproven;
+  result.stats.paths.push_back(std::move(record));
+}
+
+}  // namespace vb::plan
