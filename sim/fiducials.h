@@ -18,7 +18,8 @@ struct FiducialLayoutOptions {
   double radius_m = 0.02;       // disc radius (12 px across at the image centre, 1.25 m away)
   // Columns at these x (m), each with discs at these z (m). The defaults ring the view of the
   // default rig (sim/rig.h) on the backdrop: a row along the top and one along the bottom, and
-  // columns at both sides, at least ~60 px inside every camera's image.
+  // columns at both sides; all inside every camera's image, all but three at least 50 px inside
+  // (the top row's middle three are 20-36 px from the upper camera's top edge).
   std::vector<double> top_bottom_x_m = {-0.9, -0.45, 0.0, 0.45, 0.9};
   std::vector<double> top_bottom_z_m = {0.3, 1.85};
   std::vector<double> side_x_m = {-1.0, 1.0};
