@@ -283,4 +283,25 @@ absl::StatusOr<std::vector<FiducialObservation>> DetectFiducials(
   return found;
 }
 
+void ClearFiducials(const std::vector<FiducialObservation>& found, const CameraCalibration& camera,
+                    const std::vector<Fiducial>& fiducials, ClassImage* classes) {
+  for (const FiducialObservation& f : found) {
+    if (f.fiducial < 0 || f.fiducial >= static_cast<int>(fiducials.size())) continue;
+    const Fiducial& fiducial = fiducials[static_cast<size_t>(f.fiducial)];
+    const Eigen::Vector3d& c = fiducial.position_in_platform;
+    const auto xp = camera.Project(c + Eigen::Vector3d(fiducial.radius_m, 0, 0));
+    const auto zp = camera.Project(c + Eigen::Vector3d(0, 0, fiducial.radius_m));
+    const auto centre = camera.Project(c);
+    if (!xp || !zp || !centre) continue;
+    const double reach = 1.5 * std::max((*xp - *centre).norm(), (*zp - *centre).norm());
+    const int x0 = std::max(0, static_cast<int>(std::floor(f.uv_px.x() - reach)));
+    const int y0 = std::max(0, static_cast<int>(std::floor(f.uv_px.y() - reach)));
+    const int x1 = std::min(classes->width - 1, static_cast<int>(std::ceil(f.uv_px.x() + reach)));
+    const int y1 = std::min(classes->height - 1, static_cast<int>(std::ceil(f.uv_px.y() + reach)));
+    for (int y = y0; y <= y1; ++y)
+      for (int x = x0; x <= x1; ++x)
+        if ((Eigen::Vector2d(x, y) - f.uv_px).norm() <= reach) classes->set(x, y, PixelClass::kBackground);
+  }
+}
+
 }  // namespace vb::reconstruct

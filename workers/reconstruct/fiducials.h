@@ -50,4 +50,10 @@ absl::StatusOr<std::vector<FiducialObservation>> DetectFiducials(
     const Image& image, const CameraCalibration& camera, const std::vector<Fiducial>& fiducials,
     const FiducialDetectOptions& options, FiducialDetectSummary* summary = nullptr);
 
+// Sets to background the pixels of `classes` within 1.5 disc radii of each found fiducial: the
+// segmenter (trained on images without discs) takes most of a white disc for wood, and a found
+// disc's surround is clean backdrop (out to 2.4 radii), so nothing else is lost.
+void ClearFiducials(const std::vector<FiducialObservation>& found, const CameraCalibration& camera,
+                    const std::vector<Fiducial>& fiducials, ClassImage* classes);
+
 }  // namespace vb::reconstruct

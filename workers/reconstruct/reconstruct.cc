@@ -229,13 +229,15 @@ absl::StatusOr<ReconstructResult> Reconstruct(const std::vector<Image>& images,
     VB_ASSIGN_OR_RETURN(classes[i], Segment(images[i], segmenter));
     segment_s[i] = SecondsSince(t);
     t = std::chrono::steady_clock::now();
+    std::vector<FiducialObservation> found;
+    if (find_fiducials) {
+      VB_ASSIGN_OR_RETURN(found, DetectFiducials(images[i], rig.cameras[i], rig.fiducials,
+                                                 options.fiducials, &fiducials[i]));
+      ClearFiducials(found, rig.cameras[i], rig.fiducials, &classes[i]);  // not wood
+    }
     VB_ASSIGN_OR_RETURN(views[i],
                         ExtractStructure(classes[i], rig.cameras[i], options.structure, deadline));
-    if (find_fiducials) {
-      VB_ASSIGN_OR_RETURN(views[i].fiducials,
-                          DetectFiducials(images[i], rig.cameras[i], rig.fiducials,
-                                          options.fiducials, &fiducials[i]));
-    }
+    views[i].fiducials = std::move(found);
     structure_s[i] = SecondsSince(t);
     return absl::OkStatus();
   }));

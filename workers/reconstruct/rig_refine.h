@@ -10,7 +10,9 @@
 // project onto each view's trace of them. Camera centres stay as calibrated (a drift of the
 // mounts is mostly rotation, and with fixed centres the scale is fixed too); weak priors on the
 // corrections settle the near-gauge freedom (the whole rig turning together) at the smallest
-// correction that explains the images. This goes
+// correction that explains the images. Fiducials of the platform (RigCalibration::fiducials,
+// detected by fiducials.h into View2D::fiducials) are points of known position and pin what the
+// canes leave loose: the depth distortion of the whole rig. This goes
 // beyond Botterill et al. 2017, who calibrated once with a target; it is standard
 // self-calibration (Triggs et al., "Bundle Adjustment - A Modern Synthesis", 2000).
 // Thread-safe (pure function).
