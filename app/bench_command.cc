@@ -15,6 +15,7 @@
 #include "core/model_metrics.h"
 #include "core/statistics.h"
 #include "core/status_macros.h"
+#include "sim/rig.h"
 #include "sim/vine_generator.h"
 #include "workers/capture/sim_capture.h"
 #include "workers/reconstruct/reconstruct.h"
@@ -68,6 +69,12 @@ nlohmann::json CutMetricsSummary(const std::vector<DecidedCutMetrics>& vines) {
           {"vines_without_plan", without_plan}};
 }
 
+double MeanOf(const std::vector<double>& v) {
+  double sum = 0.0;
+  for (double x : v) sum += x;
+  return v.empty() ? 0.0 : sum / v.size();
+}
+
 }  // namespace
 
 absl::Status RunBenchReconstruct(Flags& flags) {
@@ -85,6 +92,9 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   VB_ASSIGN_OR_RETURN(const std::string policy_path, flags.String("policy", ""));
   // --rig-refine off, canes (canes only) or trellis (canes, wires and posts): for comparisons.
   VB_ASSIGN_OR_RETURN(const std::string rig_refine, flags.String("rig-refine", "canes"));
+  // --fiducials: the platform carries fiducials (sim/fiducials.h), drawn in the images and listed
+  // in the calibration; the rig refinement uses them unless --rig-refine off.
+  VB_ASSIGN_OR_RETURN(const bool fiducials, flags.Bool("fiducials", capture::SimCaptureOptions{}.fiducials));
   if (rig_refine != "off" && rig_refine != "canes" && rig_refine != "trellis")
     return absl::InvalidArgumentError("--rig-refine must be off, canes or trellis");
   if (input != "images" && input != "labels" && input != "truth")
@@ -98,6 +108,7 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   capture::SimCaptureOptions sim_options;
   sim_options.calibration_error_px = calibration_error_px;
   sim_options.render.pixel_format = format;
+  sim_options.fiducials = fiducials;
   VB_RETURN_IF_ERROR(sim_options.Validate());
   reconstruct::ReconstructOptions options;
   options.threads = static_cast<int>(threads);
@@ -109,6 +120,9 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   std::vector<DecidedCutMetrics> cut_metrics;
   std::vector<reconstruct::StageTimings> timings;
   std::vector<double> render_s;
+  // Mean over cameras of the reprojection error (sim::ReprojectionRmsPx at 0.8 m) against the true
+  // rig: of the reported calibration and of the rig the model was built with.
+  std::vector<double> rig_error_reported_px, rig_error_used_px;
   nlohmann::json per_vine_json = nlohmann::json::array();
   int failures = 0, empty = 0;
   for (int64_t i = 0; i < vines; ++i) {
@@ -128,6 +142,7 @@ absl::Status RunBenchReconstruct(Flags& flags) {
     RigCalibration rig;
     for (size_t c = 0; c < capture.bundle.images.size(); ++c)
       rig.cameras.push_back(capture.bundle.CalibrationOf(c));
+    rig.fiducials = capture.bundle.calibration.fiducials;
     absl::StatusOr<reconstruct::ReconstructResult> result;
     if (input == "images") {
       result = reconstruct::Reconstruct(images, rig, segmenter, options, Deadline::In(60.0));
@@ -155,6 +170,21 @@ absl::Status RunBenchReconstruct(Flags& flags) {
       continue;
     }
     empty += result->model.canes.empty();
+    {
+      VB_ASSIGN_OR_RETURN(const capture::SimRig sim_rig,
+                          capture::MakeSimRig(sim_options, seed * 1000003 + vine));
+      double reported = 0.0, used = 0.0;
+      for (size_t c = 0; c < rig.cameras.size(); ++c) {
+        const auto truth = sim_rig.true_rig.IndexOf(rig.cameras[c].name);
+        if (!truth) continue;
+        reported += sim::ReprojectionRmsPx(sim_rig.true_rig.cameras[*truth], rig.cameras[c]);
+        used += sim::ReprojectionRmsPx(sim_rig.true_rig.cameras[*truth], result->rig.cameras[c]);
+      }
+      rig_error_reported_px.push_back(reported / rig.cameras.size());
+      rig_error_used_px.push_back(used / rig.cameras.size());
+      entry["rig_error_px"] = {{"reported", rig_error_reported_px.back()},
+                               {"used", rig_error_used_px.back()}};
+    }
     VB_ASSIGN_OR_RETURN(const ReconstructionMetrics m,
                         EvaluateReconstruction(result->model, capture.ground_truth));
     metrics.push_back(m);
@@ -218,7 +248,12 @@ absl::Status RunBenchReconstruct(Flags& flags) {
                         {"min_head_enclosed_fraction", min_head},
                         {"stage_median_s", stage_median},
                         {"stage_p90_s", stage_p90},
-                        {"render_median_s", Median(render_s)}};
+                        {"render_median_s", Median(render_s)},
+                        {"fiducials", fiducials},
+                        {"rig_error_px",
+                         {{"reported_mean", MeanOf(rig_error_reported_px)},
+                          {"used_mean", MeanOf(rig_error_used_px)},
+                          {"used_median", Median(rig_error_used_px)}}}};
   if (per_vine) out["per_vine"] = per_vine_json;
   std::cout << out.dump(1) << "\n";
   return absl::OkStatus();

@@ -49,8 +49,9 @@ absl::Status CaptureFromSimulator(Flags& flags, const std::string& out) {
 
   VB_ASSIGN_OR_RETURN(sim::Scene scene, sim::GenerateScene(stop.seed, stop.vine, stop.generator));
   if (!flags.Has("position-m")) request.vine_position_m = scene.vine_position_m;
-  sim::SimWorld world(std::move(scene));
   VB_ASSIGN_OR_RETURN(const capture::SimRig sim_rig, capture::MakeSimRig(stop.capture, stop.noise_seed));
+  scene.fiducials = sim_rig.true_rig.fiducials;  // the platform's, drawn on the backdrop
+  sim::SimWorld world(std::move(scene));
   std::vector<std::unique_ptr<capture::Camera>> cameras =
       capture::MakeSimulatedCameras(&world, sim_rig.true_rig, stop.capture.render, stop.noise_seed);
   std::vector<capture::Camera*> rig;

@@ -33,6 +33,7 @@ absl::Status RunReconstruct(Flags& flags) {
     VB_ASSIGN_OR_RETURN(Image rgb, capture::ToRgb(bundle.images[i]));
     images.push_back(std::move(rgb));
   }
+  rig.fiducials = bundle.calibration.fiducials;  // the platform's, if the bundle lists any
   reconstruct::ReconstructOptions options;
   options.threads = static_cast<int>(threads);
   VB_ASSIGN_OR_RETURN(const reconstruct::ReconstructResult result,

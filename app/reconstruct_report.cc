@@ -42,6 +42,22 @@ nlohmann::json ReconstructReport(const reconstruct::ReconstructResult& result) {
                           {"trellis_rms_after_px", rr.trellis_rms_after_px},
                           {"correction_px", rr.correction_px}};
   if (!rr.reason.empty()) report["rig_refine"]["reason"] = rr.reason;
+  if (!result.fiducials.empty()) {
+    nlohmann::json cameras = nlohmann::json::array();
+    for (size_t c = 0; c < result.fiducials.size(); ++c) {
+      const reconstruct::FiducialDetectSummary& f = result.fiducials[c];
+      cameras.push_back({{"camera", c < result.rig.cameras.size() ? result.rig.cameras[c].name : ""},
+                         {"looked_for", f.looked_for},
+                         {"found", f.found},
+                         {"missed", f.missed}});
+    }
+    report["rig_refine"]["fiducials"] = {{"cameras", cameras},
+                                         {"observations", rr.fiducial_observations},
+                                         {"rejected", rr.fiducials_rejected},
+                                         {"rms_before_px", rr.fiducial_rms_before_px},
+                                         {"rms_after_px", rr.fiducial_rms_after_px},
+                                         {"log", rr.fiducial_log}};
+  }
   if (!result.empty_reason.empty()) report["empty_reason"] = result.empty_reason;
   return report;
 }

@@ -32,6 +32,7 @@ absl::StatusOr<SimStopFlags> ReadSimStopFlags(Flags& flags) {
     out.capture.render.read_noise_dn = 0.0;
     out.capture.render.shot_noise = 0.0;
   }
+  VB_ASSIGN_OR_RETURN(out.capture.fiducials, flags.Bool("fiducials", out.capture.fiducials));
   VB_ASSIGN_OR_RETURN(out.capture.row, flags.String("row", absl::StrCat("sim-", out.seed)));
   VB_RETURN_IF_ERROR(out.generator.Validate());
   VB_RETURN_IF_ERROR(out.capture.Validate());

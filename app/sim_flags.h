@@ -20,7 +20,7 @@ struct SimStopFlags {
 };
 
 // Reads --seed, --vine, --noise-seed, --pixel-format, --calibration-error-px, --cameras,
-// --no-neighbours, --no-noise, --row.
+// --no-neighbours, --no-noise, --fiducials (true/false), --row.
 absl::StatusOr<SimStopFlags> ReadSimStopFlags(Flags& flags);
 
 }  // namespace vb::app

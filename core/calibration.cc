@@ -109,6 +109,18 @@ Eigen::Vector3d CameraCalibration::RayInPlatform(const Eigen::Vector2d& uv) cons
   return (rotation_camera_from_platform.transpose() * Eigen::Vector3d(xy.x(), xy.y(), 1.0)).normalized();
 }
 
+absl::Status Fiducial::Validate() const {
+  if (name.empty()) return absl::InvalidArgumentError("fiducial name: empty");
+  if (!position_in_platform.allFinite()) {
+    return absl::InvalidArgumentError(absl::StrCat("fiducial ", name, ": position is not finite"));
+  }
+  if (!(std::isfinite(radius_m) && radius_m > 0.0 && radius_m <= 0.5)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("fiducial ", name, ": radius_m must be in (0, 0.5], is ", radius_m));
+  }
+  return absl::OkStatus();
+}
+
 absl::Status RigCalibration::Validate() const {
   if (cameras.empty()) return absl::InvalidArgumentError("cameras: the rig has no cameras");
   std::unordered_set<std::string> names;
@@ -116,6 +128,13 @@ absl::Status RigCalibration::Validate() const {
     if (absl::Status s = c.Validate(); !s.ok()) return s;
     if (!names.insert(c.name).second) {
       return absl::InvalidArgumentError(absl::StrCat("cameras: duplicate camera name '", c.name, "'"));
+    }
+  }
+  std::unordered_set<std::string> fiducial_names;
+  for (const Fiducial& f : fiducials) {
+    if (absl::Status s = f.Validate(); !s.ok()) return s;
+    if (!fiducial_names.insert(f.name).second) {
+      return absl::InvalidArgumentError(absl::StrCat("fiducials: duplicate name '", f.name, "'"));
     }
   }
   return absl::OkStatus();

@@ -51,11 +51,27 @@ struct CameraCalibration {
   }
 };
 
-// The calibrated rig: every camera's intrinsics and pose in the platform frame.
+// A fiducial marker on the platform whose position was surveyed with the rig's calibration: a
+// white disc printed on the backdrop (or on the frame), facing the cameras. Seen in every stop's
+// images, it anchors the calibration there (workers/reconstruct/fiducials.h, rig_refine.h).
+struct Fiducial {
+  std::string name;
+  Eigen::Vector3d position_in_platform = Eigen::Vector3d::Zero();  // centre of the disc, metres
+  double radius_m = 0.02;                                          // disc radius
+
+  // INVALID_ARGUMENT naming the field (prefixed by the fiducial's name): empty name, position
+  // not finite, radius not finite or outside (0, 0.5] m.
+  absl::Status Validate() const;
+};
+
+// The calibrated rig: every camera's intrinsics and pose in the platform frame, and the
+// platform's surveyed fiducials (none on a rig without them).
 struct RigCalibration {
   std::vector<CameraCalibration> cameras;
+  std::vector<Fiducial> fiducials;
 
-  // Validates each camera and requires >= 1 camera and unique names.
+  // Validates each camera and fiducial and requires >= 1 camera, unique camera names and unique
+  // fiducial names.
   absl::Status Validate() const;
   // Index of the named camera, or nullopt.
   std::optional<size_t> IndexOf(const std::string& name) const;

@@ -98,5 +98,21 @@ TEST(RigCalibration, ValidateRejectsEmptyAndDuplicateNames) {
   EXPECT_FALSE(rig.IndexOf("cam9").has_value());
 }
 
+TEST(RigCalibration, ValidateRejectsBadFiducials) {
+  RigCalibration rig;
+  rig.cameras = {WideCamera()};
+  rig.fiducials = {{"fid0", Eigen::Vector3d(0, 1.25, 0.3), 0.02},
+                   {"fid1", Eigen::Vector3d(0.5, 1.25, 0.3), 0.02}};
+  EXPECT_TRUE(rig.Validate().ok());
+  rig.fiducials[1].name = "fid0";
+  EXPECT_NE(rig.Validate().message().find("duplicate name 'fid0'"), std::string::npos);
+  rig.fiducials[1].name = "fid1";
+  rig.fiducials[1].radius_m = 0.0;
+  EXPECT_NE(rig.Validate().message().find("fid1: radius_m"), std::string::npos);
+  rig.fiducials[1].radius_m = 0.02;
+  rig.fiducials[1].position_in_platform.z() = std::nan("");
+  EXPECT_NE(rig.Validate().message().find("fid1: position"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace vb

@@ -12,6 +12,7 @@ constexpr float kRefDistance2 = 0.64f;  // Light::intensity is defined at 0.8 m 
 constexpr float kGridCell = 0.02f;
 constexpr float kTwoPi = 6.2831853f;
 constexpr float kBackdrop[3] = {0.09f, 0.24f, 0.66f};  // blue cloth albedo
+constexpr float kFiducialWhite = 0.8f;                  // albedo of the printed discs
 
 inline float Clamp01(float v) { return v < 0.0f ? 0.0f : (v > 1.0f ? 1.0f : v); }
 inline float Frac(float v) { return v - std::floor(v); }
@@ -67,6 +68,30 @@ Shader::Shader(const Scene& scene, const std::vector<Segment>& segments,
   grid_.assign(static_cast<size_t>(grid_nx_) * grid_nz_, 1.0f);
   if (options.texture) FillUnevenness(scene);
   BuildBackdrop();
+  for (const Fiducial& f : scene.fiducials) {
+    fiducials_.push_back({static_cast<float>(f.position_in_platform.x()),
+                          static_cast<float>(f.position_in_platform.z()),
+                          static_cast<float>(f.radius_m)});
+  }
+  const int mx = rays.width() / 2, my = rays.height() / 2;
+  if (mx + 1 < rays.width()) {
+    const RayF& a = rays.at(mx, my);
+    const RayF& b = rays.at(mx + 1, my);
+    pix_angle_ = std::hypot(b.x - a.x, b.y - a.y, b.z - a.z);
+  }
+}
+
+float Shader::FiducialCoverage(float x, float z, float t) const {
+  // The footprint at the image centre: at the edges a barrel lens widens it, which only makes the
+  // discs' edges there a little sharper than a box filter would.
+  const float w = std::max(t * pix_angle_, 1e-6f);
+  float best = 0.0f;
+  for (const FiducialF& f : fiducials_) {
+    const float dx = x - f.x, dz = z - f.z, reach = f.radius + w;
+    if (std::abs(dx) > reach || std::abs(dz) > reach) continue;
+    best = std::max(best, Clamp01((f.radius - std::sqrt(dx * dx + dz * dz)) / w + 0.5f));
+  }
+  return best;
 }
 
 void Shader::FillUnevenness(const Scene& scene) {
@@ -164,6 +189,9 @@ void Shader::ShadeBackground(const RayF& r, float rgb[3]) const {
   const float p[3] = {cx_ + t * r.x, cy_ + t * r.y, cz_ + t * r.z};
   const float v[3] = {-r.x, -r.y, -r.z};
   if (t_back <= t_ground) {
+    const float cov = fiducials_.empty() ? 0.0f : FiducialCoverage(p[0], p[2], t);
+    float colour[3];
+    for (int c = 0; c < 3; ++c) colour[c] = kBackdrop[c] + cov * (kFiducialWhite - kBackdrop[c]);
     const ShadowMaps::Grid& g = shadows_.grid();
     const float u = (p[0] - g.x0) / g.cell;
     const float w = (p[2] - g.z0) / g.cell;
@@ -172,12 +200,12 @@ void Shader::ShadeBackground(const RayF& r, float rgb[3]) const {
       const float fu = u - iu, fw = w - iw;
       const float* c = &backdrop_[static_cast<size_t>(iw) * g.nx + iu];
       const float e = (c[0] * (1 - fu) + c[1] * fu) * (1 - fw) + (c[g.nx] * (1 - fu) + c[g.nx + 1] * fu) * fw;
-      rgb[0] = kBackdrop[0] * e, rgb[1] = kBackdrop[1] * e, rgb[2] = kBackdrop[2] * e;
+      rgb[0] = colour[0] * e, rgb[1] = colour[1] * e, rgb[2] = colour[2] * e;
       return;
     }
     const float n[3] = {0.0f, -1.0f, 0.0f};
     const float k = Unevenness(p[0], p[2]);
-    const float albedo[3] = {kBackdrop[0] * k, kBackdrop[1] * k, kBackdrop[2] * k};
+    const float albedo[3] = {colour[0] * k, colour[1] * k, colour[2] * k};
     Light(p, n, v, albedo, 0.0f, 1, rgb);
   } else {
     const float n[3] = {0.0f, 0.0f, 1.0f};

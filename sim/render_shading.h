@@ -81,6 +81,9 @@ class Shader {
   void Light(const float p[3], const float n[3], const float v[3], const float albedo[3],
              float specular, int shininess, float rgb[3]) const;
   float Unevenness(float x, float z) const;
+  // Fraction of the pixel whose ray meets the backdrop at (x, z), t metres from the camera, that
+  // a fiducial disc covers (box filter over the pixel footprint).
+  float FiducialCoverage(float x, float z, float t) const;
   void FillUnevenness(const Scene& scene);
   void BuildBackdrop();
 
@@ -88,6 +91,11 @@ class Shader {
     float x, y, z, power;  // power = intensity * (0.8 m)^2
   };
   std::vector<LightF> lights_;
+  struct FiducialF {
+    float x, z, radius;
+  };
+  std::vector<FiducialF> fiducials_;
+  float pix_angle_ = 0.0f;  // angle between neighbouring pixels' rays at the image centre
   const Scene& scene_;
   const std::vector<Segment>& segments_;
   const RenderOptions& options_;

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/calibration.h"
 #include "core/vine_model.h"
 #include "Eigen/Core"
 
@@ -31,6 +32,9 @@ struct Scene {
   std::vector<VineModel> neighbours;
 
   double backdrop_y_m = 1.25;  // the blue backdrop plane y = backdrop_y_m
+  // The platform's fiducials (sim/fiducials.h): white discs printed on the backdrop, drawn at
+  // their (x, z); their y is taken to be backdrop_y_m. Empty: none (the default).
+  std::vector<Fiducial> fiducials;
   double ground_z_m = 0.0;     // the ground plane
   std::vector<Light> lights;
 };

@@ -124,6 +124,24 @@ absl::StatusOr<CameraCalibration> ParseCamera(const cv::FileNode& item, size_t i
   return cam;
 }
 
+// An optional `fiducials` item: {name, position_in_platform (3x1, m), radius_m}.
+absl::StatusOr<Fiducial> ParseFiducial(const cv::FileNode& item, size_t index) {
+  std::string what = absl::StrCat("fiducials[", index, "]");
+  if (!item.isMap()) return WrongType(what, "a map", item);
+  Fiducial f;
+  VB_ASSIGN_OR_RETURN(f.name, ReadString(item, "name", what + ".name"));
+  what = absl::StrCat(what, " (", f.name, ")");
+  VB_ASSIGN_OR_RETURN(const std::vector<double> p,
+                      ReadMatrix(item, "position_in_platform", what + ".position_in_platform",
+                                 {{3, 1}, {1, 3}}));
+  f.position_in_platform = Eigen::Vector3d(p[0], p[1], p[2]);
+  const cv::FileNode radius = item["radius_m"];
+  if (radius.empty() || radius.isNone()) return Missing(what + ".radius_m");
+  if (!radius.isReal() && !radius.isInt()) return WrongType(what + ".radius_m", "a number", radius);
+  f.radius_m = radius.isInt() ? static_cast<double>(static_cast<int>(radius)) : radius.real();
+  return f;
+}
+
 // OpenCV's parser reports "(line): message" in cv::Exception::func and its own function name in
 // ::err (parseError passes them swapped); turn that into one readable sentence.
 std::string DescribeParseError(const cv::Exception& e) {
@@ -158,6 +176,15 @@ absl::StatusOr<RigCalibration> ParseRig(std::string text) {
   for (size_t i = 0; i < cameras.size(); ++i) {
     VB_ASSIGN_OR_RETURN(CameraCalibration cam, ParseCamera(cameras[static_cast<int>(i)], i));
     rig.cameras.push_back(std::move(cam));
+  }
+  // Optional (absent in bundles written before fiducials existed): the platform's fiducials.
+  const cv::FileNode fiducials = root["fiducials"];
+  if (!fiducials.empty() && !fiducials.isNone()) {
+    if (!fiducials.isSeq()) return WrongType("fiducials", "a sequence", fiducials);
+    for (size_t i = 0; i < fiducials.size(); ++i) {
+      VB_ASSIGN_OR_RETURN(Fiducial f, ParseFiducial(fiducials[static_cast<int>(i)], i));
+      rig.fiducials.push_back(std::move(f));
+    }
   }
   VB_RETURN_IF_ERROR(rig.Validate());
   return rig;
@@ -215,6 +242,17 @@ absl::Status WriteCalibrationYaml(const std::string& path, const RigCalibration&
       fs << "}";
     }
     fs << "]";
+    if (!rig.fiducials.empty()) {
+      fs << "fiducials" << "[";
+      for (const Fiducial& f : rig.fiducials) {
+        fs << "{";
+        fs << "name" << f.name;
+        fs << "position_in_platform" << ToCvMat(f.position_in_platform.data(), 3, 1);
+        fs << "radius_m" << f.radius_m;
+        fs << "}";
+      }
+      fs << "]";
+    }
     text = fs.releaseAndGetString();
   } catch (const cv::Exception& e) {
     return absl::InternalError(absl::StrCat(path, ": cannot serialise calibration: ", e.err));

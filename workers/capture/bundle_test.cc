@@ -615,6 +615,38 @@ TEST_F(CalibrationYamlTest, RoundTripsAndAcceptsColumnDistortion) {
   EXPECT_EQ(read->cameras[0].distortion[4], 0.5);
 }
 
+// The platform's fiducials travel in calibration.yaml; a file without them (every bundle written
+// before they existed, as the one above) reads with none.
+TEST_F(CalibrationYamlTest, RoundTripsFiducials) {
+  RigCalibration rig;
+  rig.cameras = {MakeCalibration("left", 0), MakeCalibration("right", 1)};
+  ASSERT_TRUE(WriteCalibrationYaml(Path("plain.yaml"), rig).ok());
+  absl::StatusOr<RigCalibration> read = ReadCalibrationYaml(Path("plain.yaml"));
+  ASSERT_TRUE(read.ok()) << read.status();
+  EXPECT_TRUE(read->fiducials.empty());
+
+  rig.fiducials = {{"fid0", Eigen::Vector3d(-0.9, 1.25, 0.3), 0.02},
+                   {"fid1", Eigen::Vector3d(1.1, 1.25, 1.75), 0.025}};
+  ASSERT_TRUE(WriteCalibrationYaml(Path("calibration.yaml"), rig).ok());
+  read = ReadCalibrationYaml(Path("calibration.yaml"));
+  ASSERT_TRUE(read.ok()) << read.status();
+  ASSERT_EQ(read->fiducials.size(), 2u);
+  for (size_t i = 0; i < 2; ++i) {
+    EXPECT_EQ(read->fiducials[i].name, rig.fiducials[i].name);
+    EXPECT_EQ(read->fiducials[i].position_in_platform, rig.fiducials[i].position_in_platform);
+    EXPECT_EQ(read->fiducials[i].radius_m, rig.fiducials[i].radius_m);
+  }
+}
+
+TEST_F(CalibrationYamlTest, ReadRejectsAFiducialWithoutRadius) {
+  WriteText(Path("bad.yaml"), YamlText({YamlCamera{}}) +
+                                  "fiducials:\n   - name: fid0\n     position_in_platform: " +
+                                  YamlMatrix(3, 1, "0., 1.25, 0.3"));
+  const absl::StatusOr<RigCalibration> read = ReadCalibrationYaml(Path("bad.yaml"));
+  ASSERT_FALSE(read.ok());
+  EXPECT_THAT(Message(read.status()), HasSubstr("fiducials[0] (fid0).radius_m"));
+}
+
 TEST_F(CalibrationYamlTest, ProjectsLikeTheCalibration) {
   // The written file is the model of core/calibration.h: x_cam = R x_platform + t.
   RigCalibration rig;

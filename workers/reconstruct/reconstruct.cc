@@ -101,6 +101,7 @@ absl::Status ReconstructOptions::Validate() const {
   VB_RETURN_IF_ERROR(connect.Validate());
   VB_RETURN_IF_ERROR(fit.Validate());
   VB_RETURN_IF_ERROR(trellis.Validate());
+  VB_RETURN_IF_ERROR(fiducials.Validate());
   if (threads < 1) return absl::InvalidArgumentError("options.threads must be >= 1");
   return absl::OkStatus();
 }
@@ -219,14 +220,24 @@ absl::StatusOr<ReconstructResult> Reconstruct(const std::vector<Image>& images,
   std::vector<ClassImage> classes(n);
   std::vector<View2D> views(n);
   std::vector<double> segment_s(n, 0.0), structure_s(n, 0.0);
+  const bool find_fiducials = options.fiducials.enabled && options.rig_refine.enabled &&
+                              options.rig_refine.use_fiducials && !rig.fiducials.empty();
+  std::vector<FiducialDetectSummary> fiducials(find_fiducials ? n : 0);
   VB_RETURN_IF_ERROR(ParallelFor(n, options.threads, [&](int i) -> absl::Status {
     VB_RETURN_IF_ERROR(deadline.Check("reconstruct"));
     auto t = std::chrono::steady_clock::now();
     VB_ASSIGN_OR_RETURN(classes[i], Segment(images[i], segmenter));
     segment_s[i] = SecondsSince(t);
     t = std::chrono::steady_clock::now();
+    std::vector<FiducialObservation> found;
+    if (find_fiducials) {
+      VB_ASSIGN_OR_RETURN(found, DetectFiducials(images[i], rig.cameras[i], rig.fiducials,
+                                                 options.fiducials, &fiducials[i]));
+      ClearFiducials(found, rig.cameras[i], rig.fiducials, &classes[i]);  // not wood
+    }
     VB_ASSIGN_OR_RETURN(views[i],
                         ExtractStructure(classes[i], rig.cameras[i], options.structure, deadline));
+    views[i].fiducials = std::move(found);
     structure_s[i] = SecondsSince(t);
     return absl::OkStatus();
   }));
@@ -248,6 +259,7 @@ absl::StatusOr<ReconstructResult> Reconstruct(const std::vector<Image>& images,
     result.empty_reason = "no wood (cane, trunk or head) was found in any image";
     result.rig = rig;
   }
+  result.fiducials = std::move(fiducials);
   result.timings.segment_s = seg * scale;
   result.timings.structure_s = str * scale;
   result.timings.total_s = SecondsSince(start);

@@ -24,6 +24,7 @@
 #include "workers/reconstruct/cane_fit.h"
 #include "workers/reconstruct/connect.h"
 #include "workers/reconstruct/correspondence.h"
+#include "workers/reconstruct/fiducials.h"
 #include "workers/reconstruct/head.h"
 #include "workers/reconstruct/piece3d.h"
 #include "workers/reconstruct/rig_refine.h"
@@ -43,6 +44,7 @@ struct ReconstructOptions {
   FitOptions fit;
   TrellisOptions trellis;
   RigRefineOptions rig_refine;           // step 3b: refine the rig on confident matches, re-match
+  FiducialDetectOptions fiducials;       // the platform's fiducials, for 3b (rig.fiducials)
   bool refine = true;                    // run the joint Ceres refinement (step 7)
   int threads = 2;                       // threads for the per-view steps
 
@@ -64,11 +66,15 @@ struct ReconstructResult {
   ConnectSummary connect;
   FitSummary fit;
   RigRefineSummary rig_refine;
+  // Per camera: the platform's fiducials looked for and found (none when the rig lists none, or
+  // fiducial detection or rig refinement is off).
+  std::vector<FiducialDetectSummary> fiducials;
   // The rig the model was built with: the calibration, or its refinement (rig_refine.applied).
   RigCalibration rig;
 };
 
-// images[i] (rgb8) was taken by rig.cameras[i]. Errors, each naming the camera or field:
+// images[i] (rgb8) was taken by rig.cameras[i]. The fiducials of rig.fiducials are looked for in
+// each image (fiducials.h) and refine the rig in step 3b. Errors, each naming the camera or field:
 // INVALID_ARGUMENT for fewer than two cameras, an image count or size that disagrees with the
 // calibration, a non-rgb8 image, an invalid calibration (NaN, singular), camera centres closer
 // than 1 cm, invalid options; DEADLINE_EXCEEDED / CANCELLED when `deadline` passes (nothing is

@@ -59,6 +59,26 @@ struct CorrectedCentrelineCost {
   double inv_sd;
 };
 
+// A fiducial of known platform position p seen at pixel uv by a camera with corrections (w, s).
+struct FiducialCost {
+  FiducialCost(const Projector& projector, const Eigen::Vector3d& p, const Eigen::Vector2d& uv,
+               double inv_sd)
+      : projector(projector), p(p), uv(uv), inv_sd(inv_sd) {}
+  template <typename T>
+  bool operator()(const T* w, const T* s, T* residual) const {
+    const T point[3] = {T(p.x()), T(p.y()), T(p.z())};
+    T u, v;
+    if (!ProjectCorrected(projector, w, s, point, &u, &v)) return false;
+    residual[0] = (u - T(uv.x())) * T(inv_sd);
+    residual[1] = (v - T(uv.y())) * T(inv_sd);
+    return true;
+  }
+  Projector projector;
+  Eigen::Vector3d p;
+  Eigen::Vector2d uv;
+  double inv_sd;
+};
+
 // Holds a correction near zero: residual = the pixels it moves the image by / prior_px, for the
 // rotation (angle x focal length), the focal scale (s x half the image width) and the principal
 // point.
@@ -254,6 +274,11 @@ absl::Status RigRefineOptions::Validate() const {
         "rig_refine: trellis_sd_px, trellis_match_residual_px and trellis_max_rms_px must be > 0, "
         "trellis_direction_sd >= 0");
   if (trellis_samples < 2) return absl::InvalidArgumentError("rig_refine.trellis_samples must be >= 2");
+  if (!positive(fiducial_sd_px)) return absl::InvalidArgumentError("rig_refine.fiducial_sd_px must be > 0");
+  if (!positive(fiducial_max_residual_px))
+    return absl::InvalidArgumentError("rig_refine.fiducial_max_residual_px must be > 0");
+  if (min_fiducials_per_camera < 3)
+    return absl::InvalidArgumentError("rig_refine.min_fiducials_per_camera must be >= 3");
   return absl::OkStatus();
 }
 
@@ -304,6 +329,17 @@ absl::StatusOr<RigCalibration> RefineRig(const std::vector<View2D>& views,
       }
     }
   }
+  for (size_t v = 0; v < views.size(); ++v) {
+    for (size_t k = 0; k < views[v].fiducials.size(); ++k) {
+      const FiducialObservation& f = views[v].fiducials[k];
+      if (f.fiducial < 0 || f.fiducial >= static_cast<int>(rig.fiducials.size()) ||
+          !f.uv_px.allFinite()) {
+        return absl::InvalidArgumentError(
+            absl::StrCat("views[", v, "].fiducials[", k, "]: fiducial ", f.fiducial,
+                         " (the rig has ", rig.fiducials.size(), ") or its pixel is invalid"));
+      }
+    }
+  }
   if (options.reference_camera >= static_cast<int>(rig.cameras.size())) {
     return absl::InvalidArgumentError(absl::StrCat("rig_refine.reference_camera ",
                                                    options.reference_camera, ": the rig has ",
@@ -334,9 +370,29 @@ absl::StatusOr<RigCalibration> RefineRig(const std::vector<View2D>& views,
     points = std::move(thinned);
   }
   out.points = static_cast<int>(points.size());
-  if (out.points < options.min_points) {
+  const size_t reference = options.reference_camera < 0
+                               ? rig.cameras.size()  // none held fixed
+                               : static_cast<size_t>(options.reference_camera);
+  // Fiducial detections (of cameras that are corrected).
+  struct FiducialTerm {
+    size_t view;
+    const FiducialObservation* observation;
+    ceres::ResidualBlockId id = nullptr;
+  };
+  std::vector<FiducialTerm> fiducial_terms;
+  bool fiducials_suffice = false;
+  if (options.use_fiducials) {
+    fiducials_suffice = true;
+    for (size_t v = 0; v < views.size(); ++v) {
+      if (v == reference) continue;
+      for (const FiducialObservation& f : views[v].fiducials) fiducial_terms.push_back({v, &f});
+      fiducials_suffice = fiducials_suffice && static_cast<int>(views[v].fiducials.size()) >=
+                                                    options.min_fiducials_per_camera;
+    }
+  }
+  if (out.points < options.min_points && !fiducials_suffice) {
     out.reason = absl::StrCat("only ", out.points, " confident points seen by two views (need ",
-                              options.min_points, ")");
+                              options.min_points, ") and too few fiducials");
     return rig;
   }
   out.median_before_px = MedianDistance(views, rig, points);
@@ -358,9 +414,6 @@ absl::StatusOr<RigCalibration> RefineRig(const std::vector<View2D>& views,
   ceres::Problem problem(problem_options);
   ceres::CauchyLoss loss(options.loss_scale_sd);
   const double inv_sd = 1.0 / options.reprojection_sd_px;
-  const size_t reference = options.reference_camera < 0
-                               ? rig.cameras.size()  // none held fixed
-                               : static_cast<size_t>(options.reference_camera);
   for (size_t i = 0; i < points.size(); ++i) {
     for (size_t v = 0; v < views.size(); ++v) {
       const std::optional<Eigen::Vector2d> uv = rig.cameras[v].Project(points[i]);
@@ -379,6 +432,34 @@ absl::StatusOr<RigCalibration> RefineRig(const std::vector<View2D>& views,
       ++out.residuals;
     }
   }
+
+  // Fiducials: the same robust scale in pixels as the canes'.
+  ceres::CauchyLoss fiducial_loss(options.loss_scale_sd * options.reprojection_sd_px /
+                                  options.fiducial_sd_px);
+  for (FiducialTerm& term : fiducial_terms) {
+    term.id = problem.AddResidualBlock(
+        new ceres::AutoDiffCostFunction<FiducialCost, 2, 3, 3>(new FiducialCost(
+            projectors[term.view],
+            rig.fiducials[static_cast<size_t>(term.observation->fiducial)].position_in_platform,
+            term.observation->uv_px, 1.0 / options.fiducial_sd_px)),
+        &fiducial_loss, rotations[term.view].data(), intrinsics[term.view].data());
+  }
+  // Reprojection error of a fiducial detection, pixels, with the current corrections.
+  auto fiducial_error = [&](const FiducialTerm& term) {
+    const Eigen::Vector3d& p =
+        rig.fiducials[static_cast<size_t>(term.observation->fiducial)].position_in_platform;
+    double uv[2];
+    if (!ProjectCorrected(projectors[term.view], rotations[term.view].data(),
+                          intrinsics[term.view].data(), p.data(), &uv[0], &uv[1])) {
+      return 1e6;
+    }
+    return (Eigen::Vector2d(uv[0], uv[1]) - term.observation->uv_px).norm();
+  };
+  auto fiducial_rms = [&]() {
+    double sum = 0.0;
+    for (const FiducialTerm& term : fiducial_terms) sum += std::pow(fiducial_error(term), 2);
+    return fiducial_terms.empty() ? 0.0 : std::sqrt(sum / fiducial_terms.size());
+  };
 
   // Priors on the corrections of every camera (but the reference) that has observations; called
   // again when the trellis brings in a camera that no cane point reached.
@@ -402,7 +483,8 @@ absl::StatusOr<RigCalibration> RefineRig(const std::vector<View2D>& views,
   };
   add_priors();
   ceres::Solver::Options solver_options;
-  solver_options.linear_solver_type = ceres::DENSE_SCHUR;  // points eliminated, cameras dense
+  // Points eliminated, cameras dense; with fiducials alone there is nothing to eliminate.
+  solver_options.linear_solver_type = points.empty() ? ceres::DENSE_QR : ceres::DENSE_SCHUR;
   solver_options.num_threads = 1;
   solver_options.max_num_iterations = options.max_iterations;
   // One solve; false (with out.reason set) when its solution is unusable.
@@ -551,6 +633,36 @@ absl::StatusOr<RigCalibration> RefineRig(const std::vector<View2D>& views,
   {
     VB_ASSIGN_OR_RETURN(const bool usable, solve());
     if (!usable) return rig;
+  }
+  // A detection the solved rig misses by more than fiducial_max_residual_px is not its fiducial
+  // (a bright thing nearby, a disc partly hidden): leave it out and solve again.
+  if (!fiducial_terms.empty()) {
+    const size_t before = fiducial_terms.size();
+    std::erase_if(fiducial_terms, [&](const FiducialTerm& term) {
+      const double error = fiducial_error(term);
+      if (error <= options.fiducial_max_residual_px) return false;
+      problem.RemoveResidualBlock(term.id);
+      out.fiducial_log.push_back(absl::StrCat(
+          rig.cameras[term.view].name, " ",
+          rig.fiducials[static_cast<size_t>(term.observation->fiducial)].name, ": detected at (",
+          term.observation->uv_px.x(), ", ", term.observation->uv_px.y(), "), ", error,
+          " px from where the refined rig projects it (limit ", options.fiducial_max_residual_px,
+          "): rejected"));
+      return true;
+    });
+    out.fiducials_rejected = static_cast<int>(before - fiducial_terms.size());
+    if (out.fiducials_rejected > 0) {
+      VB_ASSIGN_OR_RETURN(const bool usable, solve());
+      if (!usable) return rig;
+    }
+    out.fiducial_observations = static_cast<int>(fiducial_terms.size());
+    out.fiducial_rms_after_px = fiducial_rms();
+    for (const FiducialTerm& term : fiducial_terms) {
+      const std::optional<Eigen::Vector2d> uv = rig.cameras[term.view].Project(
+          rig.fiducials[static_cast<size_t>(term.observation->fiducial)].position_in_platform);
+      out.fiducial_rms_before_px += uv ? (*uv - term.observation->uv_px).squaredNorm() : 1e12;
+    }
+    out.fiducial_rms_before_px = std::sqrt(out.fiducial_rms_before_px / std::max<size_t>(fiducial_terms.size(), 1));
   }
 
   RigCalibration refined = rig;

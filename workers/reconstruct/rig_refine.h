@@ -10,7 +10,9 @@
 // project onto each view's trace of them. Camera centres stay as calibrated (a drift of the
 // mounts is mostly rotation, and with fixed centres the scale is fixed too); weak priors on the
 // corrections settle the near-gauge freedom (the whole rig turning together) at the smallest
-// correction that explains the images. This goes
+// correction that explains the images. Fiducials of the platform (RigCalibration::fiducials,
+// detected by fiducials.h into View2D::fiducials) are points of known position and pin what the
+// canes leave loose: the depth distortion of the whole rig. This goes
 // beyond Botterill et al. 2017, who calibrated once with a target; it is standard
 // self-calibration (Triggs et al., "Bundle Adjustment - A Modern Synthesis", 2000).
 // Thread-safe (pure function).
@@ -63,6 +65,16 @@ struct RigRefineOptions {
   double trellis_match_residual_px = 6.0;  // the caller matches the trellis lines with this
                                            // TrellisOptions::max_residual_px (a drifted rig
                                            // misses its third view by more than the usual 3 px)
+  // The platform's fiducials (View2D::fiducials, positions in RigCalibration::fiducials) as
+  // points of known position: each must project onto its detection. They pin what the canes
+  // leave loose (the depth distortion of the whole rig).
+  bool use_fiducials = true;
+  double fiducial_sd_px = 0.3;            // residual scale of a fiducial's detection
+  double fiducial_max_residual_px = 2.0;  // a detection missing its fiducial by more after the
+                                          // solve is rejected (logged) and the rig solved again
+  // With fewer than min_points cane points, the fiducials alone refine the rig if every camera
+  // (but the reference) sees at least this many.
+  int min_fiducials_per_camera = 4;
 
   absl::Status Validate() const;
 };
@@ -79,6 +91,11 @@ struct RigRefineSummary {
   // at the end.
   double trellis_rms_before_px = 0.0;
   double trellis_rms_after_px = 0.0;
+  int fiducial_observations = 0;  // fiducial detections in the adjustment (after rejection)
+  int fiducials_rejected = 0;     // detections left out (fiducial_max_residual_px)
+  double fiducial_rms_before_px = 0.0;  // RMS reprojection error of the kept detections through
+  double fiducial_rms_after_px = 0.0;   // the calibrated and the refined rig
+  std::vector<std::string> fiducial_log;  // one line per rejected or invalid detection
   double median_before_px = 0.0;  // median distance to the skeleton before and after
   double median_after_px = 0.0;
   // Per camera: the largest of rotation angle x focal length, focal scale x half width and the
@@ -86,9 +103,14 @@ struct RigRefineSummary {
   std::vector<double> correction_px;
 };
 
-// The rig with refined camera rotations, focal lengths and principal points. `pieces` are a first correspondence pass's output with
-// `rig`. Falls back to `rig` unchanged (applied = false, reason set) when there are too few
-// confident points, the solve fails, or a correction exceeds max_correction_px.
+// The rig with refined camera rotations, focal lengths and principal points. `pieces` are a first
+// correspondence pass's output with `rig`. With options.use_fiducials, each view's fiducial
+// detections (View2D::fiducials) join as observations of known points; all is solved (Cauchy
+// loss), detections then further than fiducial_max_residual_px from their projection are
+// rejected (fiducial_log names them) and the rig is solved again. Falls back to `rig` unchanged
+// (applied = false, reason set) when there are too few confident points (and too few
+// fiducials), the solve fails, or a correction exceeds max_correction_px. A detection whose
+// fiducial index is out of range of rig.fiducials is INVALID_ARGUMENT.
 // INVALID_ARGUMENT for invalid options or views not matching the rig; DEADLINE_EXCEEDED /
 // CANCELLED from `deadline`.
 absl::StatusOr<RigCalibration> RefineRig(const std::vector<View2D>& views,

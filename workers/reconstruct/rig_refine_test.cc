@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "gtest/gtest.h"
+#include "sim/fiducials.h"
 #include "sim/rig.h"
 #include "sim/vine_generator.h"
 #include "workers/reconstruct/synthetic_views.h"
@@ -263,6 +264,132 @@ namespace {
 // Wires drawn from a model end far outside the image (beyond the lens's fold); re-expressing them
 // for the same camera must give the same line, and for a longer focal length the line seen
 // through the same pixels.
+// The platform's fiducials as the detector would report them for images taken by `true_rig`:
+// at their true projections, plus a deterministic error of up to `noise_px` in each coordinate.
+std::vector<View2D> WithFiducials(std::vector<View2D> views, const RigCalibration& true_rig,
+                                  const RigCalibration& calibrated, double noise_px) {
+  int k = 0;
+  for (size_t v = 0; v < views.size(); ++v) {
+    for (size_t f = 0; f < true_rig.fiducials.size(); ++f) {
+      const Eigen::Vector3d& p = true_rig.fiducials[f].position_in_platform;
+      const auto uv = true_rig.cameras[v].Project(p);
+      const auto expected = calibrated.cameras[v].Project(p);
+      if (!uv || !true_rig.cameras[v].InImage(*uv) || !expected) continue;
+      ++k;
+      const Eigen::Vector2d error(noise_px * std::sin(1.7 * k), noise_px * std::cos(2.3 * k));
+      views[v].fiducials.push_back({static_cast<int>(f), *uv + error, *expected});
+    }
+  }
+  return views;
+}
+
+RigCalibration WithPlatformFiducials(RigCalibration rig) {
+  rig.fiducials = sim::PlatformFiducials().value();
+  return rig;
+}
+
+// No cane at all: the fiducials alone pull every camera of a drifted rig back to the truth (to
+// a small fraction of the drift, with 0.2 px of detection error).
+TEST(RigRefine, FiducialsAlonePullADriftedRigBack) {
+  const Stop stop = MakeStop(1101);
+  const RigCalibration true_rig = WithPlatformFiducials(stop.true_rig);
+  for (uint64_t seed : {1, 2, 3}) {
+    const RigCalibration drifted = sim::PerturbCalibration(true_rig, 1.0, seed);
+    const std::vector<View2D> views = WithFiducials(stop.views, true_rig, drifted, 0.2);
+    RigRefineSummary summary;
+    const absl::StatusOr<RigCalibration> refined =
+        RefineRig(views, drifted, /*pieces=*/{}, {}, Deadline::Infinite(), &summary);
+    ASSERT_TRUE(refined.ok()) << refined.status();
+    ASSERT_TRUE(summary.applied) << summary.reason;
+    EXPECT_EQ(summary.points, 0);
+    EXPECT_EQ(summary.fiducials_rejected, 0);
+    EXPECT_LT(summary.fiducial_rms_after_px, 0.5 * summary.fiducial_rms_before_px);
+    for (size_t c = 0; c < true_rig.cameras.size(); ++c) {
+      const double before = sim::ReprojectionRmsPx(true_rig.cameras[c], drifted.cameras[c]);
+      const double after = sim::ReprojectionRmsPx(true_rig.cameras[c], refined->cameras[c]);
+      EXPECT_LT(after, 0.25 * before) << "seed " << seed << " camera " << c << ": " << before
+                                      << " px -> " << after << " px";
+    }
+  }
+}
+
+// With too few fiducials and no canes, nothing is refined.
+TEST(RigRefine, TooFewFiducialsAndNoCanesKeepsTheRig) {
+  const Stop stop = MakeStop(1101);
+  const RigCalibration true_rig = WithPlatformFiducials(stop.true_rig);
+  const RigCalibration drifted = sim::PerturbCalibration(true_rig, 1.0, 1);
+  std::vector<View2D> views = WithFiducials(stop.views, true_rig, drifted, 0.0);
+  for (View2D& view : views) view.fiducials.resize(3);
+  RigRefineSummary summary;
+  const auto refined = RefineRig(views, drifted, {}, {}, Deadline::Infinite(), &summary);
+  ASSERT_TRUE(refined.ok()) << refined.status();
+  EXPECT_FALSE(summary.applied);
+  EXPECT_NE(summary.reason.find("fiducials"), std::string::npos) << summary.reason;
+}
+
+// The canes leave the depth distortion of the whole rig loose; with the fiducials too,
+// triangulation of the vine plane comes out better than from the canes alone on every drift.
+TEST(RigRefine, FiducialsImproveOnTheCanesAlone) {
+  const Stop stop = MakeStop(1105);
+  const RigCalibration true_rig = WithPlatformFiducials(stop.true_rig);
+  double sum_canes = 0.0, sum_both = 0.0, sum_before = 0.0;
+  for (uint64_t seed : {1, 2, 3, 4, 5, 6}) {
+    const RigCalibration drifted = sim::PerturbCalibration(true_rig, 1.0, seed);
+    RigRefineOptions canes_only;
+    canes_only.use_fiducials = false;
+    const std::vector<View2D> views = WithFiducials(stop.views, true_rig, drifted, 0.2);
+    const auto canes = RefineRig(views, drifted, stop.pieces, canes_only, Deadline::Infinite());
+    RigRefineSummary summary;
+    const auto both = RefineRig(views, drifted, stop.pieces, {}, Deadline::Infinite(), &summary);
+    ASSERT_TRUE(canes.ok() && both.ok());
+    ASSERT_TRUE(summary.applied) << summary.reason;
+    EXPECT_GT(summary.fiducial_observations, 30);
+    const double after_canes = TriangulationRmsM(true_rig, *canes);
+    const double after_both = TriangulationRmsM(true_rig, *both);
+    EXPECT_LT(after_both, after_canes) << "seed " << seed;
+    sum_before += TriangulationRmsM(true_rig, drifted);
+    sum_canes += after_canes;
+    sum_both += after_both;
+  }
+  EXPECT_LT(sum_both, 0.5 * sum_canes)
+      << "before " << sum_before << " m, canes " << sum_canes << " m, with fiducials " << sum_both;
+}
+
+// A detection of something else 12 px from a fiducial is rejected and named in the log; the rig
+// still comes back.
+TEST(RigRefine, RejectsAFiducialDetectionFarFromItsFiducial) {
+  const Stop stop = MakeStop(1101);
+  const RigCalibration true_rig = WithPlatformFiducials(stop.true_rig);
+  const RigCalibration drifted = sim::PerturbCalibration(true_rig, 1.0, 2);
+  std::vector<View2D> views = WithFiducials(stop.views, true_rig, drifted, 0.1);
+  ASSERT_GE(views[1].fiducials.size(), 5u);
+  views[1].fiducials[2].uv_px += Eigen::Vector2d(9.0, -8.0);
+  const std::string name = true_rig.fiducials[views[1].fiducials[2].fiducial].name;
+  RigRefineSummary summary;
+  const auto refined = RefineRig(views, drifted, stop.pieces, {}, Deadline::Infinite(), &summary);
+  ASSERT_TRUE(refined.ok()) << refined.status();
+  ASSERT_TRUE(summary.applied) << summary.reason;
+  EXPECT_EQ(summary.fiducials_rejected, 1);
+  ASSERT_EQ(summary.fiducial_log.size(), 1u);
+  EXPECT_NE(summary.fiducial_log[0].find("cam1 " + name), std::string::npos)
+      << summary.fiducial_log[0];
+  for (size_t c = 0; c < true_rig.cameras.size(); ++c) {
+    EXPECT_LT(sim::ReprojectionRmsPx(true_rig.cameras[c], refined->cameras[c]),
+              0.5 * sim::ReprojectionRmsPx(true_rig.cameras[c], drifted.cameras[c]))
+        << "camera " << c;
+  }
+}
+
+TEST(RigRefine, RejectsAFiducialIndexTheRigDoesNotHave) {
+  const Stop stop = MakeStop(1101);
+  std::vector<View2D> views = stop.views;
+  views[0].fiducials.push_back({3, Eigen::Vector2d(100, 100), Eigen::Vector2d(100, 100)});
+  const auto refined = RefineRig(views, stop.true_rig, stop.pieces, {}, Deadline::Infinite());
+  ASSERT_FALSE(refined.ok());
+  EXPECT_EQ(refined.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(refined.status().message().find("views[0].fiducials[0]"), std::string::npos);
+}
+
 TEST(ReexpressLines, KeepsLinesThatEndOutsideTheImage) {
   const Stop stop = MakeStop(1106);
   const CameraCalibration& camera = stop.true_rig.cameras[0];

@@ -63,6 +63,13 @@ struct Line2D {
   std::vector<Eigen::Vector2d> centre_px;
 };
 
+// One of the platform's fiducials (RigCalibration::fiducials) found in this view (fiducials.h).
+struct FiducialObservation {
+  int fiducial = -1;                                      // index into RigCalibration::fiducials
+  Eigen::Vector2d uv_px = Eigen::Vector2d::Zero();        // detected centre, pixels
+  Eigen::Vector2d expected_px = Eigen::Vector2d::Zero();  // projection through the calibration
+};
+
 struct View2D {
   int width = 0;
   int height = 0;
@@ -77,6 +84,9 @@ struct View2D {
   // Distance in pixels from each pixel to the nearest skeleton point (any segment), capped at
   // kCentrelineDistanceCapPx. Row-major, width * height. Used as a smooth reprojection cost.
   std::vector<float> centreline_distance_px;
+  // The platform's fiducials seen in the image (empty when the rig has none or they were not
+  // looked for); rig_refine.h uses them as points of known position.
+  std::vector<FiducialObservation> fiducials;
 
   bool IsForeground(int x, int y) const {
     return classes.at(x, y) == PixelClass::kForeground;
