@@ -270,8 +270,8 @@ TEST(Rig, FartherRigSeesMoreOfTheVineInTwoViewsThanTheDefault) {
 // Where the true trunk + cane length lies with respect to the rig's images, on simulated stops:
 // the share inside >= 2 / 1 / 0 images, per camera by image border, and the length inside fewer
 // than two images by x, z and depth y. Also the share inside >= 2 images with the arm base as an
-// occluder, and whether the arm base of the default mount (workers/plan,
-// DefaultPlatformFromArmBase) is in view. Rig options from the environment: VB_RIG_Y (rig_y_m;
+// occluder, the neighbouring vines' length inside >= 2 images, and whether the arm base of the
+// default mount (workers/plan, DefaultPlatformFromArmBase) is in view. Rig options from the environment: VB_RIG_Y (rig_y_m;
 // the toe-in target stays on the vine plane y = 0.8), VB_RIG_HEIGHT, VB_RIG_AIM_BELOW,
 // VB_RIG_BASELINE, VB_RIG_APEX_UP, VB_RIG_TOE_IN, VB_RIG_FOV, VB_RIG_K1/K2/K3. Stops: VB_SEED
 // (1100), VB_STOPS (20), vine 1.
@@ -328,12 +328,19 @@ TEST(RigCoverage, DISABLED_Report) {
     }
 
   std::vector<CoverageSample> all;
+  double neighbour_two = 0.0;  // neighbouring vines' trunk + cane length inside >= 2 images
   for (int i = 0; i < stops; ++i) {
     auto scene = GenerateScene(static_cast<uint64_t>(seed + i), 1);
     ASSERT_TRUE(scene.ok()) << scene.status();
     auto samples = SampleViewCoverage(scene->vine, *rig);
     ASSERT_TRUE(samples.ok()) << samples.status();
     all.insert(all.end(), samples->begin(), samples->end());
+    for (const VineModel& neighbour : scene->neighbours) {
+      auto theirs = SampleViewCoverage(neighbour, *rig);
+      ASSERT_TRUE(theirs.ok()) << theirs.status();
+      for (const CoverageSample& s : *theirs)
+        if (s.views >= 2) neighbour_two += s.length_m;
+    }
   }
   const ViewCoverage c = SummariseViewCoverage(all, cameras);
   // The same with the arm base as an occluder (a capsule of radius 0.075 m along its axis): the
@@ -363,6 +370,8 @@ TEST(RigCoverage, DISABLED_Report) {
   std::printf("stops %d from seed %d; rig y %.3f m; arm base in view: %s\n", stops, seed,
               o.rig_y_m, base_in_view ? "YES" : "no");
   std::printf(">=2 views, arm base not in the way: %.4f\n", unoccluded_two / c.truth_cane_length_m);
+  std::printf("per stop: this vine %.2f m inside >= 2 images, the neighbours %.2f m\n",
+              c.in_two_or_more_fraction * c.truth_cane_length_m / stops, neighbour_two / stops);
   std::printf(">=2 views %.4f  one %.4f  none %.4f  trunk in <2 %.4f\n", c.in_two_or_more_fraction,
               c.in_one_fraction, c.in_none_fraction, c.trunk_in_fewer_than_two_fraction);
   const char* side_names[] = {"inside", "left", "right", "top", "bottom", "unprojected"};
