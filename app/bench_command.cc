@@ -15,6 +15,7 @@
 #include "core/model_metrics.h"
 #include "core/statistics.h"
 #include "core/status_macros.h"
+#include "core/view_coverage.h"
 #include "sim/rig.h"
 #include "sim/vine_generator.h"
 #include "workers/capture/sim_capture.h"
@@ -117,6 +118,7 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   const reconstruct::SegmenterModel& segmenter = reconstruct::BuiltinSegmenterModel();
 
   std::vector<ReconstructionMetrics> metrics;
+  std::vector<ViewCoverage> coverage;
   std::vector<DecidedCutMetrics> cut_metrics;
   std::vector<reconstruct::StageTimings> timings;
   std::vector<double> render_s;
@@ -188,12 +190,20 @@ absl::Status RunBenchReconstruct(Flags& flags) {
     VB_ASSIGN_OR_RETURN(const ReconstructionMetrics m,
                         EvaluateReconstruction(result->model, capture.ground_truth));
     metrics.push_back(m);
+    // The ceiling the field of view puts on recall: true length inside two or more of the
+    // images of the rig as it really is (not the perturbed calibration the pipeline is given).
+    VB_ASSIGN_OR_RETURN(const capture::SimRig sim_rig,
+                        capture::MakeSimRig(sim_options, seed * 1000003 + vine));
+    VB_ASSIGN_OR_RETURN(const ViewCoverage view_coverage,
+                        EvaluateViewCoverage(capture.ground_truth, sim_rig.true_rig));
+    coverage.push_back(view_coverage);
     VB_ASSIGN_OR_RETURN(DecidedCutMetrics cuts,
                         EvaluateDecidedCuts(result->model, capture.ground_truth, policy));
     entry["cut_metrics"] = DecidedCutMetricsToJson(cuts);
     cut_metrics.push_back(std::move(cuts));
     timings.push_back(result->timings);
     entry["metrics"] = MetricsToJson(m);
+    entry["metrics"].update(ViewCoverageToJson(view_coverage));
     entry["reconstruction"] = ReconstructReport(*result);
     per_vine_json.push_back(entry);
   }
@@ -211,6 +221,17 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   average("wire_precision", &ReconstructionMetrics::wire_precision);
   average("head_enclosed_fraction", &ReconstructionMetrics::head_enclosed_fraction);
   average("head_volume_ratio", &ReconstructionMetrics::head_volume_ratio);
+  // Means over vines, like the metrics above (the same vines: those reconstructed).
+  auto average_coverage = [&](const char* key, double ViewCoverage::*field) {
+    double sum = 0;
+    for (const ViewCoverage& c : coverage) sum += c.*field;
+    mean[key] = coverage.empty() ? 0.0 : sum / coverage.size();
+  };
+  average_coverage("cane_length_in_two_views_fraction", &ViewCoverage::in_two_or_more_fraction);
+  average_coverage("cane_length_in_one_view_fraction", &ViewCoverage::in_one_fraction);
+  average_coverage("cane_length_in_no_view_fraction", &ViewCoverage::in_none_fraction);
+  average_coverage("trunk_length_in_fewer_than_two_views_fraction",
+                   &ViewCoverage::trunk_in_fewer_than_two_fraction);
   const nlohmann::json cuts = CutMetricsSummary(cut_metrics);
   double min_head = 1.0;
   for (const ReconstructionMetrics& m : metrics) min_head = std::min(min_head, m.head_enclosed_fraction);

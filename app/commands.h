@@ -22,9 +22,10 @@ absl::Status RunBundleInfo(Flags& flags);
 // vine model (workers/reconstruct).
 absl::Status RunReconstruct(Flags& flags);
 
-// vinebot evaluate --model model.json --truth ground_truth.json [--policy policy.json]: prints
-// the accuracy metrics of ARCHITECTURE.md as one JSON object, the cut-point metrics included
-// (decide run on both models under the default or given policy).
+// vinebot evaluate --model model.json --truth ground_truth.json [--policy policy.json]
+// [--calibration calibration.yaml]: prints the accuracy metrics of ARCHITECTURE.md as one JSON
+// object, the cut-point metrics included (decide run on both models under the default or given
+// policy), and with a calibration the view coverage of the truth (core/view_coverage.h).
 absl::Status RunEvaluate(Flags& flags);
 
 // vinebot decide --model model.json [--policy policy.json] [--weights weights.json]

@@ -32,7 +32,9 @@ const std::vector<Command>& Commands() {
        vb::app::RunCapture},
       {"bundle info", "--bundle DIR", vb::app::RunBundleInfo},
       {"reconstruct", "--bundle DIR --out model.json [--deadline-s T]", vb::app::RunReconstruct},
-      {"evaluate", "--model model.json --truth ground_truth.json [--policy policy.json]",
+      {"evaluate",
+       "--model model.json --truth ground_truth.json [--policy policy.json] "
+       "[--calibration calibration.yaml]",
        vb::app::RunEvaluate},
       {"decide",
        "--model model.json [--policy policy.json] [--weights weights.json] [--deadline-s T] "

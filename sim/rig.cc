@@ -113,6 +113,13 @@ absl::Status RigOptions::Validate() const {
     return Invalid("distance_to_vine_plane_m",
                    absl::StrCat("must be finite and > 0.05, is ", distance_to_vine_plane_m));
   }
+  if (!(std::isfinite(rig_y_m) && std::abs(rig_y_m) <= 1.0)) {
+    return Invalid("rig_y_m", absl::StrCat("must be finite and within [-1, 1], is ", rig_y_m));
+  }
+  if (!(std::isfinite(aim_below_rig_m) && std::abs(aim_below_rig_m) <= rig_height_m)) {
+    return Invalid("aim_below_rig_m",
+                   absl::StrCat("must be finite and within +-rig_height_m, is ", aim_below_rig_m));
+  }
   const std::pair<const char*, double> coefficients[] = {
       {"k1", k1}, {"k2", k2}, {"p1", p1}, {"p2", p2}, {"k3", k3}};
   for (const auto& [name, value] : coefficients) {
@@ -150,12 +157,15 @@ absl::StatusOr<RigCalibration> MakeRig(const RigOptions& options) {
       centres = {{-0.5 * s, 0.0, 0.0}, {0.5 * s, 0.0, 0.0}};
       break;
     default: {
-      const double below = s / (2.0 * std::sqrt(3.0));  // centroid to the lower side
-      centres = {{-0.5 * s, 0.0, -below}, {0.5 * s, 0.0, -below}, {0.0, 0.0, 2.0 * below}};
+      // Centroid to the side of the pair; the third camera is twice as far on the other side.
+      const double inradius = s / (2.0 * std::sqrt(3.0));
+      const double pair = options.apex_up ? -inradius : inradius;
+      centres = {{-0.5 * s, 0.0, pair}, {0.5 * s, 0.0, pair}, {0.0, 0.0, -2.0 * pair}};
     }
   }
-  const Eigen::Vector3d rig_centre(0.0, 0.0, options.rig_height_m);
-  const Eigen::Vector3d target(0.0, options.distance_to_vine_plane_m, options.rig_height_m);
+  const Eigen::Vector3d rig_centre(0.0, options.rig_y_m, options.rig_height_m);
+  const Eigen::Vector3d target(0.0, options.rig_y_m + options.distance_to_vine_plane_m,
+                               options.rig_height_m - options.aim_below_rig_m);
 
   RigCalibration rig;
   for (int i = 0; i < options.camera_count; ++i) {
