@@ -288,6 +288,7 @@ absl::StatusOr<std::vector<int>> PlanPass(const VineModel& model, const std::vec
       })) {
     // No cut of this pass has a motion, so no wood falls and the passes end: the blocked cuts
     // (canes at the head that block each other) are searched once more, sliding further.
+    p.last_resort_used = true;
     CutMotionOptions wider = options.cut_motion;
     wider.max_slide_m = options.last_resort_max_slide_m;
     std::vector<Cut> blocked;
@@ -549,6 +550,14 @@ absl::StatusOr<std::vector<int>> PlanPass(const VineModel& model, const std::vec
   // The next pass sees the vine without the wood of this pass's cuts; with no cut made, it would
   // see this pass's vine again and fail the same way.
   if (p.legs.size() == legs_before) {
+    if (!retry.empty() && !last_pass && !p.last_resort_used &&
+        options.last_resort_max_slide_m > options.cut_motion.max_slide_m) {
+      // Except for the last resort: the blocked cuts alone go to the next pass, where on the same
+      // vine none of them has a motion and they are searched sliding further. The unreached
+      // would fail the same way.
+      for (int i : unreached) p.Unplanned(p.plan.cuts[i].id, "no_path_within_deadline");
+      return retry;
+    }
     for (int i : retry) p.Unplanned(p.plan.cuts[i].id, "no_collision_free_cut_motion");
     for (int i : unreached) p.Unplanned(p.plan.cuts[i].id, "no_path_within_deadline");
     return std::vector<int>{};

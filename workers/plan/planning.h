@@ -66,6 +66,8 @@ struct Planning {
   // The scenes in use take every leg of the passes before this one as made (and hold the stubs
   // of this one's).
   int scene_pass = 0;
+  // The last resort (PlanOptions::last_resort_max_slide_m) has searched the blocked cuts once.
+  bool last_resort_used = false;
 
   const Joints& At() const { return legs.empty() ? options.home : legs.back().motion.path.back(); }
 
