@@ -296,16 +296,27 @@ absl::StatusOr<HeadAndTrunk> ReconstructHeadAndTrunk(const std::vector<View2D>& 
   const double trunk_width = lower_widths.empty() ? 0.0 : Median(lower_widths);
 
   // Head bottom: the lowest wide slab above the lower half of the trunk (heads carry lobes
-  // that hang down beside the trunk top; scanning from below keeps them in the head).
+  // that hang down beside the trunk top; scanning from below keeps them in the head). Where no
+  // slab is clearly wide (the widening is weak evidence: a trunk measured 1 cm wider moves it
+  // under the factor), the lowest of the widest slabs starts the head if it is wider than the
+  // trunk at all: the head is where the hull is widest, and erring low keeps it enclosed.
   double head_bottom_z = top_z - options.head_min_height_m;
   if (trunk_width > 0) {
+    auto width = [&](int s) { return max_x[s] - min_x[s] + options.min_cell_m; };
+    int bottom_slab = -1;
+    int widest_slab = -1;
     for (size_t i = occupied.size() / 2; i < occupied.size(); ++i) {
       const int s = occupied[i];
-      if (max_x[s] - min_x[s] + options.min_cell_m > options.head_width_factor * trunk_width) {
-        head_bottom_z = std::min(head_bottom_z, slab_z(s) - 0.5 * options.slab_m);
+      if (width(s) > options.head_width_factor * trunk_width) {
+        bottom_slab = s;
         break;
       }
+      if (widest_slab < 0 || width(s) > width(widest_slab) + 1e-9) widest_slab = s;
     }
+    if (bottom_slab < 0 && widest_slab >= 0 && width(widest_slab) > trunk_width + 1e-9)
+      bottom_slab = widest_slab;
+    if (bottom_slab >= 0)
+      head_bottom_z = std::min(head_bottom_z, slab_z(bottom_slab) - 0.5 * options.slab_m);
   }
 
   // The lowest head slabs are often no wider than the trunk: reach a little lower, for safety.

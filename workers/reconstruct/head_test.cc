@@ -43,6 +43,35 @@ TEST(ReconstructHeadAndTrunk, EnclosesTheTrueHeadAndFindsTheTrunk) {
   }
 }
 
+// A thick trunk under a tall head only ~1.5x as wide (tuning stop 1187 with the rig refined by
+// fiducials looked like this): no slab is wide by head_width_factor, so the head must start at
+// its widest slab, not collapse to the top head_min_height_m of the hull.
+TEST(ReconstructHeadAndTrunk, WeakWideningStillEnclosesATallHead) {
+  const RigCalibration rig = sim::MakeRig().value();
+  VineModel vine;
+  Cane trunk;
+  trunk.id = CaneId(1);
+  trunk.kind = CaneKind::kTrunk;
+  for (double z = 0.0; z <= 0.8201; z += 0.02) {
+    trunk.polyline.points.push_back({0.0, 0.8, z});
+    trunk.polyline.radii.push_back(0.035);
+  }
+  vine.canes.push_back(trunk);
+  for (double z = 0.84; z <= 0.9801; z += 0.02)
+    for (double x : {-0.02, 0.0, 0.02}) vine.head.spheres.push_back({{x, 0.8, z}, 0.035});
+  const std::vector<View2D> views = SyntheticViews(vine, rig);
+  const auto result =
+      ReconstructHeadAndTrunk(views, rig, WorkingVolume(), HeadOptions(), Deadline::Infinite());
+  ASSERT_TRUE(result.ok()) << result.status();
+  VineModel model;
+  model.head = result->head;
+  VineModel truth;
+  truth.head = vine.head;
+  const ReconstructionMetrics m = EvaluateReconstruction(model, truth).value();
+  EXPECT_GE(m.head_enclosed_fraction, 0.99);
+  EXPECT_LT(m.head_volume_ratio, 25.0);
+}
+
 TEST(ReconstructHeadAndTrunk, EmptyViewsGiveAnEmptyHead) {
   const RigCalibration rig = sim::MakeRig().value();
   const std::vector<View2D> views = SyntheticViews(VineModel(), rig);
