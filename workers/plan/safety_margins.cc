@@ -61,11 +61,12 @@ void Place(const std::vector<LinkBody>& bodies, const Joints& q,
   }
 }
 
-// One body capsule swept over up to kChunkConfigurations consecutive configurations of one
-// protected motion: the box of its placed capsules, which bounds their distances from below.
+// One body capsule swept over up to kChunkConfigurations consecutive distinct configurations
+// held by the same protected motions: the box of its placed capsules, which bounds their
+// distances from below.
 struct Chunk {
   Eigen::Vector3d lo, hi;
-  int motion = 0;  // in InflateMargins: the group of motions that hold its configurations
+  int motion = 0;  // the group of motions that hold its configurations (InflateMargins)
   int first = 0;   // placed[first + j * stride] for j < count
   int count = 0;
 };
@@ -91,6 +92,7 @@ double BoxDistance(const Eigen::Vector3d& lo1, const Eigen::Vector3d& hi1,
 // Pairs are skipped when their lower bound exceeds the minimum so far by more than this: far
 // above the rounding of the bounds, so a skipped pair could never have lowered the minimum.
 constexpr double kBoundSlackM = 1e-9;
+constexpr double kReachSlackM = 1e-6;
 
 // The same rule as CollisionScene::WithoutCaneNear: the cut cane's capsules near the cut point.
 bool Ignored(const Obstacle& o, const ProtectedMotion& m) {
@@ -329,8 +331,9 @@ MarginSummary InflateMargins(const RobotModel& robot, std::span<const ProtectedM
     });
     std::sort(near.begin(), near.end());
     double clearance = std::numeric_limits<double>::infinity();
-    // A pair farther than `reach` leaves the margin at its maximum: the search is capped there.
-    double cap = reach;
+    // A pair farther than `reach` leaves the margin at its maximum: the search is capped there
+    // (a micrometre beyond, so that the rounding of clearance - slack_m cannot matter).
+    double cap = reach + kReachSlackM;
     for (const auto& [bound, i] : near) {
       if (bound > cap + kBoundSlackM) break;
       const Chunk& c = chunks[i];
