@@ -4,7 +4,11 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <limits>
+#include <map>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -28,31 +32,67 @@ absl::Status MarginOptions::Validate() const {
 namespace {
 
 // One arm body capsule at one configuration, in the base frame, with its axis-aligned box
-// (surface included) and the protected motion it belongs to.
+// (surface included). A non-finite capsule (its distances are NaN, which never lower a minimum)
+// is kept in place, marked invalid, so that capsule k of configuration c is placed[c * n + k].
 struct PlacedCapsule {
   Eigen::Vector3d a, b;
   double radius = 0.0;
   Eigen::Vector3d lo, hi;
-  int motion = 0;
+  Eigen::Vector3d mid;      // the segment's midpoint and half length: every point of the
+  double half = 0.0;        // capsule is within half + radius of mid
+  bool valid = false;
 };
 
-void Place(const std::vector<LinkBody>& bodies, const Joints& q, int motion,
+void Place(const std::vector<LinkBody>& bodies, const Joints& q,
            std::vector<PlacedCapsule>* placed) {
   const auto frames = LinkFrames(q);
   for (const LinkBody& body : bodies) {
     for (const Capsule& c : body.capsules) {
-      PlacedCapsule p;
+      PlacedCapsule& p = placed->emplace_back();
       p.a = frames[body.frame] * c.a;
       p.b = frames[body.frame] * c.b;
       p.radius = c.radius;
       p.lo = p.a.cwiseMin(p.b).array() - c.radius;
       p.hi = p.a.cwiseMax(p.b).array() + c.radius;
-      p.motion = motion;
-      // A non-finite capsule's distances are NaN, which never lowers a minimum: drop it.
-      if (p.lo.allFinite() && p.hi.allFinite()) placed->push_back(p);
+      p.mid = 0.5 * (p.a + p.b);
+      p.half = 0.5 * (p.b - p.a).norm();
+      p.valid = p.lo.allFinite() && p.hi.allFinite();
     }
   }
 }
+
+// One body capsule swept over up to kChunkConfigurations consecutive distinct configurations
+// held by the same protected motions: the box of its placed capsules, which bounds their
+// distances from below.
+struct Chunk {
+  Eigen::Vector3d lo, hi;
+  int motion = 0;  // the group of motions that hold its configurations (InflateMargins)
+  int first = 0;   // placed[first + j * stride] for j < count
+  int count = 0;
+};
+constexpr int kChunkConfigurations = 8;
+
+struct ConfigurationHash {
+  size_t operator()(const std::array<uint64_t, 6>& key) const {
+    uint64_t h = 0x9e3779b97f4a7c15ull;
+    for (const uint64_t k : key) h = (h ^ k) * 0xff51afd7ed558ccdull, h ^= h >> 32;
+    return static_cast<size_t>(h);
+  }
+};
+
+// Euclidean distance between two axis-aligned boxes (0 when they meet): a lower bound of the
+// distance between any shapes inside them.
+double BoxDistance(const Eigen::Vector3d& lo1, const Eigen::Vector3d& hi1,
+                   const Eigen::Vector3d& lo2, const Eigen::Vector3d& hi2) {
+  const Eigen::Vector3d gap =
+      (lo2 - hi1).cwiseMax(lo1 - hi2).cwiseMax(Eigen::Vector3d::Zero());
+  return gap.norm();
+}
+
+// Pairs are skipped when their lower bound exceeds the minimum so far by more than this: far
+// above the rounding of the bounds, so a skipped pair could never have lowered the minimum.
+constexpr double kBoundSlackM = 1e-9;
+constexpr double kReachSlackM = 1e-6;
 
 // The same rule as CollisionScene::WithoutCaneNear: the cut cane's capsules near the cut point.
 bool Ignored(const Obstacle& o, const ProtectedMotion& m) {
@@ -62,16 +102,16 @@ bool Ignored(const Obstacle& o, const ProtectedMotion& m) {
              m.ignored_radius_m;
 }
 
-// A uniform grid over the placed capsules' boxes: each cell lists the capsules whose box meets
-// it (compressed rows). Obstacles are few (hundreds) and placed capsules many (tens of
-// thousands), so each obstacle visits only the capsules in the cells its padded box meets.
-class CapsuleGrid {
+// A uniform grid over the chunks' boxes: each cell lists the chunks whose box meets it
+// (compressed rows). Obstacles are few (hundreds) and chunks many (thousands), so each obstacle
+// visits only the chunks in the cells its padded box meets.
+class ChunkGrid {
  public:
-  CapsuleGrid(const std::vector<PlacedCapsule>& placed, double cell_m) {
+  ChunkGrid(const std::vector<Chunk>& placed, double cell_m) {
     if (placed.empty()) return;
     lo_ = placed[0].lo;
     Eigen::Vector3d hi = placed[0].hi;
-    for (const PlacedCapsule& p : placed) {
+    for (const Chunk& p : placed) {
       lo_ = lo_.cwiseMin(p.lo);
       hi = hi.cwiseMax(p.hi);
     }
@@ -81,13 +121,13 @@ class CapsuleGrid {
     for (int k = 0; k < 3; ++k)
       n_[k] = std::clamp(static_cast<int>((hi[k] - lo_[k]) / cell_m_) + 1, 1, kMaxCells);
     start_.assign(static_cast<size_t>(n_[0]) * n_[1] * n_[2] + 1, 0);
-    auto for_cells = [&](const PlacedCapsule& p, auto&& f) {
+    auto for_cells = [&](const Chunk& p, auto&& f) {
       const auto [c0, c1] = Cells(p.lo, p.hi);
       for (int z = c0[2]; z <= c1[2]; ++z)
         for (int y = c0[1]; y <= c1[1]; ++y)
           for (int x = c0[0]; x <= c1[0]; ++x) f(Index(x, y, z));
     };
-    for (const PlacedCapsule& p : placed) for_cells(p, [&](size_t cell) { ++start_[cell + 1]; });
+    for (const Chunk& p : placed) for_cells(p, [&](size_t cell) { ++start_[cell + 1]; });
     for (size_t c = 1; c < start_.size(); ++c) start_[c] += start_[c - 1];
     entries_.resize(start_.back());
     std::vector<int> fill(start_.begin(), start_.end() - 1);
@@ -95,8 +135,8 @@ class CapsuleGrid {
       for_cells(placed[i], [&](size_t cell) { entries_[fill[cell]++] = static_cast<int>(i); });
   }
 
-  // Calls visit(i) for every capsule listed in a cell the box [lo, hi] meets (a capsule in
-  // several cells is visited once per cell); stops when visit returns false.
+  // Calls visit(i) for every chunk listed in a cell the box [lo, hi] meets (a chunk in several
+  // cells is visited once per cell).
   template <typename Visit>
   void ForEachNear(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, Visit&& visit) const {
     if (entries_.empty()) return;
@@ -109,7 +149,7 @@ class CapsuleGrid {
         for (int x = c0[0]; x <= c1[0]; ++x) {
           const size_t cell = Index(x, y, z);
           for (int e = start_[cell]; e < start_[cell + 1]; ++e)
-            if (!visit(entries_[e])) return;
+            visit(entries_[e]);
         }
   }
 
@@ -132,14 +172,15 @@ class CapsuleGrid {
   double cell_m_ = 1.0;
   std::array<int, 3> n_ = {0, 0, 0};
   std::vector<int> start_;    // cell c lists entries_[start_[c] .. start_[c + 1])
-  std::vector<int> entries_;  // capsule indices
+  std::vector<int> entries_;  // chunk indices
 };
 
-// Grid cell edge: about an arm link's thickness plus the margin reach, so a cane piece's padded
-// box meets a few cells.
+// Grid cell edge: about an arm link's sweep over a chunk plus the margin reach, so a cane
+// piece's padded box meets a few cells.
 constexpr double kCellM = 0.12;
 
 }  // namespace
+
 
 MarginSummary InflateMargins(const RobotModel& robot, std::span<const ProtectedMotion> motions,
                              const MarginOptions& options, CollisionScene* scene) {
@@ -154,34 +195,106 @@ MarginSummary InflateMargins(const RobotModel& robot, std::span<const ProtectedM
     for (size_t i = 0; i + 1 < motion.path.size(); ++i)
       expected += MotionSteps(motion.path[i], motion.path[i + 1], options.max_step_m, lever_m) - 1;
   }
+  // Each distinct configuration (bitwise: the same joints place the same capsules, hence the same
+  // distances) is placed once; a configuration several motions share is ignored by an obstacle
+  // only if every one of them ignores it. Alternatives share most of their configurations, and
+  // every stroke's ends are also protected alone.
   std::vector<PlacedCapsule> placed;
   placed.reserve(expected * capsules);
+  const int stride = static_cast<int>(capsules);
+  std::unordered_map<std::array<uint64_t, 6>, int, ConfigurationHash> index;
+  index.reserve(expected);
+  std::vector<int> first_motion;                  // per distinct configuration
+  std::vector<std::vector<int>> more_motions;     // other motions that hold it (few)
+  std::vector<int> more_of;                       // index into more_motions, or -1
   int configurations = 0;
+  auto add = [&](const Joints& q, int motion) {
+    ++configurations;
+    std::array<uint64_t, 6> key;
+    std::memcpy(key.data(), q.data(), sizeof(key));
+    const auto [it, inserted] = index.try_emplace(key, static_cast<int>(first_motion.size()));
+    if (inserted) {
+      Place(bodies, q, &placed);
+      first_motion.push_back(motion);
+      more_of.push_back(-1);
+      return;
+    }
+    const int u = it->second;
+    if (first_motion[u] == motion) return;
+    if (more_of[u] < 0) {
+      more_of[u] = static_cast<int>(more_motions.size());
+      more_motions.emplace_back();
+    }
+    more_motions[more_of[u]].push_back(motion);
+  };
   for (size_t m = 0; m < motions.size(); ++m) {
     const ProtectedMotion& motion = motions[m];
     const int id = static_cast<int>(m);
     for (size_t i = 0; i < motion.path.size(); ++i) {
-      Place(bodies, motion.path[i], id, &placed);
-      ++configurations;
+      add(motion.path[i], id);
       if (i + 1 == motion.path.size()) break;
       const Joints& a = motion.path[i];
       const Joints& b = motion.path[i + 1];
       const int steps = MotionSteps(a, b, options.max_step_m, lever_m);
-      for (int s = 1; s < steps; ++s) {
-        Place(bodies, a + (b - a) * (double(s) / steps), id, &placed);
-        ++configurations;
-      }
+      for (int s = 1; s < steps; ++s) add(a + (b - a) * (double(s) / steps), id);
     }
+  }
+  // Groups: the set of motions that ignore something and hold a configuration; group 0 (no
+  // motion) for a configuration some motion that ignores nothing holds: never ignored.
+  std::map<std::vector<int>, int> group_of;
+  std::vector<std::vector<int>> groups = {{}};
+  group_of[{}] = 0;
+  const int distinct = static_cast<int>(first_motion.size());
+  std::vector<int> group(distinct, 0);
+  for (int u = 0; u < distinct; ++u) {
+    std::vector<int> holders = {first_motion[u]};
+    if (more_of[u] >= 0)
+      holders.insert(holders.end(), more_motions[more_of[u]].begin(),
+                     more_motions[more_of[u]].end());
+    std::sort(holders.begin(), holders.end());
+    holders.erase(std::unique(holders.begin(), holders.end()), holders.end());
+    bool never = false;
+    for (int m : holders) never |= motions[m].ignored_cane.value == 0;
+    if (never) holders.clear();
+    const auto [it, inserted] = group_of.try_emplace(holders, static_cast<int>(groups.size()));
+    if (inserted) groups.push_back(holders);
+    group[u] = it->second;
+  }
+  // Chunks: each body capsule over runs of consecutive distinct configurations of one group.
+  std::vector<Chunk> chunks;
+  for (int u0 = 0; u0 < distinct;) {
+    int n = 1;
+    while (n < kChunkConfigurations && u0 + n < distinct && group[u0 + n] == group[u0]) ++n;
+    for (int k = 0; k < stride; ++k) {
+      Chunk chunk;
+      chunk.motion = group[u0];
+      chunk.first = u0 * stride + k;
+      chunk.count = n;
+      chunk.lo.setConstant(std::numeric_limits<double>::infinity());
+      chunk.hi.setConstant(-std::numeric_limits<double>::infinity());
+      for (int j = 0; j < n; ++j) {
+        const PlacedCapsule& p = placed[chunk.first + j * stride];
+        if (!p.valid) continue;
+        chunk.lo = chunk.lo.cwiseMin(p.lo);
+        chunk.hi = chunk.hi.cwiseMax(p.hi);
+      }
+      if (chunk.lo.allFinite() && chunk.hi.allFinite()) chunks.push_back(chunk);
+    }
+    u0 += n;
   }
 
   // Only pairs closer than `reach` can limit a margin: farther ones clamp to max_margin_m. So
-  // pairs whose boxes are farther apart than that are skipped without changing any margin, and an
+  // pairs whose boxes are farther apart than that are skipped without changing any margin; the
+  // others are measured nearest box first, and skipped once their box is farther than the
+  // smallest distance so far (a chunk's box bounds its capsules', which bound the capsules). An
   // obstacle's search ends once its margin is 0.
   const double reach = options.max_margin_m + options.slack_m;
-  const CapsuleGrid grid(placed, kCellM);
-  std::vector<int> visited(placed.size(), -1);      // obstacle index that last measured it
+  const ChunkGrid grid(chunks, kCellM);
+  std::vector<int> visited(chunks.size(), -1);      // obstacle index that last listed it
   std::vector<char> ignored(motions.size(), 0);
   std::vector<int> ignored_list;
+  std::vector<char> group_ignored(groups.size(), 0);
+  std::vector<std::pair<double, int>> near;         // (box distance, chunk) of one obstacle
   std::vector<double> vine_margins;
   for (size_t oi = 0; oi < scene->obstacles.size(); ++oi) {
     Obstacle& o = scene->obstacles[oi];
@@ -195,28 +308,64 @@ MarginSummary InflateMargins(const RobotModel& robot, std::span<const ProtectedM
         }
       }
     }
-    const double pad = o.capsule.radius + reach;
-    const Eigen::Vector3d lo = o.capsule.a.cwiseMin(o.capsule.b).array() - pad;
-    const Eigen::Vector3d hi = o.capsule.a.cwiseMax(o.capsule.b).array() + pad;
+    for (size_t g = 1; g < groups.size(); ++g) {
+      bool all = !ignored_list.empty();
+      for (int m : groups[g]) all = all && ignored[m];
+      group_ignored[g] = all;
+    }
+    const Eigen::Vector3d o_lo = o.capsule.a.cwiseMin(o.capsule.b).array() - o.capsule.radius;
+    const Eigen::Vector3d o_hi = o.capsule.a.cwiseMax(o.capsule.b).array() + o.capsule.radius;
+    const Eigen::Vector3d o_mid = 0.5 * (o.capsule.a + o.capsule.b);
+    const double o_half = 0.5 * (o.capsule.b - o.capsule.a).norm();
+    const Eigen::Vector3d lo = o_lo.array() - reach;
+    const Eigen::Vector3d hi = o_hi.array() + reach;
     const int stamp = static_cast<int>(oi);
-    double clearance = std::numeric_limits<double>::infinity();
+    near.clear();
     grid.ForEachNear(lo, hi, [&](int i) {
-      if (visited[i] == stamp) return true;
+      if (visited[i] == stamp) return;
       visited[i] = stamp;
-      const PlacedCapsule& p = placed[i];
-      if (ignored[p.motion]) return true;
-      if ((p.lo.array() > hi.array()).any() || (p.hi.array() < lo.array()).any()) return true;
-      const double d = SegmentSegmentDistance(p.a, p.b, o.capsule.a, o.capsule.b) - p.radius -
-                       o.capsule.radius;
-      clearance = std::min(clearance, d);
-      return clearance > options.slack_m;  // margin 0 already: nothing can lower it
+      const Chunk& c = chunks[i];
+      if (group_ignored[c.motion]) return;
+      if ((c.lo.array() > hi.array()).any() || (c.hi.array() < lo.array()).any()) return;
+      near.emplace_back(BoxDistance(c.lo, c.hi, o_lo, o_hi), i);
     });
+    std::sort(near.begin(), near.end());
+    double clearance = std::numeric_limits<double>::infinity();
+    // A pair farther than `reach` leaves the margin at its maximum: the search is capped there
+    // (a micrometre beyond, so that the rounding of clearance - slack_m cannot matter).
+    double cap = reach + kReachSlackM;
+    for (const auto& [bound, i] : near) {
+      if (bound > cap + kBoundSlackM) break;
+      const Chunk& c = chunks[i];
+      for (int j = 0; j < c.count; ++j) {
+        const PlacedCapsule& p = placed[c.first + j * stride];
+        if (!p.valid) continue;
+        if ((p.lo.array() > hi.array()).any() || (p.hi.array() < lo.array()).any()) continue;
+        if (BoxDistance(p.lo, p.hi, o_lo, o_hi) > cap + kBoundSlackM) continue;
+        // Distance is 1-Lipschitz: no point of the capsule is nearer the obstacle's axis than
+        // its midpoint's distance less half its length.
+        if (PointSegmentDistance(p.mid, o.capsule.a, o.capsule.b) - p.half - p.radius -
+                o.capsule.radius >
+            cap + kBoundSlackM)
+          continue;
+        // The same from the obstacle's midpoint (tight for the short chords of canes).
+        if (PointSegmentDistance(o_mid, p.a, p.b) - o_half - p.radius - o.capsule.radius >
+            cap + kBoundSlackM)
+          continue;
+        const double d = SegmentSegmentDistance(p.a, p.b, o.capsule.a, o.capsule.b) - p.radius -
+                         o.capsule.radius;
+        clearance = std::min(clearance, d);
+        cap = std::min(cap, clearance);
+      }
+      if (clearance <= options.slack_m) break;  // margin 0 already: nothing can lower it
+    }
     o.margin_m = std::clamp(clearance - options.slack_m, 0.0, options.max_margin_m);
     if (o.kind != ObstacleKind::kPlatform) vine_margins.push_back(o.margin_m);
   }
   for (HalfSpace& plane : scene->planes) {
     double clearance = std::numeric_limits<double>::infinity();
     for (const PlacedCapsule& p : placed) {
+      if (!p.valid) continue;
       const double d = plane.offset - std::max(plane.normal.dot(p.a), plane.normal.dot(p.b)) -
                        p.radius;
       clearance = std::min(clearance, d);

@@ -161,6 +161,31 @@ TEST(SafetyMargins, TheCutCaneNearTheCutDoesNotLimitItsMargin) {
   EXPECT_EQ(scene.obstacles[1].margin_m, 0.0);                          // cane 8: touching
 }
 
+// The same configuration in several motions (as a stroke's ends are, and alternatives share):
+// an obstacle ignores it only where every motion that holds it ignores that obstacle.
+TEST(SafetyMargins, ASharedConfigurationIsIgnoredOnlyWhereEveryMotionIgnoresIt) {
+  const Eigen::Vector3d cut(0.05, 0, 0.05);
+  const ProtectedMotion cut7 = {{Joints::Zero()}, CaneId{7}, cut, 0.02};
+  const ProtectedMotion cut8 = {{Joints::Zero()}, CaneId{8}, cut, 0.02};
+  const ProtectedMotion end = {{Joints::Zero()}, CaneId{0}, Eigen::Vector3d::Zero(), 0.0};
+  const MarginOptions options;
+  auto margins = [&](const std::vector<ProtectedMotion>& motions) {
+    CollisionScene scene;
+    scene.obstacles.push_back(Ball(0.055, 0.01, ObstacleKind::kCane, 7));
+    scene.obstacles.push_back(Ball(0.055, 0.01, ObstacleKind::kCane, 8));
+    const MarginSummary summary = InflateMargins(Post(), motions, options, &scene);
+    EXPECT_EQ(summary.configurations, static_cast<int>(motions.size()));
+    return std::pair(scene.obstacles[0].margin_m, scene.obstacles[1].margin_m);
+  };
+  // Ignoring nothing, before or after the cut: both canes touch.
+  EXPECT_EQ(margins({cut7, end}), std::pair(0.0, 0.0));
+  EXPECT_EQ(margins({end, cut7}), std::pair(0.0, 0.0));
+  // Two cuts on different canes: each cane is protected by the other cut.
+  EXPECT_EQ(margins({cut7, cut8}), std::pair(0.0, 0.0));
+  // Two motions on the same cane: it is ignored by both.
+  EXPECT_EQ(margins({cut7, cut7}), std::pair(options.max_margin_m, 0.0));
+}
+
 TEST(SafetyMargins, PlanesKeepTheirDistance) {
   CollisionScene scene;
   HalfSpace ground;  // free side: z >= -0.02, i.e. -z <= 0.02
@@ -211,6 +236,22 @@ TEST(SafetyMargins, MatchesTheReferenceOnSimulatedVines) {
         motion.ignored_radius_m = 0.04;
       }
       motions.push_back(motion);
+    }
+    // Motions that share configurations (placed once by the fast pass): a copy of a motion that
+    // ignores nothing, allowed to touch a cane (the configurations stay protected from it); a
+    // copy of one that ignores a cane, ignoring another (each cane stays protected by the other
+    // motion); a copy ignoring the same cane (ignored by both); and a motion's first
+    // configuration alone (as PlanVine protects a stroke's ends).
+    for (int m = 0; m < 8; ++m) {
+      ProtectedMotion copy = motions[m];
+      const Obstacle& cane = *canes[rng() % canes.size()];
+      if (m % 4 != 3) {
+        copy.ignored_cane = CaneId{cane.owner_id};
+        copy.ignored_point_in_base = cane.capsule.a;
+        copy.ignored_radius_m = 0.04;
+      }
+      if (m % 4 == 3) copy.path.resize(1);
+      motions.push_back(copy);
     }
     Joints home, away;
     for (int j = 0; j < 6; ++j) home[j] = angle(rng), away[j] = angle(rng);
