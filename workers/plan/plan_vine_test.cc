@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "workers/plan/plan_vine.h"
 
+#include <algorithm>
 #include <cmath>
 #include <set>
 
@@ -343,6 +344,56 @@ TEST(PlanVine, ACutThatNoPassFreesSlidesFurtherAsALastResort) {
     }
   }
   FAIL() << "no cut on seeds 1100-1103 needs a slide and is reached";
+}
+
+// A pass that plans motions but whose paths reach none of them makes no cut either: its blocked
+// cuts still get the last resort. With no path possible (RRT-Connect given no time, no direct
+// segments), a cut that needs a slide ends with no path once the last resort gave it a motion,
+// and with no collision-free motion without the last resort.
+TEST(PlanVine, APassThatReachesNoMotionStillGivesItsBlockedCutsTheLastResort) {
+  const RobotModel robot = DefaultUr5(SecateurTool());
+  const PlatformGeometry platform = DefaultPlatform();
+  PlanOptions options = Options();
+  options.cut_motion.max_slide_m = 0;
+  options.path.try_direct_first = false;
+  options.path.time_limit_s = 1e-9;
+  CutMotionOptions sliding = options.cut_motion;
+  sliding.max_slide_m = 0.10;
+  for (uint64_t seed : {1100, 1101, 1102, 1103}) {
+    const Stop stop = SimStop(seed);
+    const auto scene = CollisionScene::Build(stop.model, platform, robot);
+    ASSERT_TRUE(scene.ok()) << scene.status();
+    const std::vector<CutMotion> square = PlanCutMotions(robot, stop.model, *scene, stop.plan.cuts,
+                                                         options.cut_motion, Deadline::Infinite());
+    const auto free_at =
+        std::find_if(square.begin(), square.end(), [](const CutMotion& m) {
+          return m.outcome == CutMotionOutcome::kPlanned;
+        });
+    if (free_at == square.end()) continue;
+    for (size_t k = 0; k < square.size(); ++k) {
+      const std::span<const Cut> one(&stop.plan.cuts[k], 1);
+      if (square[k].outcome != CutMotionOutcome::kNoCollisionFreeMotion ||
+          PlanCutMotions(robot, stop.model, *scene, one, sliding, Deadline::Infinite())[0]
+                  .outcome != CutMotionOutcome::kPlanned)
+        continue;
+      CutPlan plan = stop.plan;
+      plan.cuts = {stop.plan.cuts[free_at - square.begin()], stop.plan.cuts[k]};
+      auto reason_of_blocked = [&](double last_resort_m) {
+        options.last_resort_max_slide_m = last_resort_m;
+        auto result = PlanVine(stop.model, plan, robot, platform, options);
+        EXPECT_TRUE(result.ok()) << result.status();
+        if (!result.ok()) return std::string();
+        EXPECT_TRUE(result->cuts.empty());
+        for (const UnplannedCut& u : result->trajectory.unplanned)
+          if (u.cut_id.value == plan.cuts[1].id.value) return u.reason;
+        return std::string("planned");
+      };
+      EXPECT_EQ(reason_of_blocked(0.10), "no_path_within_deadline") << "seed " << seed;
+      EXPECT_EQ(reason_of_blocked(0.0), "no_collision_free_cut_motion") << "seed " << seed;
+      return;
+    }
+  }
+  FAIL() << "no stop of seeds 1100-1103 has a free cut and a cut that needs a slide";
 }
 
 TEST(PlanVine, RejectsANegativeLastResortSlide) {
