@@ -304,6 +304,18 @@ TEST(PlanVine, ACutThatWallsTheArmInIsUndone) {
   EXPECT_GT(undone, 0);
 }
 
+// Whether `cut` has no collision-free motion in `scene` with `square` (no slide) but has one
+// with `sliding`: a cut only a slide frees.
+bool OnlyASlideFrees(const RobotModel& robot, const Stop& stop, const CollisionScene& scene,
+                     const Cut& cut, const CutMotionOptions& square,
+                     const CutMotionOptions& sliding) {
+  const std::span<const Cut> one(&cut, 1);
+  return PlanCutMotions(robot, stop.model, scene, one, square, Deadline::Infinite())[0].outcome ==
+             CutMotionOutcome::kNoCollisionFreeMotion &&
+         PlanCutMotions(robot, stop.model, scene, one, sliding, Deadline::Infinite())[0]
+                 .outcome == CutMotionOutcome::kPlanned;
+}
+
 // A cut that no motion frees without sliding, alone in its plan: its only pass plans no motion,
 // so with last_resort_max_slide_m it is searched again, sliding, and made; without, given up.
 TEST(PlanVine, ACutThatNoPassFreesSlidesFurtherAsALastResort) {
@@ -318,13 +330,7 @@ TEST(PlanVine, ACutThatNoPassFreesSlidesFurtherAsALastResort) {
     const auto scene = CollisionScene::Build(stop.model, platform, robot);
     ASSERT_TRUE(scene.ok()) << scene.status();
     for (const Cut& cut : stop.plan.cuts) {
-      const std::span<const Cut> one(&cut, 1);
-      if (PlanCutMotions(robot, stop.model, *scene, one, options.cut_motion,
-                         Deadline::Infinite())[0].outcome !=
-              CutMotionOutcome::kNoCollisionFreeMotion ||
-          PlanCutMotions(robot, stop.model, *scene, one, sliding, Deadline::Infinite())[0]
-                  .outcome != CutMotionOutcome::kPlanned)
-        continue;
+      if (!OnlyASlideFrees(robot, stop, *scene, cut, options.cut_motion, sliding)) continue;
       CutPlan plan = stop.plan;
       plan.cuts = {cut};
       options.last_resort_max_slide_m = 0.10;
@@ -371,10 +377,7 @@ TEST(PlanVine, APassThatReachesNoMotionStillGivesItsBlockedCutsTheLastResort) {
         });
     if (free_at == square.end()) continue;
     for (size_t k = 0; k < square.size(); ++k) {
-      const std::span<const Cut> one(&stop.plan.cuts[k], 1);
-      if (square[k].outcome != CutMotionOutcome::kNoCollisionFreeMotion ||
-          PlanCutMotions(robot, stop.model, *scene, one, sliding, Deadline::Infinite())[0]
-                  .outcome != CutMotionOutcome::kPlanned)
+      if (!OnlyASlideFrees(robot, stop, *scene, stop.plan.cuts[k], options.cut_motion, sliding))
         continue;
       CutPlan plan = stop.plan;
       plan.cuts = {stop.plan.cuts[free_at - square.begin()], stop.plan.cuts[k]};
