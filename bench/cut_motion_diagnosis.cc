@@ -171,6 +171,35 @@ std::vector<std::string> ObstacleClasses(const CollisionScene& scene, const Vine
   return out;
 }
 
+// Along a trajectory segment's points in `scene`: the least primitive clearance (capped at 1 m)
+// and how many points the FCL mesh checker finds in collision.
+struct SegmentClearance {
+  double worst_m = 1;
+  int mesh_colliding = 0;
+};
+SegmentClearance ClearanceAlong(const RobotModel& robot, const CollisionScene& scene,
+                                const std::vector<TrajectoryPoint>& points) {
+  auto primitive = MakeChecker(CheckerKind::kPrimitives, robot, scene);
+  auto mesh = MakeChecker(CheckerKind::kFclMesh, robot, scene);
+  SegmentClearance out;
+  for (const TrajectoryPoint& p : points) {
+    const Joints q = Eigen::Map<const Joints>(p.q.data());
+    out.worst_m = std::min(out.worst_m, primitive->Clearance(q));
+    out.mesh_colliding += mesh->IsFree(q) ? 0 : 1;
+  }
+  return out;
+}
+
+// Every (obstacle, arm body) contact at any of the points.
+Contacts ContactsAlong(const Classifier& who, const std::vector<TrajectoryPoint>& points) {
+  Contacts all;
+  for (const TrajectoryPoint& p : points) {
+    const Contacts c = who.At(Eigen::Map<const Joints>(p.q.data()));
+    all.insert(c.begin(), c.end());
+  }
+  return all;
+}
+
 std::string Join(const std::set<std::string>& s) {
   std::string out;
   for (const std::string& x : s) out += (out.empty() ? "" : "+") + x;
@@ -410,17 +439,10 @@ int Main(int argc, char** argv) {
                   c.id.value == result->trajectory.segments[k].cut_id.value)
                 before.push_back(c);
           const auto s = CollisionScene::Build(WithoutFallenWood(scene->vine, before), platform, robot);
-          auto primitive = MakeChecker(CheckerKind::kPrimitives, robot, *s);
-          auto mesh = MakeChecker(CheckerKind::kFclMesh, robot, *s);
-          double worst = 1;
-          int mesh_bad = 0;
-          for (const TrajectoryPoint& p : segment.points) {
-            const Joints q = Eigen::Map<const Joints>(p.q.data());
-            worst = std::min(worst, primitive->Clearance(q));
-            mesh_bad += mesh->IsFree(q) ? 0 : 1;
-          }
+          const SegmentClearance along = ClearanceAlong(robot, *s, segment.points);
           std::printf("    transit after %zu cuts: primitive clearance at its samples %.6f m; "
-                      "mesh-colliding samples %d\n", before.size(), worst, mesh_bad);
+                      "mesh-colliding samples %d\n", before.size(), along.worst_m,
+                      along.mesh_colliding);
           // What its samples touch: obstacle kind:owner#chord (a cane's chords from its base).
           std::vector<std::string> names;
           std::map<int64_t, int> chords;
@@ -428,12 +450,7 @@ int Main(int argc, char** argv) {
             names.push_back(std::to_string(static_cast<int>(o.kind)) + ":" +
                             std::to_string(o.owner_id) + "#" +
                             std::to_string(o.kind == ObstacleKind::kCane ? chords[o.owner_id]++ : 0));
-          const Classifier who(robot, *s, names);
-          Contacts all;
-          for (const TrajectoryPoint& p : segment.points) {
-            const Contacts c = who.At(Eigen::Map<const Joints>(p.q.data()));
-            all.insert(c.begin(), c.end());
-          }
+          const Contacts all = ContactsAlong(Classifier(robot, *s, names), segment.points);
           for (const auto& [o, body] : all) std::printf("    touches %s with %s\n", o.c_str(), body.c_str());
         }
         for (const Cut& c : result->cuts) {
@@ -447,27 +464,14 @@ int Main(int argc, char** argv) {
           const CollisionScene allowed = s->WithoutCaneNear(
               c.cane_id, robot.platform_from_arm_base.inverse() * c.point,
               options.cut_motion.cut_cane_free_radius_m);
-          auto primitive = MakeChecker(CheckerKind::kPrimitives, robot, allowed);
-          auto mesh = MakeChecker(CheckerKind::kFclMesh, robot, allowed);
-          double worst = 1;
-          int mesh_bad = 0;
-          for (const TrajectoryPoint& p : segment.points) {
-            const Joints q = Eigen::Map<const Joints>(p.q.data());
-            worst = std::min(worst, primitive->Clearance(q));
-            mesh_bad += mesh->IsFree(q) ? 0 : 1;
-          }
-          std::printf("    primitive clearance along it %.6f m; mesh-colliding points %d\n", worst,
-                      mesh_bad);
+          const SegmentClearance along = ClearanceAlong(robot, allowed, segment.points);
+          std::printf("    primitive clearance along it %.6f m; mesh-colliding points %d\n",
+                      along.worst_m, along.mesh_colliding);
           std::vector<std::string> names;
           for (const Obstacle& o : allowed.obstacles)
             names.push_back(std::to_string(static_cast<int>(o.kind)) + ":" +
                             std::to_string(o.owner_id));
-          const Classifier who(robot, allowed, names);
-          Contacts all;
-          for (const TrajectoryPoint& p : segment.points) {
-            const Contacts c = who.At(Eigen::Map<const Joints>(p.q.data()));
-            all.insert(c.begin(), c.end());
-          }
+          const Contacts all = ContactsAlong(Classifier(robot, allowed, names), segment.points);
           for (const auto& [o, body] : all) std::printf("    touches %s with %s\n", o.c_str(), body.c_str());
           std::printf("    cut cane %lld, cuts before:", static_cast<long long>(c.cane_id.value));
           for (const Cut& b : before) std::printf(" %lld(cane %lld)", static_cast<long long>(b.id.value), static_cast<long long>(b.cane_id.value));
