@@ -4,26 +4,16 @@
 #include <cmath>
 
 #include "gtest/gtest.h"
+#include "core/vine_model_test_util.h"
 
 namespace vb {
 namespace {
 
-Cane MakeCane(int id, std::optional<int> parent, CaneKind kind, Eigen::Vector3d a,
-              Eigen::Vector3d b) {
-  Cane c;
-  c.id = CaneId(id);
-  if (parent) c.parent_id = CaneId(*parent);
-  c.kind = kind;
-  c.polyline.points = {a, b};
-  c.polyline.radii = {0.005, 0.005};
-  return c;
-}
-
 VineModel Truth() {
   VineModel m;
-  m.canes.push_back(MakeCane(1, std::nullopt, CaneKind::kTrunk, {0, 0.8, 0}, {0, 0.8, 1.0}));
-  m.canes.push_back(MakeCane(2, 1, CaneKind::kCane, {0, 0.8, 1.0}, {0.5, 0.8, 1.0}));
-  m.canes.push_back(MakeCane(3, 1, CaneKind::kCane, {0, 0.8, 1.0}, {-0.5, 0.8, 1.2}));
+  m.canes.push_back(StraightCane(1, std::nullopt, CaneKind::kTrunk, {0, 0.8, 0}, {0, 0.8, 1.0}));
+  m.canes.push_back(StraightCane(2, 1, CaneKind::kCane, {0, 0.8, 1.0}, {0.5, 0.8, 1.0}));
+  m.canes.push_back(StraightCane(3, 1, CaneKind::kCane, {0, 0.8, 1.0}, {-0.5, 0.8, 1.2}));
   m.head.spheres.push_back({{0, 0.8, 1.0}, 0.05});
   Wire w;
   w.id = WireId(1);
@@ -48,7 +38,7 @@ TEST(EvaluateReconstruction, CountsMissingShiftedAndDisconnectedLength) {
   VineModel model = Truth();
   model.canes.erase(model.canes.begin() + 2);  // cane 3 missing: recall loses its length
   // A false cane, and cane 2 hung on it instead of on the trunk: recalled but not connected.
-  model.canes.push_back(MakeCane(9, 1, CaneKind::kCane, {0, 0.9, 0.5}, {0.3, 0.9, 0.5}));
+  model.canes.push_back(StraightCane(9, 1, CaneKind::kCane, {0, 0.9, 0.5}, {0.3, 0.9, 0.5}));
   model.canes[1].parent_id = CaneId(9);
   const auto m = EvaluateReconstruction(model, Truth());
   ASSERT_TRUE(m.ok()) << m.status();

@@ -6,6 +6,7 @@
 
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
+#include "core/vine_model_test_util.h"
 
 namespace vb {
 namespace {
@@ -25,17 +26,6 @@ CameraCalibration Pinhole(const std::string& name, double x) {
   return c;
 }
 
-Cane Straight(int id, std::optional<int> parent, CaneKind kind, Eigen::Vector3d a,
-              Eigen::Vector3d b) {
-  Cane c;
-  c.id = CaneId(id);
-  if (parent) c.parent_id = CaneId(*parent);
-  c.kind = kind;
-  c.polyline.points = {a, b};
-  c.polyline.radii = {0.005, 0.005};
-  return c;
-}
-
 // Camera A at x = 0 sees X in [-1, 1) on the plane y = 1, camera B at x = 1 sees [0, 2).
 RigCalibration TwoCameras() {
   RigCalibration rig;
@@ -47,8 +37,8 @@ TEST(ViewCoverage, SplitsACanePartlyOutsideEachCamera) {
   VineModel truth;
   // From X = -1.5 to 1.5: [0, 1) in both images, [-1, 0) and [1, 1.5] in one, [-1.5, -1) in none.
   // A trunk outside both images (behind the cameras) carries the cane; it is 0.5 m long.
-  truth.canes.push_back(Straight(1, std::nullopt, CaneKind::kTrunk, {-1.5, -1, 0}, {-1.5, -0.5, 0}));
-  truth.canes.push_back(Straight(2, 1, CaneKind::kCane, {-1.5, 1, 0}, {1.5, 1, 0}));
+  truth.canes.push_back(StraightCane(1, std::nullopt, CaneKind::kTrunk, {-1.5, -1, 0}, {-1.5, -0.5, 0}));
+  truth.canes.push_back(StraightCane(2, 1, CaneKind::kCane, {-1.5, 1, 0}, {1.5, 1, 0}));
   const auto all = SampleViewCoverage(truth, TwoCameras(), 0.001);
   ASSERT_TRUE(all.ok()) << all.status();
   std::vector<CoverageSample> cane;
@@ -76,8 +66,8 @@ TEST(ViewCoverage, SplitsACanePartlyOutsideEachCamera) {
 TEST(ViewCoverage, CountsATrunkBelowTheImagesAndSkipsSpurs) {
   VineModel truth;
   // Trunk from Z = -2 to 0.5 at X = 0.5 (inside both images across): in view for Z > -1 only.
-  truth.canes.push_back(Straight(1, std::nullopt, CaneKind::kTrunk, {0.5, 1, -2}, {0.5, 1, 0.5}));
-  truth.canes.push_back(Straight(2, 1, CaneKind::kSpur, {0.5, 1, 0.5}, {5, 1, 0.5}));
+  truth.canes.push_back(StraightCane(1, std::nullopt, CaneKind::kTrunk, {0.5, 1, -2}, {0.5, 1, 0.5}));
+  truth.canes.push_back(StraightCane(2, 1, CaneKind::kSpur, {0.5, 1, 0.5}, {5, 1, 0.5}));
   std::vector<CoverageSample> samples = *SampleViewCoverage(truth, TwoCameras(), 0.001);
   for (const CoverageSample& s : samples) ASSERT_EQ(s.kind, CaneKind::kTrunk);
   const ViewCoverage c = SummariseViewCoverage(samples, 2);
@@ -91,7 +81,7 @@ TEST(ViewCoverage, CountsATrunkBelowTheImagesAndSkipsSpurs) {
 
 TEST(ViewCoverage, PointsBehindACameraAreNotProjected) {
   VineModel truth;
-  truth.canes.push_back(Straight(1, std::nullopt, CaneKind::kTrunk, {0.5, -1, 0}, {0.5, -2, 0}));
+  truth.canes.push_back(StraightCane(1, std::nullopt, CaneKind::kTrunk, {0.5, -1, 0}, {0.5, -2, 0}));
   const auto samples = SampleViewCoverage(truth, TwoCameras(), 0.01);
   ASSERT_TRUE(samples.ok());
   ASSERT_FALSE(samples->empty());
@@ -103,7 +93,7 @@ TEST(ViewCoverage, PointsBehindACameraAreNotProjected) {
 
 TEST(ViewCoverage, RejectsABadStepRigOrModel) {
   VineModel truth;
-  truth.canes.push_back(Straight(1, std::nullopt, CaneKind::kTrunk, {0, 1, 0}, {0, 1, 1}));
+  truth.canes.push_back(StraightCane(1, std::nullopt, CaneKind::kTrunk, {0, 1, 0}, {0, 1, 1}));
   EXPECT_THAT(EvaluateViewCoverage(truth, TwoCameras(), 0.0).status().message(),
               HasSubstr("sample_step_m"));
   RigCalibration bad = TwoCameras();

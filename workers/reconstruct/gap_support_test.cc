@@ -2,27 +2,16 @@
 #include "workers/reconstruct/gap_support.h"
 
 #include "gtest/gtest.h"
+#include "core/vine_model_test_util.h"
 #include "sim/rig.h"
 #include "workers/reconstruct/synthetic_views.h"
 
 namespace vb::reconstruct {
 namespace {
 
-// One straight cane, 8 mm thick, across the middle of the rig's view.
-VineModel OneCane() {
-  VineModel model;
-  Cane cane;
-  cane.id = CaneId(1);
-  cane.kind = CaneKind::kTrunk;
-  cane.polyline.points = {{-0.1, 0.8, 0.9}, {0.2, 0.8, 1.0}};
-  cane.polyline.radii = {0.004, 0.004};
-  model.canes.push_back(cane);
-  return model;
-}
-
 TEST(GapSupport, AStretchOfTheCaneIsWoodInEveryView) {
   const RigCalibration rig = sim::MakeRig().value();
-  const std::vector<View2D> views = SyntheticViews(OneCane(), rig);
+  const std::vector<View2D> views = SyntheticViews(OneCaneAcrossTheView(), rig);
   const Eigen::Vector3d a(-0.05, 0.8, 0.9 + 0.1 * 0.05 / 0.3);
   const Eigen::Vector3d b(0.15, 0.8, 0.9 + 0.1 * 0.25 / 0.3);
   EXPECT_GE(GapSupport(a, b, views, rig), 0.99);
@@ -30,7 +19,7 @@ TEST(GapSupport, AStretchOfTheCaneIsWoodInEveryView) {
 
 TEST(GapSupport, AGapOverBackgroundIsNotWood) {
   const RigCalibration rig = sim::MakeRig().value();
-  const std::vector<View2D> views = SyntheticViews(OneCane(), rig);
+  const std::vector<View2D> views = SyntheticViews(OneCaneAcrossTheView(), rig);
   // From a point on the cane straight up 8 cm, over the blue backdrop.
   const Eigen::Vector3d a(0.0, 0.8, 0.9 + 0.1 / 3.0);
   EXPECT_LT(GapSupport(a, a + Eigen::Vector3d(0, 0, 0.08), views, rig), 0.2);
@@ -43,7 +32,7 @@ TEST(GapSupport, AGapOverBackgroundIsNotWood) {
 
 TEST(GapSupport, WhatNoTwoViewsSeeIsUnsupported) {
   const RigCalibration rig = sim::MakeRig().value();
-  const std::vector<View2D> views = SyntheticViews(OneCane(), rig);
+  const std::vector<View2D> views = SyntheticViews(OneCaneAcrossTheView(), rig);
   // Far beside the rig, outside every image.
   EXPECT_EQ(GapSupport({3.0, 0.8, 1.0}, {3.1, 0.8, 1.0}, views, rig), 0.0);
   EXPECT_EQ(GapSupport({0.0, 0.8, 1.0}, {NAN, 0.8, 1.0}, views, rig), 0.0);

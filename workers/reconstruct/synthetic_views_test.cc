@@ -2,25 +2,15 @@
 #include "workers/reconstruct/synthetic_views.h"
 
 #include "gtest/gtest.h"
+#include "core/vine_model_test_util.h"
 #include "sim/rig.h"
 
 namespace vb::reconstruct {
 namespace {
 
-VineModel OneCane() {
-  VineModel model;
-  Cane cane;
-  cane.id = CaneId(1);
-  cane.kind = CaneKind::kTrunk;
-  cane.polyline.points = {{-0.1, 0.8, 0.9}, {0.2, 0.8, 1.0}};
-  cane.polyline.radii = {0.004, 0.004};
-  model.canes.push_back(cane);
-  return model;
-}
-
 TEST(SyntheticViews, SegmentsLieOnTheProjectedCane) {
   const RigCalibration rig = sim::MakeRig().value();
-  const std::vector<View2D> views = SyntheticViews(OneCane(), rig);
+  const std::vector<View2D> views = SyntheticViews(OneCaneAcrossTheView(), rig);
   ASSERT_EQ(views.size(), 3u);
   for (size_t v = 0; v < views.size(); ++v) {
     ASSERT_EQ(views[v].segments.size(), 1u);
