@@ -125,11 +125,8 @@ TEST(JoinClassifier, DISABLED_TrainOnSimulatedStops) {
       ASSERT_TRUE(matched.ok()) << matched.status();
       auto canes = AssembleCanes(matched->pieces, options.assembly, deadline);
       ASSERT_TRUE(canes.ok()) << canes.status();
-      std::erase_if(*canes, [&](const Polyline3& cane) {
-        size_t outside = 0;
-        for (const Eigen::Vector3d& p : cane.points) outside += !options.volume.Contains(p);
-        return outside * 2 > cane.points.size();
-      });
+      std::erase_if(*canes,
+                    [&](const Polyline3& cane) { return options.volume.MostlyOutside(cane); });
       std::vector<Eigen::Vector3d> hints;
       for (const Polyline3& c : *canes) hints.insert(hints.end(), c.points.begin(), c.points.end());
       const auto head = ReconstructHeadAndTrunk(stop.views, matched->rig, options.volume,

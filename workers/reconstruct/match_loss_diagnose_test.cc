@@ -126,11 +126,8 @@ TEST(MatchLoss, DISABLED_Report) {
     PointGrid assembled_grid, connected_grid;
     auto canes = AssembleCanes(matched->pieces, options.assembly, deadline);
     ASSERT_TRUE(canes.ok());
-    std::erase_if(*canes, [&](const Polyline3& cane) {
-      size_t outside = 0;
-      for (const Eigen::Vector3d& p : cane.points) outside += !options.volume.Contains(p);
-      return outside * 2 > cane.points.size();
-    });
+    std::erase_if(*canes,
+                  [&](const Polyline3& cane) { return options.volume.MostlyOutside(cane); });
     for (const Polyline3& c : *canes) assembled_grid.AddLine(c.points, 1.0);
     std::vector<Eigen::Vector3d> hints;
     for (const Polyline3& c : *canes) hints.insert(hints.end(), c.points.begin(), c.points.end());

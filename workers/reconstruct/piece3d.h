@@ -18,6 +18,13 @@ struct WorkingVolume {
   Eigen::AlignedBox3d box{Eigen::Vector3d(-1.1, 0.45, -0.05), Eigen::Vector3d(1.1, 1.2, 2.1)};
 
   bool Contains(const Eigen::Vector3d& p) const { return box.contains(p); }
+
+  // More than half of the line's points lie outside: a reconstructed cane that is rejected.
+  bool MostlyOutside(const Polyline3& line) const {
+    size_t outside = 0;
+    for (const Eigen::Vector3d& p : line.points) outside += !Contains(p);
+    return outside * 2 > line.points.size();
+  }
 };
 
 // A piece of cane (or trunk) in 3D, from one match of 2D segments across two views, checked in

@@ -101,11 +101,8 @@ TEST(PipelineStages, DISABLED_Report) {
     for (const Piece3D& p : *pieces) piece_lines.push_back(p.polyline);
     auto canes = AssembleCanes(*pieces, options.assembly, deadline);
     ASSERT_TRUE(canes.ok()) << canes.status();
-    std::erase_if(*canes, [&](const Polyline3& cane) {
-      size_t outside = 0;
-      for (const Eigen::Vector3d& p : cane.points) outside += !options.volume.Contains(p);
-      return outside * 2 > cane.points.size();
-    });
+    std::erase_if(*canes,
+                  [&](const Polyline3& cane) { return options.volume.MostlyOutside(cane); });
     std::vector<Eigen::Vector3d> hints;
     for (const Polyline3& c : *canes) hints.insert(hints.end(), c.points.begin(), c.points.end());
     const auto head = ReconstructHeadAndTrunk(stop.views, rig, options.volume, options.head,

@@ -141,11 +141,8 @@ absl::StatusOr<ReconstructResult> ReconstructFromViews(const std::vector<View2D>
   t = std::chrono::steady_clock::now();
   VB_ASSIGN_OR_RETURN(std::vector<Polyline3> canes,
                       AssembleCanes(pieces, options.assembly, deadline));
-  std::erase_if(canes, [&](const Polyline3& cane) {
-    size_t outside = 0;
-    for (const Eigen::Vector3d& p : cane.points) outside += !options.volume.Contains(p);
-    return outside * 2 > cane.points.size();
-  });
+  std::erase_if(canes,
+                [&](const Polyline3& cane) { return options.volume.MostlyOutside(cane); });
   result.assembled_canes = static_cast<int>(canes.size());
   result.timings.assembly_s = SecondsSince(t);
 
