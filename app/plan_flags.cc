@@ -44,7 +44,7 @@ absl::StatusOr<PlanSetup> ParsePlanSetup(Flags& flags) {
   VB_ASSIGN_OR_RETURN(const double tilt_deg,
                       flags.Double("max-tilt-deg", cut.max_tilt_rad * 180 / M_PI));
   VB_ASSIGN_OR_RETURN(const int64_t tilt_steps, flags.Int("tilt-steps", cut.tilt_steps));
-  // Every joint's acceleration limit (default URScript movej's 1.4 rad/s^2): for what-if runs.
+  // Every joint's acceleration limit (default JointLimits', 5 rad/s^2): for what-if runs.
   VB_ASSIGN_OR_RETURN(const double acceleration,
                       flags.Double("joint-acceleration", plan::JointLimits().max_acceleration[0]));
   VB_ASSIGN_OR_RETURN(o.blend_transits, flags.Bool("blend-transits", o.blend_transits));

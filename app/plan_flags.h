@@ -26,7 +26,7 @@ struct PlanSetup {
 // --retry-unreached true|false, --blend-transits true|false (defaults: PlanOptions'),
 // --jaw-opening-m W
 // (the secateur's, SecateurOptions' default), --joint-acceleration A (rad/s^2 for every joint;
-// default JointLimits', URScript movej's 1.4; for what-if runs).
+// default JointLimits', 5 as in UR's ROS 2 MoveIt config; for what-if runs).
 // --choose-motions-with-order true|false, --rolled-twins true|false, --undo-walled-in
 // true|false (PlanOptions').
 // INVALID_ARGUMENT naming the flag.

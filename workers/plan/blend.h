@@ -19,7 +19,7 @@
 // Collisions: with a checker, the chords between successive output samples that overlap a blend
 // are checked with IsMotionFree: they are what an executor interpolating the samples follows (and
 // what trajectory_check.h re-checks); the parabola stays within amax sample_dt_s^2 / 8 of them
-// (0.44 mrad at 1.4 rad/s^2 and 0.05 s; checking it too in 0.01 s chords quadrupled the timing
+// (1.6 mrad at 5 rad/s^2 and 0.05 s; checking it too in 0.01 s chords quadrupled the timing
 // stage's cost and changed nothing on seeds 1110-1119); a colliding blend is made smaller (its
 // deviation from the via point bounded, which slows the neighbouring segments) by bisection
 // between the largest size found free and the smallest found colliding, starting with half its

@@ -14,7 +14,8 @@ namespace {
 using testing::J;
 
 TEST(MoveTime, TrapezoidMatchesClosedForm) {
-  JointLimits limits;  // v = pi, a = 1.4
+  JointLimits limits;  // v = pi
+  limits.max_acceleration = Joints::Constant(1.4);
   // One joint, 3 rad: v^2/a = 7.05 rad > 3, so triangular: 2 sqrt(3 / 1.4).
   EXPECT_NEAR(MoveTimeS(J(0), J(3), limits), 2.0 * std::sqrt(3.0 / 1.4), 1e-12);
   // With a = 10: v^2/a = 0.987 < 3, trapezoidal: d/v + v/a.
@@ -267,8 +268,8 @@ TEST(TimeParameterizeStroke, OneProfileWithinTheLimits) {
     stroke.push_back(q);
   }
   JointLimits limits;
-  limits.max_velocity *= 0.25;
-  limits.max_acceleration *= 0.25;
+  limits.max_velocity = Joints::Constant(0.25 * M_PI);
+  limits.max_acceleration = Joints::Constant(0.25 * 1.4);
   auto samples = TimeParameterizeStroke(stroke, limits, 3.0, 0.013);
   ASSERT_TRUE(samples.ok()) << samples.status();
   EXPECT_DOUBLE_EQ(samples->front().t, 3.0);

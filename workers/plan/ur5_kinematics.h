@@ -29,7 +29,12 @@ struct JointLimits {
   Joints lower = Joints::Constant(-2.0 * 3.141592653589793);   // rad
   Joints upper = Joints::Constant(2.0 * 3.141592653589793);    // rad
   Joints max_velocity = Joints::Constant(3.141592653589793);   // rad/s (UR5: 180 deg/s)
-  Joints max_acceleration = Joints::Constant(1.4);             // rad/s^2 (URScript movej default)
+  // rad/s^2. The UR5 has no joint acceleration limit of its own, only torque limits; Universal
+  // Robots' ROS 2 driver gives MoveIt 5 rad/s^2 per joint for time parameterisation, "chosen
+  // conservatively to work in most use cases" (ur_moveit_config/config/joint_limits.yaml).
+  // URScript movej's 1.4 rad/s^2 is a programming default, not a limit (docs/plan.md, "Time
+  // parameterisation").
+  Joints max_acceleration = Joints::Constant(5.0);
 
   // INVALID_ARGUMENT naming the joint: non-finite, lower >= upper, velocity or acceleration <= 0.
   absl::Status Validate() const;
