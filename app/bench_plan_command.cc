@@ -10,6 +10,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <iostream>
 #include <map>
 #include <numeric>
@@ -83,6 +84,15 @@ double IkNs(const plan::JointLimits& limits) {
   return 1e9 * s / poses.size();
 }
 
+// FNV-1a over the bits of a value: the trajectories' fingerprint.
+template <typename T>
+uint64_t Fnv(const T& value, uint64_t h) {
+  unsigned char bytes[sizeof(T)];
+  std::memcpy(bytes, &value, sizeof(T));
+  for (unsigned char b : bytes) h = (h ^ b) * 1099511628211ull;
+  return h;
+}
+
 // The same path queries replanned by one checker.
 struct Replay {
   std::vector<double> path_s, checks, check_ns;
@@ -128,6 +138,8 @@ absl::Status RunBenchPlan(Flags& flags) {
   VB_ASSIGN_OR_RETURN(const int64_t baseline_full_vines, flags.Int("baseline-full-vines", 0));
   // The output is always one JSON object; --json is accepted for scripts that pass it.
   VB_ASSIGN_OR_RETURN(const bool json_flag, flags.Bool("json", true));
+  // --per-vine: also each vine's stages, cuts, passes and path queries (our checker).
+  VB_ASSIGN_OR_RETURN(const bool per_vine, flags.Bool("per-vine", false));
   VB_ASSIGN_OR_RETURN(PlanSetup setup, ParsePlanSetup(flags));
   VB_RETURN_IF_ERROR(flags.Finish());
   (void)json_flag;
@@ -144,11 +156,15 @@ absl::Status RunBenchPlan(Flags& flags) {
   }
 
   std::map<CheckerKind, CheckerRecord> records;
+  nlohmann::json per_vine_json = nlohmann::json::array();
   std::map<CheckerKind, Replay> replays;
   std::vector<double> execution_s, saving, saving_vs_nn, cuts_per_vine, transit_s, cut_s,
       planned_per_vine;
   int verified = 0, verified_free = 0, failures = 0;
   int blend_vias = 0, blend_stops = 0, blend_shrinks = 0;  // transit timing, our checker
+  // Every sample (time and joints) of every trajectory planned with our checker and every
+  // unplanned cut, in order: two builds with the same fingerprint planned the same trajectories.
+  uint64_t fingerprint = 1469598103934665603ull;
   // Joint travel of the transits (rad, summed along their samples), our checker: per transit its
   // most-moving joint; per joint the total over all vines; per vine the wrist roll (joint 6).
   std::vector<double> transit_max_joint_rad, wrist_roll_rad_per_vine;
@@ -185,11 +201,30 @@ absl::Status RunBenchPlan(Flags& flags) {
       r.vine_s.push_back(s.total_s);
       if (v < baseline_full_vines) r.baseline_vines_vine_s.push_back(s.total_s);
       if (!baseline && v < baseline_vines) queries = s.paths;
+      // "other": the whole vine less the six stages (setup_s and what no timer covers); the
+      // medians of the stages do not add up to the whole vine's (a vine slow in one stage is
+      // often slow in another), so the per-vine figures (--per-vine) show where a vine goes.
+      const double other = s.total_s - (s.scene_s + s.cut_motions_s + s.margins_s +
+                                        s.ordering_s + s.paths_s + s.timing_s);
+      nlohmann::json vine_stages = nlohmann::json::object();
       for (const auto& [name, value] :
            {std::pair<const char*, double>{"scene", s.scene_s}, {"cut_motions", s.cut_motions_s},
             {"margins", s.margins_s}, {"ordering", s.ordering_s}, {"paths", s.paths_s},
-            {"timing", s.timing_s}})
+            {"timing", s.timing_s}, {"other", other}, {"stubs", s.stubs_s},
+            {"last_resort", s.last_resort_s}, {"home", s.home_s}, {"setup", s.setup_s}}) {
         r.stage_s[name].push_back(value);
+        vine_stages[name] = value;
+      }
+      if (per_vine && !baseline) {
+        int failed = 0;
+        for (const plan::PathRecord& p : s.paths) failed += p.outcome != plan::PathOutcome::kSolved;
+        per_vine_json.push_back({{"seed", seed}, {"total_s", s.total_s}, {"stages_s", vine_stages},
+                                 {"cuts", s.cuts}, {"planned", s.planned}, {"passes", s.passes},
+                                 {"paths", s.paths.size()}, {"failed_paths", failed},
+                                 {"walled_in_undone", s.walled_in_undone},
+                                 {"protected_configurations", s.margins.configurations},
+                                 {"execution_s", result->trajectory.duration_s}});
+      }
       for (const plan::PathRecord& p : s.paths) {
         r.path_s.push_back(p.planning_s);
         if (p.outcome == plan::PathOutcome::kSolved) {
@@ -208,6 +243,17 @@ absl::Status RunBenchPlan(Flags& flags) {
       r.passes = std::max(r.passes, s.passes);
       for (const UnplannedCut& u : result->trajectory.unplanned) ++r.unplanned[u.reason];
       if (kind != CheckerKind::kPrimitives) continue;
+      for (const TrajectorySegment& segment : result->trajectory.segments) {
+        fingerprint = Fnv(segment.cut_id.value, Fnv(static_cast<int>(segment.kind), fingerprint));
+        for (const TrajectoryPoint& point : segment.points) {
+          fingerprint = Fnv(point.t, fingerprint);
+          for (double q : point.q) fingerprint = Fnv(q, fingerprint);
+        }
+      }
+      for (const UnplannedCut& u : result->trajectory.unplanned) {
+        fingerprint = Fnv(u.cut_id.value, fingerprint);
+        for (char c : u.reason) fingerprint = Fnv(c, fingerprint);
+      }
       execution_s.push_back(result->trajectory.duration_s);
       double transit = 0, cutting = 0;
       for (const TrajectorySegment& segment : result->trajectory.segments) {
@@ -296,6 +342,7 @@ absl::Status RunBenchPlan(Flags& flags) {
     j["vine_median_s"] = r != records.end() ? nlohmann::json(Median(r->second.vine_s)) : nlohmann::json();
     out[std::string(plan::CheckerKindName(kind))] = j;
   }
+  out["trajectory_fingerprint"] = absl::StrCat(absl::Hex(fingerprint, absl::kZeroPad16));
   out["ik_all_solutions_ns"] = IkNs(setup.robot.limits);
   out["execution_s_per_vine_median"] = Median(execution_s);
   out["transit_s_per_vine_median"] = Median(transit_s);
@@ -331,6 +378,7 @@ absl::Status RunBenchPlan(Flags& flags) {
     out["speedup_per_vine_vs_fcl_mesh"] = Median(mesh_vines->second.vine_s) /
                                           Median(fast_vines->second.baseline_vines_vine_s);
   }
+  if (per_vine) out["per_vine"] = per_vine_json;
   std::cout << out.dump(1) << "\n";
   return absl::OkStatus();
 }

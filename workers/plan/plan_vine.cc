@@ -288,6 +288,7 @@ absl::StatusOr<std::vector<int>> PlanPass(const VineModel& model, const std::vec
       })) {
     // No cut of this pass has a motion, so no wood falls and the passes end: the blocked cuts
     // (canes at the head that block each other) are searched once more, sliding further.
+    const auto last_resort_start = std::chrono::steady_clock::now();
     p.last_resort_used = true;
     CutMotionOptions wider = options.cut_motion;
     wider.max_slide_m = options.last_resort_max_slide_m;
@@ -301,6 +302,7 @@ absl::StatusOr<std::vector<int>> PlanPass(const VineModel& model, const std::vec
     std::vector<CutMotion> again =
         PlanCutMotions(p.robot, model, scene, blocked, wider, p.deadline, make_checker);
     for (size_t i = 0; i < again.size(); ++i) motions[blocked_at[i]] = std::move(again[i]);
+    stats.last_resort_s += Seconds(last_resort_start);
   }
   std::vector<int> planned, retry;  // indices into cuts / motions; into plan.cuts
   for (size_t k = 0; k < motions.size(); ++k) {
@@ -318,6 +320,7 @@ absl::StatusOr<std::vector<int>> PlanPass(const VineModel& model, const std::vec
   // on the vine after any of its cuts made before them, so each must be free of all of them (a
   // stroke of those of the other cuts). A cut whose every motion touches another's stub waits for
   // the next pass, where that stub is part of the vine.
+  const auto stubs_start = std::chrono::steady_clock::now();
   std::vector<Cut> made_before;
   for (const Leg& leg : p.legs) made_before.push_back(leg.cut);
   std::vector<std::vector<Obstacle>> stubs(motions.size());
@@ -355,6 +358,7 @@ absl::StatusOr<std::vector<int>> PlanPass(const VineModel& model, const std::vec
     free_of_stubs.push_back(k);
   }
   planned = std::move(free_of_stubs);
+  stats.stubs_s += Seconds(stubs_start);
   stats.cut_motions_s += Seconds(t);
   if (planned.empty()) {
     for (int i : retry) p.Unplanned(p.plan.cuts[i].id, "no_collision_free_cut_motion");
@@ -585,6 +589,7 @@ absl::StatusOr<PlanResult> PlanVine(const VineModel& model, const CutPlan& plan,
   result.trajectory.platform_from_arm_base = robot.platform_from_arm_base;
   result.trajectory.tool = robot.tool;
   PlanStats& stats = result.stats;
+  stats.setup_s = Seconds(start);  // validation
   stats.cuts = static_cast<int>(plan.cuts.size());
   {
     auto t = std::chrono::steady_clock::now();
@@ -598,23 +603,27 @@ absl::StatusOr<PlanResult> PlanVine(const VineModel& model, const CutPlan& plan,
   }
   VB_RETURN_IF_ERROR(deadline.Check("plan"));
 
+  auto t = std::chrono::steady_clock::now();
   Planning p{model, plan, robot, platform, options, deadline, result};
   p.self_checker = MakeChecker(options.checker, robot, CollisionScene{});
+  stats.setup_s += Seconds(t);
   std::vector<int> pending(plan.cuts.size());
   for (size_t i = 0; i < pending.size(); ++i) pending[i] = static_cast<int>(i);
   VineModel now = model;
   for (int pass = 0; pass < options.max_passes && !pending.empty(); ++pass) {
     VB_ASSIGN_OR_RETURN(pending, PlanPass(now, pending, pass + 1 == options.max_passes, p));
     if (!pending.empty()) {
+      t = std::chrono::steady_clock::now();
       std::vector<Cut> made;
       for (const Leg& leg : p.legs) made.push_back(leg.cut);
       now = WithoutFallenWood(model, made);
+      stats.setup_s += Seconds(t);
     }
   }
 
   // Home again; if no path leads home from the last cut, that cut is given up and the arm goes
   // home from the one before it (the arm never ends a vine stranded among the canes).
-  auto t = std::chrono::steady_clock::now();
+  t = std::chrono::steady_clock::now();
   std::vector<Joints> home_path;
   std::shared_ptr<CollisionChecker> home_checker;  // of the scene the way home was found in
   std::shared_ptr<MotionProver> home_proof;        // that scene without margins
@@ -644,7 +653,8 @@ absl::StatusOr<PlanResult> PlanVine(const VineModel& model, const CutPlan& plan,
       p.scene_pass = dropped_pass + 1;  // it takes every leg left as made
     }
   }
-  stats.paths_s += Seconds(t);
+  stats.home_s = Seconds(t);
+  stats.paths_s += stats.home_s;
 
   // Timing: home -> (transit, cut)* -> home; every transit and stroke starts and ends at rest
   // (a stroke is approached from rest, and each segment can be executed on its own).
