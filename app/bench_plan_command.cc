@@ -6,6 +6,8 @@
 // time, checks per path, ns per configuration check and the fraction of reachable cuts planned;
 // plus IK time, execution time per vine, the ordering's saving, and the dense re-check of every
 // trajectory planned with our checker against FCL meshes with the margins removed.
+#include <time.h>
+
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -36,6 +38,9 @@ using plan::Joints;
 
 struct CheckerRecord {
   std::vector<double> path_s, solved_path_s, vine_s, checks_per_path;
+  // Thread CPU time of each whole vine: what the vine costs on one core, steadier than the wall
+  // time on a shared machine (which the time limits of the path queries still follow).
+  std::vector<double> vine_cpu_s;
   // Vine times on the vines the baselines also plan whole (for the speed-up).
   std::vector<double> baseline_vines_vine_s;
   int direct = 0, without_margins = 0;
@@ -84,6 +89,12 @@ double IkNs(const plan::JointLimits& limits) {
   return 1e9 * s / poses.size();
 }
 
+double ThreadCpuS() {
+  timespec ts;
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
 // FNV-1a over the bits of a value: the trajectories' fingerprint.
 template <typename T>
 uint64_t Fnv(const T& value, uint64_t h) {
@@ -105,6 +116,7 @@ nlohmann::json Summary(const CheckerRecord& r) {
   return {{"stage_median_s", stages},{"per_path_median_s", Median(r.path_s)},
           {"per_path_p95_s", Quantile(r.path_s, 0.95)},
           {"vine_median_s", Median(r.vine_s)},
+          {"vine_cpu_median_s", Median(r.vine_cpu_s)},
           {"checks_per_path", Median(r.checks_per_path)},
           {"success_rate", r.reachable > 0 ? double(r.planned) / r.reachable : 0.0},
           {"paths", r.path_s.size()},
@@ -188,8 +200,10 @@ absl::Status RunBenchPlan(Flags& flags) {
       plan::PlanOptions options = setup.options;
       options.checker = kind;
       if (baseline) options.path.time_limit_s *= baseline_time_scale;
+      const double cpu_start_s = ThreadCpuS();
       auto result = plan::PlanVine(scene.vine, decision->plan, setup.robot, setup.platform,
                                    options, Deadline::In(60.0 * (baseline ? baseline_time_scale : 1)));
+      const double cpu_s = ThreadCpuS() - cpu_start_s;
       if (!result.ok()) {
         ++failures;
         std::cerr << "seed " << seed << " " << plan::CheckerKindName(kind) << ": "
@@ -199,6 +213,7 @@ absl::Status RunBenchPlan(Flags& flags) {
       CheckerRecord& r = records[kind];
       const plan::PlanStats& s = result->stats;
       r.vine_s.push_back(s.total_s);
+      r.vine_cpu_s.push_back(cpu_s);
       if (v < baseline_full_vines) r.baseline_vines_vine_s.push_back(s.total_s);
       if (!baseline && v < baseline_vines) queries = s.paths;
       // "other": the whole vine less the six stages (setup_s and what no timer covers); the
@@ -218,7 +233,8 @@ absl::Status RunBenchPlan(Flags& flags) {
       if (per_vine && !baseline) {
         int failed = 0;
         for (const plan::PathRecord& p : s.paths) failed += p.outcome != plan::PathOutcome::kSolved;
-        per_vine_json.push_back({{"seed", seed}, {"total_s", s.total_s}, {"stages_s", vine_stages},
+        per_vine_json.push_back({{"seed", seed}, {"total_s", s.total_s}, {"cpu_s", cpu_s},
+                                 {"stages_s", vine_stages},
                                  {"cuts", s.cuts}, {"planned", s.planned}, {"passes", s.passes},
                                  {"paths", s.paths.size()}, {"failed_paths", failed},
                                  {"walled_in_undone", s.walled_in_undone},
