@@ -5,7 +5,9 @@
 // prints one JSON object: per checker the per-path planning time (median, p95), the whole-vine
 // time, checks per path, ns per configuration check and the fraction of reachable cuts planned;
 // plus IK time, execution time per vine, the ordering's saving, and the dense re-check of every
-// trajectory planned with our checker against FCL meshes with the margins removed.
+// trajectory planned with our checker against FCL meshes with the margins removed. With
+// --per-vine true, also each vine's stages (our checker); trajectory_fingerprint hashes every
+// trajectory planned with our checker (equal fingerprints: the same trajectories).
 #include <time.h>
 
 #include <algorithm>
