@@ -5,11 +5,16 @@
 // prints one JSON object: per checker the per-path planning time (median, p95), the whole-vine
 // time, checks per path, ns per configuration check and the fraction of reachable cuts planned;
 // plus IK time, execution time per vine, the ordering's saving, and the dense re-check of every
-// trajectory planned with our checker against FCL meshes with the margins removed.
+// trajectory planned with our checker against FCL meshes with the margins removed. With
+// --per-vine true, also each vine's stages (our checker); trajectory_fingerprint hashes every
+// trajectory planned with our checker (equal fingerprints: the same trajectories).
+#include <time.h>
+
 #include <algorithm>
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <iostream>
 #include <map>
 #include <numeric>
@@ -35,6 +40,9 @@ using plan::Joints;
 
 struct CheckerRecord {
   std::vector<double> path_s, solved_path_s, vine_s, checks_per_path;
+  // Thread CPU time of each whole vine: what the vine costs on one core, steadier than the wall
+  // time on a shared machine (which the time limits of the path queries still follow).
+  std::vector<double> vine_cpu_s;
   // Vine times on the vines the baselines also plan whole (for the speed-up).
   std::vector<double> baseline_vines_vine_s;
   int direct = 0, without_margins = 0;
@@ -83,6 +91,21 @@ double IkNs(const plan::JointLimits& limits) {
   return 1e9 * s / poses.size();
 }
 
+double ThreadCpuS() {
+  timespec ts;
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
+// FNV-1a over the bits of a value: the trajectories' fingerprint.
+template <typename T>
+uint64_t Fnv(const T& value, uint64_t h) {
+  unsigned char bytes[sizeof(T)];
+  std::memcpy(bytes, &value, sizeof(T));
+  for (unsigned char b : bytes) h = (h ^ b) * 1099511628211ull;
+  return h;
+}
+
 // The same path queries replanned by one checker.
 struct Replay {
   std::vector<double> path_s, checks, check_ns;
@@ -95,6 +118,7 @@ nlohmann::json Summary(const CheckerRecord& r) {
   return {{"stage_median_s", stages},{"per_path_median_s", Median(r.path_s)},
           {"per_path_p95_s", Quantile(r.path_s, 0.95)},
           {"vine_median_s", Median(r.vine_s)},
+          {"vine_cpu_median_s", Median(r.vine_cpu_s)},
           {"checks_per_path", Median(r.checks_per_path)},
           {"success_rate", r.reachable > 0 ? double(r.planned) / r.reachable : 0.0},
           {"paths", r.path_s.size()},
@@ -128,6 +152,8 @@ absl::Status RunBenchPlan(Flags& flags) {
   VB_ASSIGN_OR_RETURN(const int64_t baseline_full_vines, flags.Int("baseline-full-vines", 0));
   // The output is always one JSON object; --json is accepted for scripts that pass it.
   VB_ASSIGN_OR_RETURN(const bool json_flag, flags.Bool("json", true));
+  // --per-vine: also each vine's stages, cuts, passes and path queries (our checker).
+  VB_ASSIGN_OR_RETURN(const bool per_vine, flags.Bool("per-vine", false));
   VB_ASSIGN_OR_RETURN(PlanSetup setup, ParsePlanSetup(flags));
   VB_RETURN_IF_ERROR(flags.Finish());
   (void)json_flag;
@@ -144,11 +170,15 @@ absl::Status RunBenchPlan(Flags& flags) {
   }
 
   std::map<CheckerKind, CheckerRecord> records;
+  nlohmann::json per_vine_json = nlohmann::json::array();
   std::map<CheckerKind, Replay> replays;
   std::vector<double> execution_s, saving, saving_vs_nn, cuts_per_vine, transit_s, cut_s,
       planned_per_vine;
   int verified = 0, verified_free = 0, failures = 0;
   int blend_vias = 0, blend_stops = 0, blend_shrinks = 0;  // transit timing, our checker
+  // Every sample (time and joints) of every trajectory planned with our checker and every
+  // unplanned cut, in order: two builds with the same fingerprint planned the same trajectories.
+  uint64_t fingerprint = 1469598103934665603ull;
   // Joint travel of the transits (rad, summed along their samples), our checker: per transit its
   // most-moving joint; per joint the total over all vines; per vine the wrist roll (joint 6).
   std::vector<double> transit_max_joint_rad, wrist_roll_rad_per_vine;
@@ -172,8 +202,10 @@ absl::Status RunBenchPlan(Flags& flags) {
       plan::PlanOptions options = setup.options;
       options.checker = kind;
       if (baseline) options.path.time_limit_s *= baseline_time_scale;
+      const double cpu_start_s = ThreadCpuS();
       auto result = plan::PlanVine(scene.vine, decision->plan, setup.robot, setup.platform,
                                    options, Deadline::In(60.0 * (baseline ? baseline_time_scale : 1)));
+      const double cpu_s = ThreadCpuS() - cpu_start_s;
       if (!result.ok()) {
         ++failures;
         std::cerr << "seed " << seed << " " << plan::CheckerKindName(kind) << ": "
@@ -183,13 +215,34 @@ absl::Status RunBenchPlan(Flags& flags) {
       CheckerRecord& r = records[kind];
       const plan::PlanStats& s = result->stats;
       r.vine_s.push_back(s.total_s);
+      r.vine_cpu_s.push_back(cpu_s);
       if (v < baseline_full_vines) r.baseline_vines_vine_s.push_back(s.total_s);
       if (!baseline && v < baseline_vines) queries = s.paths;
+      // "other": the whole vine less the six stages (setup_s and what no timer covers); the
+      // medians of the stages do not add up to the whole vine's (a vine slow in one stage is
+      // often slow in another), so the per-vine figures (--per-vine) show where a vine goes.
+      const double other = s.total_s - (s.scene_s + s.cut_motions_s + s.margins_s +
+                                        s.ordering_s + s.paths_s + s.timing_s);
+      nlohmann::json vine_stages = nlohmann::json::object();
       for (const auto& [name, value] :
            {std::pair<const char*, double>{"scene", s.scene_s}, {"cut_motions", s.cut_motions_s},
             {"margins", s.margins_s}, {"ordering", s.ordering_s}, {"paths", s.paths_s},
-            {"timing", s.timing_s}})
+            {"timing", s.timing_s}, {"other", other}, {"stubs", s.stubs_s},
+            {"last_resort", s.last_resort_s}, {"home", s.home_s}, {"setup", s.setup_s}}) {
         r.stage_s[name].push_back(value);
+        vine_stages[name] = value;
+      }
+      if (per_vine && !baseline) {
+        int failed = 0;
+        for (const plan::PathRecord& p : s.paths) failed += p.outcome != plan::PathOutcome::kSolved;
+        per_vine_json.push_back({{"seed", seed}, {"total_s", s.total_s}, {"cpu_s", cpu_s},
+                                 {"stages_s", vine_stages},
+                                 {"cuts", s.cuts}, {"planned", s.planned}, {"passes", s.passes},
+                                 {"paths", s.paths.size()}, {"failed_paths", failed},
+                                 {"walled_in_undone", s.walled_in_undone},
+                                 {"protected_configurations", s.margins.configurations},
+                                 {"execution_s", result->trajectory.duration_s}});
+      }
       for (const plan::PathRecord& p : s.paths) {
         r.path_s.push_back(p.planning_s);
         if (p.outcome == plan::PathOutcome::kSolved) {
@@ -208,6 +261,17 @@ absl::Status RunBenchPlan(Flags& flags) {
       r.passes = std::max(r.passes, s.passes);
       for (const UnplannedCut& u : result->trajectory.unplanned) ++r.unplanned[u.reason];
       if (kind != CheckerKind::kPrimitives) continue;
+      for (const TrajectorySegment& segment : result->trajectory.segments) {
+        fingerprint = Fnv(segment.cut_id.value, Fnv(static_cast<int>(segment.kind), fingerprint));
+        for (const TrajectoryPoint& point : segment.points) {
+          fingerprint = Fnv(point.t, fingerprint);
+          for (double q : point.q) fingerprint = Fnv(q, fingerprint);
+        }
+      }
+      for (const UnplannedCut& u : result->trajectory.unplanned) {
+        fingerprint = Fnv(u.cut_id.value, fingerprint);
+        for (char c : u.reason) fingerprint = Fnv(c, fingerprint);
+      }
       execution_s.push_back(result->trajectory.duration_s);
       double transit = 0, cutting = 0;
       for (const TrajectorySegment& segment : result->trajectory.segments) {
@@ -296,6 +360,7 @@ absl::Status RunBenchPlan(Flags& flags) {
     j["vine_median_s"] = r != records.end() ? nlohmann::json(Median(r->second.vine_s)) : nlohmann::json();
     out[std::string(plan::CheckerKindName(kind))] = j;
   }
+  out["trajectory_fingerprint"] = absl::StrCat(absl::Hex(fingerprint, absl::kZeroPad16));
   out["ik_all_solutions_ns"] = IkNs(setup.robot.limits);
   out["execution_s_per_vine_median"] = Median(execution_s);
   out["transit_s_per_vine_median"] = Median(transit_s);
@@ -331,6 +396,7 @@ absl::Status RunBenchPlan(Flags& flags) {
     out["speedup_per_vine_vs_fcl_mesh"] = Median(mesh_vines->second.vine_s) /
                                           Median(fast_vines->second.baseline_vines_vine_s);
   }
+  if (per_vine) out["per_vine"] = per_vine_json;
   std::cout << out.dump(1) << "\n";
   return absl::OkStatus();
 }

@@ -249,10 +249,10 @@ absl::StatusOr<BlendedPath> TimeParameterizeBlended(std::span<const Joints> wayp
       out.samples.push_back({t0, run.w.back()});
     }
     out.duration_s = t0 - start_time_s;
-    if (checker == nullptr) break;
 
-    // The chords that overlap each interior blend.
+    // The chords that overlap each interior blend (checked, unless there is no checker).
     std::vector<int> colliding;  // global via indices
+    out.blend_chords.clear();
     int via_base = 0;
     for (size_t r = 0; r < runs.size(); ++r) {
       const Run& run = runs[r];
@@ -264,14 +264,19 @@ absl::StatusOr<BlendedPath> TimeParameterizeBlended(std::span<const Joints> wayp
         const double lo = run_t0 + run.tau[k] - 0.5 * run.tb[k];
         const double hi = run_t0 + run.tau[k] + 0.5 * run.tb[k];
         bool free = true;
-        for (size_t i = first; i < last && free; ++i) {
+        for (size_t i = first; i < last; ++i) {
           if (out.samples[i + 1].t <= lo || out.samples[i].t >= hi) continue;
-          free = checker->IsMotionFree(out.samples[i].q, out.samples[i + 1].q, options.max_step_m);
+          if (out.blend_chords.empty() || out.blend_chords.back() < static_cast<int>(i))
+            out.blend_chords.push_back(static_cast<int>(i));
+          if (checker != nullptr && free)
+            free = checker->IsMotionFree(out.samples[i].q, out.samples[i + 1].q,
+                                         options.max_step_m);
         }
         if (!free) colliding.push_back(via_base + k);
       }
       via_base += run.n();
     }
+    if (checker == nullptr) break;
     // Deviations are read from the current layout.
     via_base = 0;
     std::vector<double> deviation(points, 0.0);

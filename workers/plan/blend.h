@@ -54,6 +54,10 @@ struct BlendedPath {
   int stops = 0;                     // interior waypoints where the arm stops
   int shrinks = 0;                   // bisection steps down after a collision
   int64_t checks = 0;                // checker->checks() spent on blends
+  // The chords samples[i] -> samples[i + 1] that overlap an interior blend, by increasing i:
+  // every other chord lies on a straight segment between two waypoints (the arm starts and ends
+  // at rest along its segment, and stops exactly at a stop), so only these leave the path.
+  std::vector<int> blend_chords;
 };
 
 // Duration of the blended path with every blend at full size (no collision checks): what

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "workers/plan/blend.h"
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -149,6 +150,7 @@ TEST(BlendedPath, CollidingBlendFallsBackToAStop) {
     }
   }
   EXPECT_TRUE(at_via);
+  EXPECT_TRUE(path->blend_chords.empty());  // no blend left: the path is its segments
   ExpectWithinLimits(path->samples, limits, 0.02);
 }
 
@@ -175,6 +177,45 @@ TEST(BlendedPath, CollidingBlendIsShrunkUntilFree) {
   for (size_t i = 1; i < path->samples.size(); ++i)
     EXPECT_TRUE(checker.IsMotionFree(path->samples[i - 1].q, path->samples[i].q, 0.005)) << i;
   ExpectWithinLimits(path->samples, limits, 0.01);
+}
+
+// Distance in joint space from q to the segment a-b.
+double ToSegment(const Joints& q, const Joints& a, const Joints& b) {
+  const Joints d = b - a;
+  const double len2 = d.squaredNorm();
+  const double s = len2 > 0 ? std::clamp((q - a).dot(d) / len2, 0.0, 1.0) : 0.0;
+  return (q - (a + s * d)).norm();
+}
+
+TEST(BlendedPath, ChordsOutsideTheBlendsLieOnTheWaypointSegments) {
+  // What PlanVine proves again after blending (blend_chords) must hold every chord that leaves
+  // the waypoint segments: both ends of any other chord are on one segment.
+  std::mt19937 rng(1104);
+  const JointLimits limits = MixedLimits();
+  int blend_chords = 0, chords = 0;
+  for (int trial = 0; trial < 20; ++trial) {
+    const std::vector<Joints> w = RandomPath(rng, 2 + trial % 6, 0.5);
+    auto path = TimeParameterizeBlended(w, limits, nullptr, {}, 0.0, 0.05);
+    ASSERT_TRUE(path.ok());
+    const auto& s = path->samples;
+    size_t next = 0;  // into blend_chords
+    for (size_t i = 0; i + 1 < s.size(); ++i) {
+      ++chords;
+      if (next < path->blend_chords.size() && path->blend_chords[next] == static_cast<int>(i)) {
+        ++next;
+        ++blend_chords;
+        continue;
+      }
+      bool on_one = false;
+      for (size_t k = 0; k + 1 < w.size() && !on_one; ++k)
+        on_one = ToSegment(s[i].q, w[k], w[k + 1]) < 1e-9 &&
+                 ToSegment(s[i + 1].q, w[k], w[k + 1]) < 1e-9;
+      EXPECT_TRUE(on_one) << "trial " << trial << " chord " << i;
+    }
+    EXPECT_EQ(next, path->blend_chords.size()) << "trial " << trial << ": not increasing";
+  }
+  EXPECT_GT(blend_chords, 0);
+  EXPECT_LT(blend_chords, chords);
 }
 
 TEST(BlendedPath, RepeatedWaypointsAreMerged) {

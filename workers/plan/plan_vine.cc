@@ -89,7 +89,8 @@ void AppendSegment(SegmentKind kind, CutId cut_id, const std::vector<TimedJoints
 
 // A transit from rest to rest, blended through its waypoints where the blends are free in
 // `checker` (the scene it was planned in) and the blended trajectory is proven free in `proof`
-// (the scene without margins; MotionProver between its samples, as it is re-checked), or
+// (the scene without margins; MotionProver between its samples through the blends, as it is
+// re-checked; the other chords are on the proven waypoint segments), or
 // stopping at each of them (on the waypoints' segments, which were proven free).
 absl::Status AppendTransit(std::span<const Joints> waypoints, CollisionChecker* checker,
                            MotionProver* proof, const PlanOptions& options,
@@ -111,11 +112,14 @@ absl::Status AppendTransit(std::span<const Joints> waypoints, CollisionChecker* 
   stats.blend_shrinks += path.shrinks;
   stats.checks += path.checks;
   if (path.vias > path.stops) {
-    std::vector<Joints> samples;
-    samples.reserve(path.samples.size());
-    for (const TimedJoints& p : path.samples) samples.push_back(p.q);
+    // Only the chords through the blends: the others lie on the waypoints' segments, which were
+    // proven free of the same scene when the path was accepted (Planning::Prove).
     const int64_t checks = proof->checks();
-    const bool proven = proof->IsPathFree(samples);
+    bool proven = true;
+    for (size_t c = 0; c < path.blend_chords.size() && proven; ++c) {
+      const int i = path.blend_chords[c];
+      proven = proof->IsMotionFree(path.samples[i].q, path.samples[i + 1].q);
+    }
     stats.checks += proof->checks() - checks;
     if (!proven) {
       ++stats.unproven_blends;
@@ -288,6 +292,7 @@ absl::StatusOr<std::vector<int>> PlanPass(const VineModel& model, const std::vec
       })) {
     // No cut of this pass has a motion, so no wood falls and the passes end: the blocked cuts
     // (canes at the head that block each other) are searched once more, sliding further.
+    const auto last_resort_start = std::chrono::steady_clock::now();
     p.last_resort_used = true;
     CutMotionOptions wider = options.cut_motion;
     wider.max_slide_m = options.last_resort_max_slide_m;
@@ -301,6 +306,7 @@ absl::StatusOr<std::vector<int>> PlanPass(const VineModel& model, const std::vec
     std::vector<CutMotion> again =
         PlanCutMotions(p.robot, model, scene, blocked, wider, p.deadline, make_checker);
     for (size_t i = 0; i < again.size(); ++i) motions[blocked_at[i]] = std::move(again[i]);
+    stats.last_resort_s += Seconds(last_resort_start);
   }
   std::vector<int> planned, retry;  // indices into cuts / motions; into plan.cuts
   for (size_t k = 0; k < motions.size(); ++k) {
@@ -318,6 +324,7 @@ absl::StatusOr<std::vector<int>> PlanPass(const VineModel& model, const std::vec
   // on the vine after any of its cuts made before them, so each must be free of all of them (a
   // stroke of those of the other cuts). A cut whose every motion touches another's stub waits for
   // the next pass, where that stub is part of the vine.
+  const auto stubs_start = std::chrono::steady_clock::now();
   std::vector<Cut> made_before;
   for (const Leg& leg : p.legs) made_before.push_back(leg.cut);
   std::vector<std::vector<Obstacle>> stubs(motions.size());
@@ -355,6 +362,7 @@ absl::StatusOr<std::vector<int>> PlanPass(const VineModel& model, const std::vec
     free_of_stubs.push_back(k);
   }
   planned = std::move(free_of_stubs);
+  stats.stubs_s += Seconds(stubs_start);
   stats.cut_motions_s += Seconds(t);
   if (planned.empty()) {
     for (int i : retry) p.Unplanned(p.plan.cuts[i].id, "no_collision_free_cut_motion");
@@ -585,6 +593,7 @@ absl::StatusOr<PlanResult> PlanVine(const VineModel& model, const CutPlan& plan,
   result.trajectory.platform_from_arm_base = robot.platform_from_arm_base;
   result.trajectory.tool = robot.tool;
   PlanStats& stats = result.stats;
+  stats.setup_s = Seconds(start);  // validation
   stats.cuts = static_cast<int>(plan.cuts.size());
   {
     auto t = std::chrono::steady_clock::now();
@@ -598,23 +607,27 @@ absl::StatusOr<PlanResult> PlanVine(const VineModel& model, const CutPlan& plan,
   }
   VB_RETURN_IF_ERROR(deadline.Check("plan"));
 
+  auto t = std::chrono::steady_clock::now();
   Planning p{model, plan, robot, platform, options, deadline, result};
   p.self_checker = MakeChecker(options.checker, robot, CollisionScene{});
+  stats.setup_s += Seconds(t);
   std::vector<int> pending(plan.cuts.size());
   for (size_t i = 0; i < pending.size(); ++i) pending[i] = static_cast<int>(i);
   VineModel now = model;
   for (int pass = 0; pass < options.max_passes && !pending.empty(); ++pass) {
     VB_ASSIGN_OR_RETURN(pending, PlanPass(now, pending, pass + 1 == options.max_passes, p));
     if (!pending.empty()) {
+      t = std::chrono::steady_clock::now();
       std::vector<Cut> made;
       for (const Leg& leg : p.legs) made.push_back(leg.cut);
       now = WithoutFallenWood(model, made);
+      stats.setup_s += Seconds(t);
     }
   }
 
   // Home again; if no path leads home from the last cut, that cut is given up and the arm goes
   // home from the one before it (the arm never ends a vine stranded among the canes).
-  auto t = std::chrono::steady_clock::now();
+  t = std::chrono::steady_clock::now();
   std::vector<Joints> home_path;
   std::shared_ptr<CollisionChecker> home_checker;  // of the scene the way home was found in
   std::shared_ptr<MotionProver> home_proof;        // that scene without margins
@@ -644,7 +657,8 @@ absl::StatusOr<PlanResult> PlanVine(const VineModel& model, const CutPlan& plan,
       p.scene_pass = dropped_pass + 1;  // it takes every leg left as made
     }
   }
-  stats.paths_s += Seconds(t);
+  stats.home_s = Seconds(t);
+  stats.paths_s += stats.home_s;
 
   // Timing: home -> (transit, cut)* -> home; every transit and stroke starts and ends at rest
   // (a stroke is approached from rest, and each segment can be executed on its own).

@@ -66,7 +66,8 @@ struct PlanOptions {
   // unrolled pose is free at a slide; oblique cuts heal as well on dormant canes, and near the
   // head the canes crowd. Eight alternative motions per cut rather than three: on tuning seeds
   // 1110-1199, 66 s of execution per vine instead of 72 s and fewer failed queries, the same
-  // share of cuts planned (docs/plan.md "The plan stage").
+  // share of cuts planned (docs/plan.md "The plan stage"). At 5 rad/s^2 (s12), 3-6 planned fewer
+  // cuts, executed in 35.7-39.9 s, and cost the same CPU per vine (paths dearer by as much).
   CutMotionOptions cut_motion = [] {
     CutMotionOptions o;
     o.alternatives = 8;
@@ -170,6 +171,10 @@ struct PathRecord {
 struct PlanStats {
   double scene_s = 0.0, cut_motions_s = 0.0, margins_s = 0.0, ordering_s = 0.0, paths_s = 0.0,
          timing_s = 0.0, total_s = 0.0;
+  // Parts of the stages above: the pass's stubs and the motions that touch them and the last
+  // resort (in cut_motions_s), the way home (in paths_s). setup_s is outside every stage:
+  // validation, the self-collision checker and the vine without fallen wood between passes.
+  double stubs_s = 0.0, last_resort_s = 0.0, home_s = 0.0, setup_s = 0.0;
   int cuts = 0, planned = 0, unreachable = 0;
   int passes = 0;                         // passes that planned at least one cut
   int walled_in_undone = 0;               // cuts undone because they walled the arm in

@@ -282,6 +282,45 @@ TEST(SafetyMargins, MatchesTheReferenceOnSimulatedVines) {
   EXPECT_GT(between, obstacles / 50) << between << " of " << obstacles;
 }
 
+// Planes moved so that each is 15 mm from long motions (hundreds of configurations: many chunks
+// and blocks, most far from the plane): the planes' chunk bounds must not skip the nearest
+// capsule, so every plane gets the reference's partial margin.
+TEST(SafetyMargins, PartialPlaneMarginsMatchTheReference) {
+  const RobotModel robot = DefaultUr5(MillEndTool());
+  auto scene = CollisionScene::Build(VineModel{},
+                                     DefaultPlatform(), robot);
+  ASSERT_TRUE(scene.ok()) << scene.status();
+  ASSERT_FALSE(scene->planes.empty());
+  std::mt19937_64 rng(1101);
+  std::uniform_real_distribution<double> angle(-M_PI, M_PI);
+  std::vector<ProtectedMotion> motions;
+  for (int m = 0; m < 3; ++m) {
+    ProtectedMotion motion;
+    for (int k = 0; k < 3; ++k) {
+      Joints q;
+      for (int j = 0; j < 6; ++j) q[j] = angle(rng);
+      motion.path.push_back(q);
+    }
+    motions.push_back(motion);
+  }
+  MarginOptions far;
+  far.max_margin_m = 1e6;  // the true clearances
+  for (HalfSpace& plane : scene->planes) plane.offset += 10.0;  // every motion on its free side
+  CollisionScene measured = *scene;
+  ReferenceInflateMargins(robot, motions, far, &measured);
+  for (size_t i = 0; i < scene->planes.size(); ++i)
+    scene->planes[i].offset -= measured.planes[i].margin_m - 0.015;
+  MarginOptions options;
+  CollisionScene fast = *scene, reference = *scene;
+  const MarginSummary summary = InflateMargins(robot, motions, options, &fast);
+  ReferenceInflateMargins(robot, motions, options, &reference);
+  EXPECT_GT(summary.configurations, 300);
+  for (size_t i = 0; i < fast.planes.size(); ++i) {
+    EXPECT_NEAR(reference.planes[i].margin_m, 0.015, 1e-9) << "plane " << i;
+    EXPECT_NEAR(fast.planes[i].margin_m, reference.planes[i].margin_m, 1e-12) << "plane " << i;
+  }
+}
+
 TEST(SafetyMargins, OptionsRejectBadValues) {
   MarginOptions options;
   options.max_step_m = 0.0;
