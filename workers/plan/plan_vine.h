@@ -170,6 +170,9 @@ struct PathRecord {
   // A path was found but not proven free of the pass's scene without margins
   // (motion_prover.h): outcome kNoPathWithinDeadline, and the query was run again.
   bool unproven = false;
+  // No path: RRT-Connect gave up with the goals walled in, or refused a repeat of a failed query
+  // (PathResult::walled_in, repeated_failure).
+  bool walled_in = false, repeated_failure = false;
 };
 
 struct PlanStats {
