@@ -45,7 +45,7 @@ struct CheckerRecord {
   std::vector<double> vine_cpu_s;
   // Vine times on the vines the baselines also plan whole (for the speed-up).
   std::vector<double> baseline_vines_vine_s;
-  int direct = 0, without_margins = 0;
+  int direct = 0, without_margins = 0, walled_in = 0, repeated_failures = 0;
   // Wall time summed over all vines' path queries, those that found a path and those that did not.
   double solved_paths_total_s = 0, failed_paths_total_s = 0;
   std::vector<double> median_margin_m;  // per vine, first pass (MarginSummary)
@@ -127,6 +127,9 @@ nlohmann::json Summary(const CheckerRecord& r) {
           {"direct_path_fraction", r.path_s.empty() ? 0.0 : double(r.direct) / r.path_s.size()},
           {"max_passes_used", r.passes},
           {"paths_without_margins", r.without_margins},
+          // Failed queries given up as walled in, and refused as repeats (path_planner.h).
+          {"failed_paths_walled_in", r.walled_in},
+          {"failed_paths_repeated", r.repeated_failures},
           {"solved_paths_total_s", r.solved_paths_total_s},
           {"failed_paths", r.path_s.size() - r.solved_path_s.size()},
           {"failed_paths_total_s", r.failed_paths_total_s},
@@ -253,6 +256,8 @@ absl::Status RunBenchPlan(Flags& flags) {
         }
         if (p.direct) ++r.direct;
         if (p.without_margins) ++r.without_margins;
+        if (p.walled_in) ++r.walled_in;
+        if (p.repeated_failure) ++r.repeated_failures;
         r.checks_per_path.push_back(static_cast<double>(p.checks));
       }
       r.reachable += s.cuts - s.unreachable;

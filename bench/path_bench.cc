@@ -14,6 +14,8 @@
 //    segments that fail a re-check at 2 mm (the planner checks at 10 mm).
 //  - BM_RepeatedHopelessQueries/0, /1: 20 queries from nearby starts to one walled-in goal on the
 //    fake checker, without and with PathOptions::remember_failures (refused_fraction).
+//  - BM_WalledInGoal/0, /100: one query to a walled-in goal on the fake checker, without and with
+//    PathOptions::walled_in_after_states (walled_in_fraction).
 //  - BM_PlanPathOneShot / BM_PlanPathReused: one query needing RRT-Connect, with and without the
 //    OMPL setup (PlanPath vs PathPlanner::Plan).
 // Run (JSON: the console printer of Debian's Google Benchmark garbles counters below 1):
@@ -237,6 +239,29 @@ void BM_RepeatedHopelessQueries(benchmark::State& state) {
   state.counters["refused_fraction"] = double(refused) / tally.total;
 }
 BENCHMARK(BM_RepeatedHopelessQueries)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+
+// One query to a goal walled in by a joint-space shell, as PlanVine asks it, without and with
+// PathOptions::walled_in_after_states (state.range(0): 0 or PlanVine's 100, with a tenth).
+void BM_WalledInGoal(benchmark::State& state) {
+  testing::JointBallChecker checker;
+  checker.AddShell(testing::J(2), 0.5, 0.8);
+  PathOptions options;
+  options.max_tree_states = 500;
+  options.tree_max_step_m = 0.03;
+  options.walled_in_after_states = static_cast<int>(state.range(0));
+  options.walled_in_goal_fraction = 0.1;
+  PathTally tally;
+  int walled_in = 0;
+  PathPlanner planner(checker, JointLimits(), options);
+  for (auto _ : state) {
+    const PathResult r = planner.Plan(testing::J(-2), testing::J(2), Deadline::In(10.0));
+    walled_in += r.walled_in;
+    tally.Add(r);
+  }
+  tally.Report(state);
+  state.counters["walled_in_fraction"] = double(walled_in) / tally.total;
+}
+BENCHMARK(BM_WalledInGoal)->Arg(0)->Arg(100)->Unit(benchmark::kMillisecond);
 
 void BM_PlannerSetup(benchmark::State& state) {
   testing::JointBallChecker checker;

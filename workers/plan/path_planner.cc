@@ -245,6 +245,12 @@ absl::Status PathOptions::Validate() const {
   if (max_tree_states < 0) {
     return absl::InvalidArgumentError("path options: max_tree_states: must be >= 0");
   }
+  if (walled_in_after_states < 0) {
+    return absl::InvalidArgumentError("path options: walled_in_after_states: must be >= 0");
+  }
+  if (!(walled_in_goal_fraction >= 0.0) || !(walled_in_goal_fraction < 1.0)) {
+    return absl::InvalidArgumentError("path options: walled_in_goal_fraction: must be in [0, 1)");
+  }
   if (shortcut_rounds < 0) {
     return absl::InvalidArgumentError("path options: shortcut_rounds: must be >= 0");
   }
@@ -452,17 +458,40 @@ PathResult PathPlanner::PlanToAny(const Joints& start, std::span<const Joints> g
       const size_t max_states =
           options_.max_tree_states > 0 ? static_cast<size_t>(options_.max_tree_states) : SIZE_MAX;
       const TreeSizeRRTConnect& rrt = *o.planner;
-      const ob::PlannerTerminationCondition ptc([&end, &deadline, &rrt, max_states] {
-        return rrt.StartTreeSize() + rrt.GoalTreeSize() >= max_states || Clock::now() >= end ||
-               deadline.Cancelled();
-      });
+      // Goals walled in (PathOptions::walled_in_after_states). OMPL's start tree is rooted at our
+      // goals.
+      const size_t wall_after = options_.walled_in_after_states > 0
+                                    ? static_cast<size_t>(options_.walled_in_after_states)
+                                    : SIZE_MAX;
+      const double wall_fraction = options_.walled_in_goal_fraction;
+      bool walled_in = false;
+      const ob::PlannerTerminationCondition ptc(
+          [&end, &deadline, &rrt, max_states, wall_after, wall_fraction, &walled_in] {
+            const size_t goal_side = rrt.StartTreeSize(), total = goal_side + rrt.GoalTreeSize();
+            if (total >= wall_after && static_cast<double>(goal_side) <= wall_fraction * total) {
+              walled_in = true;
+            }
+            return walled_in || total >= max_states || Clock::now() >= end ||
+                   deadline.Cancelled();
+          });
       const ob::PlannerStatus status = o.planner->solve(ptc);
+      // Roles are reversed: OMPL's start tree is rooted at our goals.
+      result.start_tree_states = static_cast<int>(rrt.GoalTreeSize());
+      result.goal_tree_states = static_cast<int>(rrt.StartTreeSize());
       if (status != ob::PlannerStatus::EXACT_SOLUTION || !o.pdef->hasExactSolution()) {
         // Only a query stopped by the bound on states is remembered: one stopped by time says
         // nothing reproducible. Roles are reversed: OMPL's start tree is rooted at our goals.
         if (options_.remember_failures && failures_.size() < kMaxRememberedFailures &&
-            rrt.StartTreeSize() + rrt.GoalTreeSize() >= max_states) {
+            (walled_in || rrt.StartTreeSize() + rrt.GoalTreeSize() >= max_states)) {
           failures_.push_back({rrt.TreeStates(false), rrt.TreeStates(true)});
+        }
+        if (walled_in) {
+          result.walled_in = true;
+          return finish(PathOutcome::kNoPathWithinDeadline,
+                        absl::StrCat("goals walled in: their tree holds ", rrt.StartTreeSize(),
+                                     " of the ", rrt.StartTreeSize() + rrt.GoalTreeSize(),
+                                     " states of both (walled_in_goal_fraction ", wall_fraction,
+                                     ")"));
         }
         return finish(PathOutcome::kNoPathWithinDeadline,
                       absl::StrCat("RRT-Connect found no exact path within ", budget_s,

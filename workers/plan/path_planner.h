@@ -59,10 +59,17 @@ struct PathOptions {
   // resolution. Makes results depend on the planner's earlier queries; meant for the queries of
   // one scene (ForgetFailures() when the checker's scene changes).
   bool remember_failures = false;
+  // Goals walled in: RRT-Connect gives up once its trees hold walled_in_after_states states or
+  // more together (0 = never) while the tree rooted at the goals holds at most
+  // walled_in_goal_fraction of them (PathResult::walled_in): its extensions keep colliding, and
+  // the start's tree grows alone. A bound in work, like max_tree_states, so it ends the same
+  // whatever the load; such a query is remembered as failed (remember_failures).
+  int walled_in_after_states = 0;
+  double walled_in_goal_fraction = 0.1;
 
   // INVALID_ARGUMENT naming the field: max_step_m <= 0 or non-finite, tree_max_step_m < 0 or
-  // non-finite, range_rad < 0,
-  // time_limit_s <= 0 or NaN, max_tree_states < 0, shortcut_rounds < 0.
+  // non-finite, range_rad < 0, time_limit_s <= 0 or NaN, max_tree_states < 0,
+  // walled_in_after_states < 0, walled_in_goal_fraction outside [0, 1), shortcut_rounds < 0.
   absl::Status Validate() const;
 };
 
@@ -92,6 +99,12 @@ struct PathResult {
   // kNoPathWithinDeadline without running RRT-Connect: the start and goals join the trees of an
   // earlier failed query (PathOptions::remember_failures).
   bool repeated_failure = false;
+  // States in RRT-Connect's two trees when it stopped (0 when it did not run): the tree rooted at
+  // the start and the one rooted at the goals (of its last run, after a coarse rejection).
+  int start_tree_states = 0, goal_tree_states = 0;
+  // kNoPathWithinDeadline because the goals' tree stopped growing (PathOptions::walled_in_*).
+  // Distinct from a query stopped at max_tree_states or the time limit.
+  bool walled_in = false;
 };
 
 // A planning context bound to one checker and one set of limits and options: holds OMPL's state

@@ -4,10 +4,12 @@
 #include <cmath>
 #include <atomic>
 #include <chrono>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "gtest/gtest.h"
@@ -645,6 +647,100 @@ TEST(RememberFailures, OffByDefaultAndNotForTimeLimitedQueries) {
   EXPECT_EQ(by_time.Plan(J(-2), J(2), Deadline::Infinite()).outcome,
             PathOutcome::kNoPathWithinDeadline);
   EXPECT_EQ(by_time.remembered_failures(), 0);
+}
+
+PathOptions WalledInOptions() {
+  PathOptions options;
+  options.time_limit_s = 60.0;  // bounds in work, not time, stop these queries
+  options.max_tree_states = 400;
+  options.walled_in_after_states = 60;
+  options.walled_in_goal_fraction = 0.1;
+  return options;
+}
+
+TEST(WalledIn, AGoalInAPocketFailsEarlyWithItsOutcome) {
+  JointBallChecker checker;
+  checker.AddShell(J(2), 0.5, 0.8);  // the goal's tree cannot leave its pocket
+  const PathResult walled =
+      PathPlanner(checker, JointLimits(), WalledInOptions()).Plan(J(-2), J(2), Deadline::Infinite());
+  EXPECT_EQ(walled.outcome, PathOutcome::kNoPathWithinDeadline);
+  EXPECT_TRUE(walled.walled_in);
+  EXPECT_TRUE(walled.waypoints.empty());
+  EXPECT_NE(walled.message.find("goals walled in"), std::string::npos) << walled.message;
+  const int total = walled.start_tree_states + walled.goal_tree_states;
+  EXPECT_GE(total, 60);
+  EXPECT_LT(total, 400);
+  EXPECT_LE(walled.goal_tree_states * 10, total);
+  // Without the rule the same query runs to the bound on states: more work, same outcome.
+  PathOptions off = WalledInOptions();
+  off.walled_in_after_states = 0;
+  const PathResult full =
+      PathPlanner(checker, JointLimits(), off).Plan(J(-2), J(2), Deadline::Infinite());
+  EXPECT_EQ(full.outcome, PathOutcome::kNoPathWithinDeadline);
+  EXPECT_FALSE(full.walled_in);
+  EXPECT_GE(full.start_tree_states + full.goal_tree_states, 400);
+  EXPECT_GT(full.checks, 2 * walled.checks);
+  EXPECT_EQ(PathOptions().walled_in_after_states, 0);  // off by default
+}
+
+TEST(WalledIn, AStartInAPocketIsNotAWalledInGoal) {
+  JointBallChecker checker;
+  checker.AddShell(J(-2), 0.5, 0.8);  // the start's tree is stuck; the goals' grows
+  const PathResult r =
+      PathPlanner(checker, JointLimits(), WalledInOptions()).Plan(J(-2), J(2), Deadline::Infinite());
+  EXPECT_EQ(r.outcome, PathOutcome::kNoPathWithinDeadline);
+  EXPECT_FALSE(r.walled_in) << r.message;
+  EXPECT_GE(r.start_tree_states + r.goal_tree_states, 400);
+  EXPECT_GT(r.goal_tree_states, r.start_tree_states);
+}
+
+TEST(WalledIn, GoalsThatCanBeReachedAreStillPlanned) {
+  JointBallChecker checker;
+  checker.AddBall(J(-0.5, 2), 0.7);
+  checker.AddShell(J(2), 0.5, 0.8);
+  const JointLimits limits;
+  PathPlanner planner(checker, limits, WalledInOptions());
+  // Behind a ball (RRT-Connect needed), with a walled-in goal among the goals: the free goal's
+  // tree grows, so the query is not walled in, and reaches it.
+  const Joints start = J(-2, 2.1), goal = J(1, 2, 0.1);
+  ASSERT_FALSE(checker.IsMotionFree(start, goal, 0.01));
+  const std::vector<Joints> goals = {J(2), goal};
+  const PathResult r = planner.PlanToAny(start, goals, Deadline::Infinite());
+  ASSERT_EQ(r.outcome, PathOutcome::kSolved) << r.message;
+  EXPECT_FALSE(r.walled_in);
+  EXPECT_EQ(r.goal_index, 1);
+  ExpectValidPath(checker, limits, r, start, goal);
+}
+
+TEST(WalledIn, AWalledInQueryIsRemembered) {
+  JointBallChecker checker;
+  checker.AddShell(J(2), 0.5, 0.8);
+  PathOptions options = WalledInOptions();
+  options.remember_failures = true;
+  PathPlanner planner(checker, JointLimits(), options);
+  const PathResult first = planner.Plan(J(-2), J(2), Deadline::Infinite());
+  ASSERT_TRUE(first.walled_in) << first.message;
+  EXPECT_EQ(planner.remembered_failures(), 1);
+  const PathResult again = planner.Plan(J(-2.2, 0.3), J(2, 0.1), Deadline::Infinite());
+  EXPECT_EQ(again.outcome, PathOutcome::kNoPathWithinDeadline);
+  EXPECT_TRUE(again.repeated_failure) << again.message;
+  EXPECT_FALSE(again.walled_in);
+}
+
+TEST(WalledIn, BadOptionsAreRejected) {
+  for (const auto& [field, set] :
+       std::vector<std::pair<std::string, std::function<void(PathOptions&)>>>{
+           {"walled_in_after_states", [](PathOptions& o) { o.walled_in_after_states = -1; }},
+           {"walled_in_goal_fraction", [](PathOptions& o) { o.walled_in_goal_fraction = -0.1; }},
+           {"walled_in_goal_fraction", [](PathOptions& o) { o.walled_in_goal_fraction = 1.0; }},
+           {"walled_in_goal_fraction",
+            [](PathOptions& o) { o.walled_in_goal_fraction = std::nan(""); }}}) {
+    PathOptions options;
+    set(options);
+    const absl::Status status = options.Validate();
+    EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument) << field;
+    EXPECT_NE(status.message().find(field), std::string::npos) << status.message();
+  }
 }
 
 }  // namespace

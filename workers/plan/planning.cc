@@ -79,6 +79,8 @@ void Planning::Record(const ProvenPath& path, CutId to, const std::vector<Joints
   PathRecord record{to, path.outcome, path.planning_s, path.checks, path.direct, plain, At(),
                     goals[std::max(path.goal_index, 0)], goals};
   record.unproven = path.unproven;
+  record.walled_in = path.walled_in;
+  record.repeated_failure = path.repeated_failure;
   result.stats.paths.push_back(std::move(record));
 }
 
