@@ -137,6 +137,9 @@ absl::Status ConnectOptions::Validate() const {
   if (!std::isfinite(keep_within_m) || keep_within_m < 0) {
     return absl::InvalidArgumentError("connect options: keep_within_m must be >= 0");
   }
+  if (!std::isfinite(keep_min_length_m) || keep_min_length_m < 0) {
+    return absl::InvalidArgumentError("connect options: keep_min_length_m must be >= 0");
+  }
   if (!(min_gap_support >= 0.0 && min_gap_support <= 1.0)) {
     return absl::InvalidArgumentError("connect options: min_gap_support must be in [0, 1]");
   }
@@ -376,7 +379,7 @@ absl::StatusOr<VineModel> BuildTree(const PreparedCanes& prepared_in,
     const double centre_x = prepared->trunk->points.back().x();
     std::vector<char> near(n, 0);
     for (int i = 0; i < n; ++i) {
-      if (kept[i] != 0) continue;
+      if (kept[i] != 0 || canes[i].Length() < options.keep_min_length_m) continue;
       near[i] = std::all_of(canes[i].points.begin(), canes[i].points.end(),
                             [&](const Eigen::Vector3d& p) {
                               return std::abs(p.x() - centre_x) <= options.keep_within_m;

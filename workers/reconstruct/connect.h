@@ -22,8 +22,8 @@
 //     the paper): the base was there but was not matched across the views.
 //  6. Kept near the vine (beyond the paper): a cane that step 3 leaves without a parent but that
 //     lies wholly within `keep_within_m` of the vine's centre along the row (the x of the trunk's
-//     top) is this vine's, not a neighbour's, whose canes reach into the view only from the
-//     sides: it hangs on its likeliest candidate join to a cane in the tree, the trunk or the
+//     top) and is at least `keep_min_length_m` long is this vine's, not a neighbour's, whose
+//     canes reach into the view only from the sides, nor a short ghost: it hangs on its likeliest candidate join to a cane in the tree, the trunk or the
 //     head (joins to canes kept so come after), however unlikely. Left out, its length would
 //     be lost to recall. A cane with no candidate join at all (nothing within `max_attach_m`)
 //     stays out.
@@ -67,6 +67,8 @@ struct ConnectOptions {
   double keep_within_m = 0.5;        // a cane left without a parent but lying wholly within this
                                      // of the vine's centre along the row (x) is this vine's: it
                                      // hangs on its likeliest join to the tree; 0 turns this off
+  double keep_min_length_m = 0.12;   // ... if it is at least this long (shorter ones are mostly
+                                     // ghosts)
 
   absl::Status Validate() const;
 };

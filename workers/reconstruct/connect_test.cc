@@ -158,14 +158,15 @@ TEST(ConnectCanes, BuildTreeRejectsJoinsOutOfRange) {
 
 // Step 6: canes whose every join is unlikely. Near the vine's centre along the row they are
 // this vine's and hang on their likeliest join (B after A, on which alone it can hang); one
-// reaching 0.7 m along the row may be a neighbour's and stays out.
+// reaching 0.7 m along the row may be a neighbour's and stays out, and so does a short one.
 TEST(ConnectCanes, ACaneNearTheVineWithOnlyUnlikelyJoinsIsKept) {
   const Polyline3 trunk = Line({0, 0.8, 0}, {0, 0.8, 0.95}, 0.025);
   PreparedCanes prepared;
   prepared.trunk = trunk;
   prepared.canes = {Line({0.1, 0.8, 1.2}, {0.3, 0.8, 1.4}),    // A, wholly near
                     Line({0.28, 0.8, 1.42}, {0.18, 0.8, 1.6}),  // B, near, joins A only
-                    Line({0.4, 0.8, 1.3}, {0.7, 0.8, 1.35})};   // C, reaches 0.7 m
+                    Line({0.4, 0.8, 1.3}, {0.7, 0.8, 1.35}),    // C, reaches 0.7 m
+                    Line({-0.2, 0.8, 1.3}, {-0.2, 0.8, 1.38})};  // D, near but 8 cm short
   auto join = [](int child, int parent, double p) {
     JoinCandidate c;
     c.child = child;
@@ -176,27 +177,29 @@ TEST(ConnectCanes, ACaneNearTheVineWithOnlyUnlikelyJoinsIsKept) {
     return c;
   };
   const std::vector<JoinCandidate> joins = {join(0, -1, 0.02), join(0, 1, 0.01),
-                                            join(1, 0, 0.03), join(2, -1, 0.04)};
+                                            join(1, 0, 0.03), join(2, -1, 0.04),
+                                            join(3, -1, 0.05)};
   ConnectOptions off;
   off.keep_within_m = 0.0;
   ConnectSummary summary;
   auto model = BuildTree(prepared, joins, Head(), off, &summary);
   ASSERT_TRUE(model.ok()) << model.status();
   EXPECT_EQ(model->canes.size(), 1u);
-  EXPECT_EQ(summary.unattached, 3);
+  EXPECT_EQ(summary.unattached, 4);
 
   model = BuildTree(prepared, joins, Head(), ConnectOptions(), &summary);
   ASSERT_TRUE(model.ok()) << model.status();
   ASSERT_TRUE(model->Validate().ok()) << model->Validate();
   EXPECT_EQ(summary.kept_near, 2);
   EXPECT_EQ(summary.attached, 2);
-  EXPECT_EQ(summary.unattached, 1);
+  EXPECT_EQ(summary.unattached, 2);
   const Cane* a = nullptr;
   const Cane* b = nullptr;
   for (const Cane& cane : model->canes) {
     if (cane.polyline.points.back().isApprox(Eigen::Vector3d(0.3, 0.8, 1.4))) a = &cane;
     if (cane.polyline.points.back().isApprox(Eigen::Vector3d(0.18, 0.8, 1.6))) b = &cane;
     EXPECT_FALSE(cane.polyline.points.back().isApprox(Eigen::Vector3d(0.7, 0.8, 1.35)));
+    EXPECT_FALSE(cane.polyline.points.back().isApprox(Eigen::Vector3d(-0.2, 0.8, 1.38)));
   }
   ASSERT_NE(a, nullptr);
   ASSERT_NE(b, nullptr);

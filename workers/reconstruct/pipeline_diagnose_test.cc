@@ -84,6 +84,7 @@ TEST(PipelineStages, DISABLED_Report) {
   if (const char* v = std::getenv("VB_ALPHA")) options.correspondence.alpha = std::atof(v);
   if (const char* v = std::getenv("VB_GAP_SUPPORT")) options.connect.min_gap_support = std::atof(v);
   if (const char* v = std::getenv("VB_KEEP_WITHIN")) options.connect.keep_within_m = std::atof(v);
+  if (const char* v = std::getenv("VB_KEEP_MIN_LENGTH")) options.connect.keep_min_length_m = std::atof(v);
   if (const char* v = std::getenv("VB_MIN_ISOLATED")) options.assembly.min_isolated_length_m = std::atof(v);
   if (const char* v = std::getenv("VB_MIN_EVIDENCE")) options.assembly.min_evidence_m = std::atof(v);
   if (const char* v = std::getenv("VB_MIN_PIECE_P")) options.assembly.min_piece_probability = std::atof(v);
