@@ -22,11 +22,11 @@
 //     the paper): the base was there but was not matched across the views.
 //  6. Kept near the vine (beyond the paper): a cane that step 3 leaves without a parent but that
 //     lies wholly within `keep_within_m` of the vine's centre along the row (the x of the trunk's
-//     top) and is at least `keep_min_length_m` long is this vine's, not a neighbour's, whose
-//     canes reach into the view only from the sides, nor a short ghost: it hangs on its likeliest candidate join to a cane in the tree, the trunk or the
-//     head (joins to canes kept so come after), however unlikely. Left out, its length would
-//     be lost to recall. A cane with no candidate join at all (nothing within `max_attach_m`)
-//     stays out.
+//     top) and is at least `keep_min_length_m` long is taken as this vine's (a neighbour's canes
+//     reach into the view from the sides; short ones are mostly ghosts): it hangs on its
+//     likeliest candidate join to a cane in the tree, the trunk or the head (joins to canes kept
+//     so come after), however unlikely. Left out, its length would be lost to recall. A cane
+//     with no candidate join at all (nothing within `max_attach_m`) stays out.
 // Thread-safe (pure).
 #pragma once
 
