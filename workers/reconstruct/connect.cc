@@ -134,6 +134,12 @@ absl::Status ConnectOptions::Validate() const {
     if (!std::isfinite(v) || v <= 0)
       return absl::InvalidArgumentError(absl::StrCat("connect options: ", name, " must be > 0"));
   }
+  if (!std::isfinite(keep_within_m) || keep_within_m < 0) {
+    return absl::InvalidArgumentError("connect options: keep_within_m must be >= 0");
+  }
+  if (!std::isfinite(keep_min_length_m) || keep_min_length_m < 0) {
+    return absl::InvalidArgumentError("connect options: keep_min_length_m must be >= 0");
+  }
   if (!(min_gap_support >= 0.0 && min_gap_support <= 1.0)) {
     return absl::InvalidArgumentError("connect options: min_gap_support must be in [0, 1]");
   }
@@ -365,6 +371,36 @@ absl::StatusOr<VineModel> BuildTree(const PreparedCanes& prepared_in,
     const int verdict = at == -1 ? 1 : (at >= 0 && kept[at] >= 0 ? kept[at] : 0);
     if (at >= 0 && kept[at] < 0) kept[at] = 0;
     for (int x : path) kept[x] = verdict;
+  }
+  // Canes left out but lying wholly near the vine's centre along the row are this vine's (a
+  // neighbour's canes reach into the view from the sides): hang each on its likeliest join to
+  // the tree, the likeliest of all first, so that a cane kept so can take others after it.
+  if (options.keep_within_m > 0.0) {
+    const double centre_x = prepared->trunk->points.back().x();
+    std::vector<char> near(n, 0);
+    for (int i = 0; i < n; ++i) {
+      if (kept[i] != 0 || canes[i].Length() < options.keep_min_length_m) continue;
+      near[i] = std::all_of(canes[i].points.begin(), canes[i].points.end(),
+                            [&](const Eigen::Vector3d& p) {
+                              return std::abs(p.x() - centre_x) <= options.keep_within_m;
+                            });
+    }
+    while (true) {
+      int best = -1;
+      for (size_t k = 0; k < joins.size(); ++k) {
+        const JoinCandidate& c = joins[k];
+        if (kept[c.child] != 0 || !near[c.child] || (c.parent >= 0 && kept[c.parent] != 1)) {
+          continue;
+        }
+        if (best < 0 || c.probability > joins[best].probability) best = static_cast<int>(k);
+      }
+      if (best < 0) break;
+      const int child = joins[best].child;
+      kept[child] = 1;
+      parent[child] = joins[best].parent;
+      join[child] = best;
+      ++sum.kept_near;
+    }
   }
   // Orient every kept cane base first, and give it a first point on its parent.
   for (int i = 0; i < n; ++i) {

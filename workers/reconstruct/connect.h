@@ -20,6 +20,13 @@
 //  5. A base near its join point (`max_bridge_m`) gets a first point there. So does a farther
 //     one whose gap the images show as wood all along (a GapSupportFn from the caller; beyond
 //     the paper): the base was there but was not matched across the views.
+//  6. Kept near the vine (beyond the paper): a cane that step 3 leaves without a parent but that
+//     lies wholly within `keep_within_m` of the vine's centre along the row (the x of the trunk's
+//     top) and is at least `keep_min_length_m` long is taken as this vine's (a neighbour's canes
+//     reach into the view from the sides; short ones are mostly ghosts): it hangs on its
+//     likeliest candidate join to a cane in the tree, the trunk or the head (joins to canes kept
+//     so come after), however unlikely. Left out, its length would be lost to recall. A cane
+//     with no candidate join at all (nothing within `max_attach_m`) stays out.
 // Thread-safe (pure).
 #pragma once
 
@@ -57,6 +64,11 @@ struct ConnectOptions {
   JoinWeights join_weights = DefaultJoinWeights();  // the join classifier
   double min_gap_support = 0.9;      // a gap wider than max_bridge_m is drawn when at least this
                                      // fraction of it is wood in the images (GapSupportFn)
+  double keep_within_m = 0.5;        // a cane left without a parent but lying wholly within this
+                                     // of the vine's centre along the row (x) is this vine's: it
+                                     // hangs on its likeliest join to the tree; 0 turns this off
+  double keep_min_length_m = 0.12;   // ... if it is at least this long (shorter ones are mostly
+                                     // ghosts)
 
   absl::Status Validate() const;
 };
@@ -64,6 +76,7 @@ struct ConnectOptions {
 struct ConnectSummary {
   int attached = 0;       // canes in the tree (trunk excluded)
   int unattached = 0;     // canes left out: never near the tree
+  int kept_near = 0;      // of the attached: canes kept by step 6 (near the vine, no likely join)
   int inside_trunk_or_head = 0;  // canes dropped as duplicates of the trunk or head
 };
 

@@ -156,6 +156,65 @@ TEST(ConnectCanes, BuildTreeRejectsJoinsOutOfRange) {
             absl::StatusCode::kInvalidArgument);
 }
 
+// Step 6: canes whose every join is unlikely. Near the vine's centre along the row they are
+// this vine's and hang on their likeliest join (B after A, on which alone it can hang); one
+// reaching 0.7 m along the row may be a neighbour's and stays out, and so does a short one.
+TEST(ConnectCanes, ACaneNearTheVineWithOnlyUnlikelyJoinsIsKept) {
+  const Polyline3 trunk = Line({0, 0.8, 0}, {0, 0.8, 0.95}, 0.025);
+  PreparedCanes prepared;
+  prepared.trunk = trunk;
+  prepared.canes = {Line({0.1, 0.8, 1.2}, {0.3, 0.8, 1.4}),    // A, wholly near
+                    Line({0.28, 0.8, 1.42}, {0.18, 0.8, 1.6}),  // B, near, joins A only
+                    Line({0.4, 0.8, 1.3}, {0.7, 0.8, 1.35}),    // C, reaches 0.7 m
+                    Line({-0.2, 0.8, 1.3}, {-0.2, 0.8, 1.38})};  // D, near but 8 cm short
+  auto join = [](int child, int parent, double p) {
+    JoinCandidate c;
+    c.child = child;
+    c.parent = parent;
+    c.target = parent < 0 ? JoinTarget::kHead : JoinTarget::kCane;
+    c.point = parent < 0 ? Eigen::Vector3d(0.05, 0.8, 1.05) : Eigen::Vector3d(0.3, 0.8, 1.4);
+    c.probability = p;
+    return c;
+  };
+  const std::vector<JoinCandidate> joins = {join(0, -1, 0.02), join(0, 1, 0.01),
+                                            join(1, 0, 0.03), join(2, -1, 0.04),
+                                            join(3, -1, 0.05)};
+  ConnectOptions off;
+  off.keep_within_m = 0.0;
+  ConnectSummary summary;
+  auto model = BuildTree(prepared, joins, Head(), off, &summary);
+  ASSERT_TRUE(model.ok()) << model.status();
+  EXPECT_EQ(model->canes.size(), 1u);
+  EXPECT_EQ(summary.unattached, 4);
+
+  model = BuildTree(prepared, joins, Head(), ConnectOptions(), &summary);
+  ASSERT_TRUE(model.ok()) << model.status();
+  ASSERT_TRUE(model->Validate().ok()) << model->Validate();
+  EXPECT_EQ(summary.kept_near, 2);
+  EXPECT_EQ(summary.attached, 2);
+  EXPECT_EQ(summary.unattached, 2);
+  const Cane* a = nullptr;
+  const Cane* b = nullptr;
+  for (const Cane& cane : model->canes) {
+    if (cane.polyline.points.back().isApprox(Eigen::Vector3d(0.3, 0.8, 1.4))) a = &cane;
+    if (cane.polyline.points.back().isApprox(Eigen::Vector3d(0.18, 0.8, 1.6))) b = &cane;
+    EXPECT_FALSE(cane.polyline.points.back().isApprox(Eigen::Vector3d(0.7, 0.8, 1.35)));
+    EXPECT_FALSE(cane.polyline.points.back().isApprox(Eigen::Vector3d(-0.2, 0.8, 1.38)));
+  }
+  ASSERT_NE(a, nullptr);
+  ASSERT_NE(b, nullptr);
+  EXPECT_EQ(a->parent_id, CaneId(1));  // on the head
+  EXPECT_EQ(b->parent_id, a->id);
+  // B leaves A's tip at 74 degrees (not a continuation); its base, 2.8 cm away, is drawn on A.
+  EXPECT_TRUE(b->polyline.points.front().isApprox(Eigen::Vector3d(0.3, 0.8, 1.4)));
+
+  ConnectOptions bad;
+  bad.keep_within_m = -0.1;
+  const auto rejected = BuildTree(prepared, joins, Head(), bad);
+  EXPECT_EQ(rejected.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(std::string(rejected.status().message()).find("keep_within_m"), std::string::npos);
+}
+
 TEST(ConnectCanes, TheStereoTrunkReplacesTheSilhouetteAxis) {
   const Polyline3 silhouette = Line({0.01, 0.8, 0}, {0.01, 0.8, 0.95}, 0.03);
   const std::vector<Polyline3> canes = {Line({0.0, 0.8, 0.9}, {0.0, 0.8, 0.35}, 0.02)};

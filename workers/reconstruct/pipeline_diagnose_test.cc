@@ -83,6 +83,11 @@ TEST(PipelineStages, DISABLED_Report) {
   if (const char* v = std::getenv("VB_MAX_GAP")) options.correspondence.max_gap_samples = std::atoi(v);
   if (const char* v = std::getenv("VB_ALPHA")) options.correspondence.alpha = std::atof(v);
   if (const char* v = std::getenv("VB_GAP_SUPPORT")) options.connect.min_gap_support = std::atof(v);
+  if (const char* v = std::getenv("VB_KEEP_WITHIN")) options.connect.keep_within_m = std::atof(v);
+  if (const char* v = std::getenv("VB_KEEP_MIN_LENGTH")) options.connect.keep_min_length_m = std::atof(v);
+  if (const char* v = std::getenv("VB_MIN_ISOLATED")) options.assembly.min_isolated_length_m = std::atof(v);
+  if (const char* v = std::getenv("VB_MIN_EVIDENCE")) options.assembly.min_evidence_m = std::atof(v);
+  if (const char* v = std::getenv("VB_MIN_PIECE_P")) options.assembly.min_piece_probability = std::atof(v);
   Row pieces_row, assembled_row, connected_row, final_row;
   double unattached_recall = 0;
   ParentBreakdown parents;
@@ -187,6 +192,37 @@ TEST(PipelineStages, DISABLED_Report) {
     const double recall_with_left_out = EvaluateReconstruction(Flat(both), truth)->cane_recall;
     unattached_recall += (recall_with_left_out - mc.cane_recall) / count;
 
+    // Prepared canes the tree left out: their length, how much of it lies within 1 cm of the
+    // true vine, by the best join they had (VB_LEFT_OUT=1).
+    if (std::getenv("VB_LEFT_OUT")) {
+      std::vector<double> best_p(prepared->canes.size(), 0.0);
+      std::vector<int> best_target(prepared->canes.size(), -3);
+      for (const JoinCandidate& j : joins)
+        if (j.probability > best_p[j.child]) best_p[j.child] = j.probability, best_target[j.child] = j.parent;
+      for (size_t i = 0; i < prepared->canes.size(); ++i) {
+        const Polyline3& c = prepared->canes[i];
+        bool in_model = false;
+        for (const Cane& m : connected.canes)  // merged continuations lie inside their parent
+          for (const Eigen::Vector3d& q : m.polyline.points)
+            in_model = in_model || (q - c.points.back()).norm() < 1e-9 ||
+                       (q - c.points.front()).norm() < 1e-9;
+        if (in_model) continue;
+        double near = 0, all = 0;
+        for (const Eigen::Vector3d& p : c.Sample(0.005)) {
+          all += 1;
+          for (const Cane& t : truth.canes)
+            if (DistanceToPolyline(p, t.polyline) <= 0.01) { near += 1; break; }
+        }
+        const int g = MajorityCane(c, truth);
+        double min_x = 1e9, max_x = -1e9;
+        for (const Eigen::Vector3d& p : c.points) min_x = std::min(min_x, p.x()), max_x = std::max(max_x, p.x());
+        std::printf("  left-out seed %llu cane %zu: %.3f m, precise %.2f, true %d%s, best join %.3f to %d, x %.2f..%.2f\n",
+                    static_cast<unsigned long long>(seed), i, c.Length(), all > 0 ? near / all : 0.0, g,
+                    g >= 0 && truth.canes[g].kind == CaneKind::kTrunk ? " (trunk)" : "", best_p[i],
+                    best_target[i], min_x, max_x);
+      }
+    }
+
     // Unconnected recalled length by the parent of the matched model cane.
     std::vector<int> majority;
     for (const Cane& m : connected.canes) majority.push_back(Majority(m.polyline, truth));
@@ -247,12 +283,12 @@ TEST(PipelineStages, DISABLED_Report) {
     parents.ghost_parent_m += pb.ghost_parent_m / pb.truth_m / count;
     if (verbose) {
       std::printf("seed %llu: pieces %.3f/%.3f assembled %.3f/%.3f connected %.3f/%.3f/%.3f "
-                  "final %.3f/%.3f/%.3f attached %d unattached %d inside %d; left-out recall "
+                  "final %.3f/%.3f/%.3f attached %d (kept near %d) unattached %d inside %d; left-out recall "
                   "+%.3f; wrong-parent %.3f ghost-parent %.3f (of truth length)\n",
                   static_cast<unsigned long long>(seed), mp.cane_recall, mp.cane_precision,
                   ma.cane_recall, ma.cane_precision, mc.cane_recall, mc.cane_precision,
                   mc.connectivity, mf.cane_recall, mf.cane_precision, mf.connectivity,
-                  summary.attached, summary.unattached, summary.inside_trunk_or_head,
+                  summary.attached, summary.kept_near, summary.unattached, summary.inside_trunk_or_head,
                   recall_with_left_out - mc.cane_recall, pb.wrong_parent_m / pb.truth_m,
                   pb.ghost_parent_m / pb.truth_m);
     }
