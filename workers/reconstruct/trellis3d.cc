@@ -50,6 +50,12 @@ std::optional<double> Residual(const CameraCalibration& camera, const std::vecto
                                const Eigen::Vector3d& p, const Eigen::Vector3d& q, int* nearest) {
   double best = 1e9;
   *nearest = -1;
+  int in_image = 0;
+  for (int k = 0; k <= 10; ++k) {
+    const auto uv = camera.Project(p + (q - p) * (k / 10.0));
+    in_image += uv && camera.InImage(*uv);
+  }
+  if (in_image < 3) return std::nullopt;
   for (size_t i = 0; i < lines.size(); ++i) {
     const Line2D& line = lines[i];
     double sum = 0;
@@ -63,7 +69,6 @@ std::optional<double> Residual(const CameraCalibration& camera, const std::vecto
       sum += d * d;
       ++n;
     }
-    if (n < 3) return std::nullopt;
     if (std::sqrt(sum / n) < best) {
       best = std::sqrt(sum / n);
       *nearest = static_cast<int>(i);
@@ -79,6 +84,7 @@ struct Candidate {
   int view_a, line_a, view_b, line_b;
   std::vector<int> lines;  // per view: the 2D line it was built from or confirmed by, or -1
   double width_px;
+  std::vector<Eigen::Vector3d> polyline;  // wires with fit_sag: the fitted knots (else a, b)
 };
 
 // Clips the 3D line to the volume along its main axis (0 = x for wires, 2 = z for posts).
@@ -182,19 +188,24 @@ std::vector<Candidate> Candidates(const std::vector<View2D>& views, const RigCal
           c.lines[va] = static_cast<int>(i);
           c.lines[vb] = static_cast<int>(j);
           bool rejected = false;
+          int checkable = 0;
           for (size_t v = 0; v < views.size() && !rejected; ++v) {
             if (v == va || v == vb) continue;
             int nearest = -1;
             const auto r = Residual(rig.cameras[v], posts ? views[v].posts : views[v].wires, c.a,
                                     c.b, &nearest);
             if (!r) continue;
+            ++checkable;
             if (*r > options.max_residual_px) rejected = true;
             c.residual = std::max(c.residual, *r);
             c.lines[v] = nearest;
             ++c.confirmations;
           }
-          // With three or more views, an unconfirmed line is as likely a mismatch as not.
-          if (rejected || (views.size() >= 3 && c.confirmations == 0)) continue;
+          // With three or more views, an unconfirmed line is as likely a mismatch as not; one
+          // that no other view could check is kept on request (the top wire seen by the upper
+          // camera and, near the image's side, by one lower camera).
+          const bool uncheckable = checkable == 0 && !posts && options.accept_uncheckable;
+          if (rejected || (views.size() >= 3 && c.confirmations == 0 && !uncheckable)) continue;
           c.view_a = static_cast<int>(va);
           c.line_a = static_cast<int>(i);
           c.view_b = static_cast<int>(vb);
@@ -222,7 +233,7 @@ absl::Status TrellisOptions::Validate() const {
     if (!std::isfinite(v) || v <= 0)
       return absl::InvalidArgumentError(absl::StrCat("trellis options: ", name, " must be > 0"));
   }
-  return absl::OkStatus();
+  return wire_fit.Validate();
 }
 
 absl::StatusOr<Trellis> ReconstructTrellis(const std::vector<View2D>& views,
@@ -238,12 +249,14 @@ absl::StatusOr<Trellis> ReconstructTrellis(const std::vector<View2D>& views,
       Choose(Candidates(views, rig, volume, options, false), options, views.size());
   if (options.fit_all_views)
     for (Candidate& c : wires) FitToAllViews(views, rig, volume, options, false, &c);
+  if (options.fit_sag)
+    for (Candidate& c : wires) c.polyline = FitWirePolyline(views, rig, c.a, c.b, options.wire_fit);
   std::sort(wires.begin(), wires.end(),
             [](const Candidate& x, const Candidate& y) { return x.a.z() + x.b.z() < y.a.z() + y.b.z(); });
   for (const Candidate& c : wires) {
     Wire wire;
     wire.id = WireId(static_cast<int64_t>(trellis.wires.size()) + 1);
-    wire.points = {c.a, c.b};
+    wire.points = c.polyline.empty() ? std::vector<Eigen::Vector3d>{c.a, c.b} : c.polyline;
     wire.radius = RadiusFromWidth(rig, c, 0.0008, 0.004);
     trellis.wires.push_back(wire);
   }
