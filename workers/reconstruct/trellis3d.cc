@@ -50,12 +50,6 @@ std::optional<double> Residual(const CameraCalibration& camera, const std::vecto
                                const Eigen::Vector3d& p, const Eigen::Vector3d& q, int* nearest) {
   double best = 1e9;
   *nearest = -1;
-  int in_image = 0;
-  for (int k = 0; k <= 10; ++k) {
-    const auto uv = camera.Project(p + (q - p) * (k / 10.0));
-    in_image += uv && camera.InImage(*uv);
-  }
-  if (in_image < 3) return std::nullopt;
   for (size_t i = 0; i < lines.size(); ++i) {
     const Line2D& line = lines[i];
     double sum = 0;
@@ -69,6 +63,7 @@ std::optional<double> Residual(const CameraCalibration& camera, const std::vecto
       sum += d * d;
       ++n;
     }
+    if (n < 3) return std::nullopt;
     if (std::sqrt(sum / n) < best) {
       best = std::sqrt(sum / n);
       *nearest = static_cast<int>(i);
@@ -188,24 +183,19 @@ std::vector<Candidate> Candidates(const std::vector<View2D>& views, const RigCal
           c.lines[va] = static_cast<int>(i);
           c.lines[vb] = static_cast<int>(j);
           bool rejected = false;
-          int checkable = 0;
           for (size_t v = 0; v < views.size() && !rejected; ++v) {
             if (v == va || v == vb) continue;
             int nearest = -1;
             const auto r = Residual(rig.cameras[v], posts ? views[v].posts : views[v].wires, c.a,
                                     c.b, &nearest);
             if (!r) continue;
-            ++checkable;
             if (*r > options.max_residual_px) rejected = true;
             c.residual = std::max(c.residual, *r);
             c.lines[v] = nearest;
             ++c.confirmations;
           }
-          // With three or more views, an unconfirmed line is as likely a mismatch as not; one
-          // that no other view could check is kept on request (the top wire seen by the upper
-          // camera and, near the image's side, by one lower camera).
-          const bool uncheckable = checkable == 0 && !posts && options.accept_uncheckable;
-          if (rejected || (views.size() >= 3 && c.confirmations == 0 && !uncheckable)) continue;
+          // With three or more views, an unconfirmed line is as likely a mismatch as not.
+          if (rejected || (views.size() >= 3 && c.confirmations == 0)) continue;
           c.view_a = static_cast<int>(va);
           c.line_a = static_cast<int>(i);
           c.view_b = static_cast<int>(vb);

@@ -2,9 +2,8 @@
 // Wires and posts in 3D from their 2D lines (View2D::wires, View2D::posts). A line in one view
 // back-projects to a plane through the camera centre; two views' planes meet in the 3D line.
 // Candidates from every pair of views are checked against the other views' lines, then chosen
-// greedily, best first, each 2D line used once. With three or more views, a candidate that a view
-// able to check it does not confirm is dropped; one that no other view can check (it lies outside
-// their images) is kept with accept_uncheckable, chosen after the confirmed ones. Pairs whose planes meet at a grazing angle
+// greedily, best first, each 2D line used once. With three or more views, a candidate that no
+// other view confirms is dropped. Pairs whose planes meet at a grazing angle
 // (horizontal wires seen by horizontally separated cameras) are skipped: the trinocular rig's
 // upper camera gives every wire a well-conditioned pair. Thread-safe (pure functions).
 #pragma once
@@ -32,9 +31,6 @@ struct TrellisOptions {
   bool fit_sag = true;                // a chosen wire becomes a polyline fitted to the observed
                                       // wire centres of every view (wire_fit.h): wires sag
   WireFitOptions wire_fit;
-  bool accept_uncheckable = true;     // a pair's wire that no other view can check (it lies
-                                      // outside their images: the top wire, above the lower
-                                      // cameras) is kept, after every confirmed one
 
   absl::Status Validate() const;
 };

@@ -65,31 +65,6 @@ TEST(MatchTrellisLines, NamesTheLineOfEveryViewThatSeesIt) {
   }
 }
 
-// A wire that only two views see (one of the lower pair and the upper camera: the top wire,
-// above the other lower camera's image) is kept only with accept_uncheckable.
-TEST(ReconstructTrellis, KeepsAWireThatNoThirdViewCanCheck) {
-  RigCalibration rig = sim::MakeRig().value();
-  VineModel truth;
-  Wire wire;
-  wire.id = WireId(1);
-  wire.points = {{-2.0, 0.8, 1.5}, {2.0, 0.8, 1.51}};
-  truth.wires.push_back(wire);
-  // Camera 1 cannot see the wire: its principal point moved so the wire projects far above its image.
-  rig.cameras[1].camera_matrix(1, 2) -= 3000.0;
-  std::vector<View2D> views = SyntheticViews(truth, rig);
-  views[1].wires.clear();
-  TrellisOptions options;
-  const auto kept = ReconstructTrellis(views, rig, WorkingVolume(), options);
-  ASSERT_TRUE(kept.ok()) << kept.status();
-  ASSERT_EQ(kept->wires.size(), 1u);
-  for (const Eigen::Vector3d& p : kept->wires[0].points)
-    EXPECT_LT(PointSegmentDistance(p, wire.points[0], wire.points[1]), 0.005);
-  options.accept_uncheckable = false;
-  const auto dropped = ReconstructTrellis(views, rig, WorkingVolume(), options);
-  ASSERT_TRUE(dropped.ok()) << dropped.status();
-  EXPECT_TRUE(dropped->wires.empty());
-}
-
 // A third view that sees where the pair's wire would be, but has no line there, rejects it.
 TEST(ReconstructTrellis, DropsAPairsWireThatAThirdViewCouldSeeButDoesNot) {
   const RigCalibration rig = sim::MakeRig().value();

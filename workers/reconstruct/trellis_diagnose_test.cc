@@ -93,6 +93,9 @@ struct Tally {
   double missed_by_x[5] = {0, 0, 0, 0, 0}, total_by_x[5] = {0, 0, 0, 0, 0};
   double by_views_total[4] = {0, 0, 0, 0}, by_views_missed[4] = {0, 0, 0, 0};
   double in_images[4] = {0, 0, 0, 0};  // length by number of images it projects into
+  // Length inside two images whose planes through the wire meet at >= 3 degrees (a pair that
+  // can place it: not two cameras side by side looking at a horizontal wire).
+  double well_posed = 0;
   double off_dy = 0, off_dz = 0, off_n = 0;  // mean |dy|, |dz| of the off samples
   double dy_sum = 0, dz_sum = 0;
   int dyz_n = 0;
@@ -120,6 +123,8 @@ struct Tally {
       std::printf(" %.3f", by_views_missed[b] / std::max(1e-9, by_views_total[b]));
     std::printf("\nlength inside 0,1,2,3 images:");
     for (int b = 0; b < 4; ++b) std::printf(" %.1f", in_images[b]);
+    std::printf("\ninside two images of a pair that can place it: %.3f of the length",
+                well_posed / (total[0] + total[1]));
     std::printf("\noff samples: mean |dy| %.1f mm, |dz| %.1f mm", 1000 * off_dy / std::max(1.0, off_n),
                 1000 * off_dz / std::max(1.0, off_n));
     std::printf("\nmean |dy| %.1f mm, |dz| %.1f mm (samples within 40 mm)\n",
@@ -151,6 +156,21 @@ void Score(const VineModel& truth, const VineModel& model, const std::vector<Vie
         seen += in_image;
       }
       tally->in_images[std::min(seen, 3)] += 0.005;
+      {
+        // The wire's local direction: along its polyline at p.
+        const Eigen::Vector3d dir = (truth.wires[w].points.back() - truth.wires[w].points.front()).normalized();
+        std::vector<Eigen::Vector3d> normals;
+        for (size_t v = 0; v < views.size(); ++v) {
+          const auto uv = rig.cameras[v].Project(p);
+          if (uv && rig.cameras[v].InImage(*uv))
+            normals.push_back((p - rig.cameras[v].CentreInPlatform()).cross(dir).normalized());
+        }
+        bool posed = false;
+        for (size_t i = 0; i < normals.size(); ++i)
+          for (size_t j = i + 1; j < normals.size(); ++j)
+            posed |= normals[i].cross(normals[j]).norm() >= std::sin(3.0 * M_PI / 180);
+        if (posed) tally->well_posed += 0.005;
+      }
       tally->by_views_total[std::min(covered, 3)] += 0.005;
       if (post_in_span) tally->post_total += 0.005;
       if (d <= 0.010) {
