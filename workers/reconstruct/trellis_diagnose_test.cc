@@ -14,8 +14,11 @@
 #include <vector>
 
 #include "core/model_metrics.h"
+#include "core/view_coverage.h"
 #include "Eigen/Eigenvalues"
 #include "gtest/gtest.h"
+#include "sim/rig.h"
+#include "sim/vine_generator.h"
 #include "workers/reconstruct/correspondence_test_util.h"
 #include "workers/reconstruct/reconstruct.h"
 #include "workers/reconstruct/trellis3d.h"
@@ -260,6 +263,13 @@ TEST(TrellisLoss, DISABLED_Report) {
     ASSERT_TRUE(matched.ok()) << matched.status();
     const std::vector<View2D>& views =
         matched->refined_views.empty() ? stop.views : matched->refined_views;
+    if (verbose && k == 0)
+      for (const CameraCalibration& camera : matched->rig.cameras) {
+        const Eigen::Vector3d c = camera.CentreInPlatform();
+        const Eigen::Vector3d axis = camera.rotation_camera_from_platform.row(2).transpose();
+        std::printf("%s centre (%.3f %.3f %.3f) pitch %.1f deg\n", camera.name.c_str(), c.x(), c.y(),
+                    c.z(), std::asin(axis.z()) * 180 / M_PI);
+      }
     const auto full = ReconstructFromViews(stop.views, stop.rig, options, Deadline::Infinite());
     ASSERT_TRUE(full.ok()) << full.status();
     for (const Cane& cane : full->model.canes) {
@@ -304,6 +314,73 @@ TEST(TrellisLoss, DISABLED_Report) {
               false_on_post / cane_total);
   straight.Print("straight wires");
   sag.Print("sagging wires (fit_sag)");
+}
+
+}  // namespace
+}  // namespace vb::reconstruct
+
+namespace vb::reconstruct {
+namespace {
+
+// The field-of-view ceiling on wire recall of a few rigs, from geometry alone (no rendering): per
+// stop, the share of true wire length over |x| <= 0.8 m on wires that lie, somewhere in the
+// volume, inside two images whose planes through the wire meet at 3 degrees or more (the trellis
+// stage's min_plane_angle_deg), then the mean over stops, as the benchmark averages wire recall; with the rig's cane two-view share
+// (core/view_coverage.h) beside it. Run as DISABLED_Report (VB_SEED, VB_STOPS).
+TEST(TrellisLoss, DISABLED_RigCeiling) {
+  const char* env = std::getenv("VB_SEED");
+  const uint64_t first = env ? std::atoi(env) : 1100;
+  const char* count_env = std::getenv("VB_STOPS");
+  const int count = count_env ? std::atoi(count_env) : 100;
+  struct Variant {
+    const char* name;
+    sim::RigOptions options;
+  };
+  std::vector<Variant> variants(3);
+  variants[0].name = "default (toe-in at rig height)";
+  variants[1].name = "no toe-in (axes parallel)";
+  variants[1].options.toe_in = false;
+  variants[2].name = "apex below (upper pair)";
+  variants[2].options.apex_up = false;
+  for (const Variant& variant : variants) {
+    const RigCalibration rig = sim::MakeRig(variant.options).value();
+    double wire_sum = 0, cane_sum = 0;
+    for (int k = 0; k < count; ++k) {
+      const sim::Scene scene = sim::GenerateScene(first + k, 1).value();
+      double total = 0, posed = 0;
+      for (const Wire& wire : scene.vine.wires) {
+        // A wire that a pair can place anywhere in the volume (|x| <= 1.1 m, at least 0.1 m of
+        // it) is reconstructed along all of it (a line, extended), so it counts whole.
+        const Eigen::Vector3d dir = (wire.points.back() - wire.points.front()).normalized();
+        Polyline3 line;
+        line.points = wire.points;
+        line.radii.assign(wire.points.size(), 0.001);
+        double placed_m = 0;
+        for (const Eigen::Vector3d& p : line.Sample(0.005)) {
+          if (std::abs(p.x()) > 1.1) continue;
+          std::vector<Eigen::Vector3d> normals;
+          for (const CameraCalibration& camera : rig.cameras) {
+            const auto uv = camera.Project(p);
+            if (uv && camera.InImage(*uv))
+              normals.push_back((p - camera.CentreInPlatform()).cross(dir).normalized());
+          }
+          bool ok = false;
+          for (size_t i = 0; i < normals.size(); ++i)
+            for (size_t j = i + 1; j < normals.size(); ++j)
+              ok |= normals[i].cross(normals[j]).norm() >= std::sin(3.0 * M_PI / 180);
+          placed_m += ok * 0.005;
+        }
+        const double span = static_cast<double>(SpanSamples(wire).size());
+        total += span;
+        if (placed_m >= 0.1) posed += span;
+      }
+      wire_sum += total > 0 ? posed / total : 1.0;
+      cane_sum += EvaluateViewCoverage(scene.vine, rig).value().in_two_or_more_fraction;
+    }
+    std::printf("%-32s wire ceiling %.3f, cane length in two views %.3f (stops %d from %llu)\n",
+                variant.name, wire_sum / count, cane_sum / count, count,
+                static_cast<unsigned long long>(first));
+  }
 }
 
 }  // namespace

@@ -2,7 +2,7 @@
 // A wire as it hangs: a polyline along x fitted to the observed wire centres of every view
 // (Line2D::centre_px), for the trellis stage (trellis3d.h). Trellis wires sag between their posts
 // (a parabola, with a kink at each post: sim/trellis.h), so over the +-0.8 m a stop sees, a wire
-// with a post in view can lie ~10 mm from any straight line. The straight wire found by
+// with a post in view can lie up to ~9 mm from the best straight line. The straight wire found by
 // intersecting planes is the start: each observed centre within gate_px of its projection is
 // placed along the wire where its ray passes closest to it, and the knots' y and z minimise the
 // image distance of the observations from the wire (linearised about the straight wire: each
