@@ -79,6 +79,7 @@ struct Candidate {
   int view_a, line_a, view_b, line_b;
   std::vector<int> lines;  // per view: the 2D line it was built from or confirmed by, or -1
   double width_px;
+  std::vector<Eigen::Vector3d> polyline;  // wires with fit_sag: the fitted knots (else a, b)
 };
 
 // Clips the 3D line to the volume along its main axis (0 = x for wires, 2 = z for posts).
@@ -222,7 +223,7 @@ absl::Status TrellisOptions::Validate() const {
     if (!std::isfinite(v) || v <= 0)
       return absl::InvalidArgumentError(absl::StrCat("trellis options: ", name, " must be > 0"));
   }
-  return absl::OkStatus();
+  return wire_fit.Validate();
 }
 
 absl::StatusOr<Trellis> ReconstructTrellis(const std::vector<View2D>& views,
@@ -238,12 +239,14 @@ absl::StatusOr<Trellis> ReconstructTrellis(const std::vector<View2D>& views,
       Choose(Candidates(views, rig, volume, options, false), options, views.size());
   if (options.fit_all_views)
     for (Candidate& c : wires) FitToAllViews(views, rig, volume, options, false, &c);
+  if (options.fit_sag)
+    for (Candidate& c : wires) c.polyline = FitWirePolyline(views, rig, c.a, c.b, options.wire_fit);
   std::sort(wires.begin(), wires.end(),
             [](const Candidate& x, const Candidate& y) { return x.a.z() + x.b.z() < y.a.z() + y.b.z(); });
   for (const Candidate& c : wires) {
     Wire wire;
     wire.id = WireId(static_cast<int64_t>(trellis.wires.size()) + 1);
-    wire.points = {c.a, c.b};
+    wire.points = c.polyline.empty() ? std::vector<Eigen::Vector3d>{c.a, c.b} : c.polyline;
     wire.radius = RadiusFromWidth(rig, c, 0.0008, 0.004);
     trellis.wires.push_back(wire);
   }

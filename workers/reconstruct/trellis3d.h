@@ -2,7 +2,8 @@
 // Wires and posts in 3D from their 2D lines (View2D::wires, View2D::posts). A line in one view
 // back-projects to a plane through the camera centre; two views' planes meet in the 3D line.
 // Candidates from every pair of views are checked against the other views' lines, then chosen
-// greedily, best first, each 2D line used once. Pairs whose planes meet at a grazing angle
+// greedily, best first, each 2D line used once. With three or more views, a candidate that no
+// other view confirms is dropped. Pairs whose planes meet at a grazing angle
 // (horizontal wires seen by horizontally separated cameras) are skipped: the trinocular rig's
 // upper camera gives every wire a well-conditioned pair. Thread-safe (pure functions).
 #pragma once
@@ -14,6 +15,7 @@
 #include "core/vine_model.h"
 #include "workers/reconstruct/piece3d.h"
 #include "workers/reconstruct/view2d.h"
+#include "workers/reconstruct/wire_fit.h"
 
 namespace vb::reconstruct {
 
@@ -26,12 +28,17 @@ struct TrellisOptions {
   double max_post_tilt = 0.3;         // posts stand up: |dx|, |dy| per metre of z
   bool fit_all_views = true;          // a chosen line is refitted to the planes of every view
                                       // that saw it (not only the two it was built from)
+  bool fit_sag = true;                // a chosen wire becomes a polyline fitted to the observed
+                                      // wire centres of every view (wire_fit.h): wires sag
+  WireFitOptions wire_fit;
 
   absl::Status Validate() const;
 };
 
 struct Trellis {
-  std::vector<Wire> wires;  // ids 1, 2, ... from the lowest; two points at the volume's x ends
+  // ids 1, 2, ... from the lowest; from the volume's x min to its x max: two points, or with
+  // fit_sag the knots of the fitted polyline (two points where too few centres support a fit)
+  std::vector<Wire> wires;
   std::vector<Post> posts;  // ids 1, 2, ... along x; from the ground to the volume's top
 };
 

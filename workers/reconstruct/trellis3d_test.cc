@@ -65,6 +65,21 @@ TEST(MatchTrellisLines, NamesTheLineOfEveryViewThatSeesIt) {
   }
 }
 
+// A third view that sees where the pair's wire would be, but has no line there, rejects it.
+TEST(ReconstructTrellis, DropsAPairsWireThatAThirdViewCouldSeeButDoesNot) {
+  const RigCalibration rig = sim::MakeRig().value();
+  VineModel truth;
+  Wire wire;
+  wire.id = WireId(1);
+  wire.points = {{-2.0, 0.8, 1.2}, {2.0, 0.8, 1.2}};
+  truth.wires.push_back(wire);
+  std::vector<View2D> views = SyntheticViews(truth, rig);
+  views[1].wires.clear();
+  const auto trellis = ReconstructTrellis(views, rig, WorkingVolume());
+  ASSERT_TRUE(trellis.ok()) << trellis.status();
+  EXPECT_TRUE(trellis->wires.empty());
+}
+
 TEST(ReconstructTrellis, RejectsMismatchedViewsAndBadOptions) {
   const RigCalibration rig = sim::MakeRig().value();
   std::vector<View2D> views = SyntheticViews(Trellis3(), rig);

@@ -1,0 +1,404 @@
+// SPDX-License-Identifier: Apache-2.0
+// A diagnosis tool, not a test: where wire recall and precision are lost on rendered stops (the
+// bench's stops, MakeRenderedStop). Run with
+//   VB_INPUT=labels|images VB_SEED=1100 VB_STOPS=20 vb_reconstruct_test
+//     --gtest_also_run_disabled_tests --gtest_filter='TrellisLoss.DISABLED_*'
+// Tuning seeds only (1100-1999; docs/reconstruction.md "Seeds"). For every true wire over the
+// scored span (|x| <= 0.8 m) it splits the length into: recalled (within 10 mm of a model wire),
+// off (10-40 mm: a wire was built there but lies wrong), absent (no model wire within 40 mm);
+// and says how far the best straight line through the true wire could get (the sag), whether a
+// post stands in the span, and in how many views a 2D wire line covers the true wire.
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "core/model_metrics.h"
+#include "core/view_coverage.h"
+#include "Eigen/Eigenvalues"
+#include "gtest/gtest.h"
+#include "sim/rig.h"
+#include "sim/vine_generator.h"
+#include "workers/reconstruct/correspondence_test_util.h"
+#include "workers/reconstruct/reconstruct.h"
+#include "workers/reconstruct/trellis3d.h"
+
+namespace vb::reconstruct {
+namespace {
+
+constexpr double kSpan = 0.8;
+
+std::vector<Eigen::Vector3d> SpanSamples(const Wire& wire) {
+  Polyline3 line;
+  line.points = wire.points;
+  line.radii.assign(wire.points.size(), 0.001);
+  std::vector<Eigen::Vector3d> out;
+  for (const Eigen::Vector3d& p : line.Sample(0.005))
+    if (std::abs(p.x()) <= kSpan) out.push_back(p);
+  return out;
+}
+
+double DistanceToWires(const Eigen::Vector3d& p, const std::vector<Wire>& wires,
+                       Eigen::Vector3d* error = nullptr) {
+  double best = 1e9;
+  for (const Wire& w : wires)
+    for (size_t i = 0; i + 1 < w.points.size(); ++i) {
+      double t = 0;
+      const double d = PointSegmentDistance(p, w.points[i], w.points[i + 1], &t);
+      if (d < best) {
+        best = d;
+        if (error) *error = w.points[i] + t * (w.points[i + 1] - w.points[i]) - p;
+      }
+    }
+  return best;
+}
+
+// Largest distance of the samples from their total-least-squares line.
+double StraightLineDeviation(const std::vector<Eigen::Vector3d>& samples) {
+  if (samples.size() < 2) return 0.0;
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const auto& p : samples) mean += p;
+  mean /= samples.size();
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (const auto& p : samples) cov += (p - mean) * (p - mean).transpose();
+  const Eigen::Vector3d dir = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(cov).eigenvectors().col(2);
+  double worst = 0.0;
+  for (const auto& p : samples) worst = std::max(worst, ((p - mean) - dir.dot(p - mean) * dir).norm());
+  return worst;
+}
+
+// Whether the projection of p in `camera` lies within tol_px of one of `lines` (inside its extent
+// stretched by margin_px).
+bool CoveredIn(const CameraCalibration& camera, const std::vector<Line2D>& lines,
+               const Eigen::Vector3d& p, double tol_px, double margin_px, bool* in_image) {
+  *in_image = false;
+  const auto uv = camera.Project(p);
+  if (!uv || !camera.InImage(*uv)) return false;
+  *in_image = true;
+  const Eigen::Vector2d xy = camera.PixelToNormalised(*uv);
+  const double f = camera.camera_matrix(0, 0);
+  for (const Line2D& l : lines) {
+    if (std::abs(l.line.dot(xy.homogeneous())) * f > tol_px) continue;
+    const Eigen::Vector2d d = (l.end - l.begin).normalized();
+    const double t = d.dot(xy - l.begin) * f;
+    if (t >= -margin_px && t <= (l.end - l.begin).norm() * f + margin_px) return true;
+  }
+  return false;
+}
+
+// Length (m) of true wire over the span by outcome, for one trellis configuration.
+struct Tally {
+  // By wire (0: fruiting, 1: foliage).
+  double total[2] = {0, 0}, recalled[2] = {0, 0}, off[2] = {0, 0}, absent[2] = {0, 0};
+  double straight_possible[2] = {0, 0};
+  double post_total = 0, post_recalled = 0;  // stops with a post in the span
+  // Missed length by x bin (5 bins over [-0.8, 0.8]) and by views whose 2D lines cover it.
+  double missed_by_x[5] = {0, 0, 0, 0, 0}, total_by_x[5] = {0, 0, 0, 0, 0};
+  double by_views_total[4] = {0, 0, 0, 0}, by_views_missed[4] = {0, 0, 0, 0};
+  double in_images[4] = {0, 0, 0, 0};  // length by number of images it projects into
+  // Length inside two images whose planes through the wire meet at >= 3 degrees (a pair that
+  // can place it: not two cameras side by side looking at a horizontal wire).
+  double well_posed = 0;
+  double off_dy = 0, off_dz = 0, off_n = 0;  // mean |dy|, |dz| of the off samples
+  double dy_sum = 0, dz_sum = 0;
+  int dyz_n = 0;
+  double model_total = 0, model_near = 0, model_far = 0;
+  double mean_recall = 0, mean_precision = 0;
+
+  void Print(const char* name) const {
+    std::printf("== %s\nwire recall %.3f precision %.3f (means over stops)\n", name, mean_recall,
+                mean_precision);
+    for (int kind = 0; kind < 2; ++kind)
+      std::printf("%s: %.1f m, recalled %.3f, off (10-40 mm) %.3f, absent %.3f; a straight line "
+                  "within 10 mm possible for %.3f\n",
+                  kind == 0 ? "fruiting wire" : "foliage wires", total[kind],
+                  recalled[kind] / total[kind], off[kind] / total[kind],
+                  absent[kind] / total[kind], straight_possible[kind] / total[kind]);
+    std::printf("stops with a post in the span: recall %.3f of %.1f m\n",
+                post_total > 0 ? post_recalled / post_total : 0.0, post_total);
+    std::printf("missed fraction by x bin (-0.8..0.8):");
+    for (int b = 0; b < 5; ++b)
+      std::printf(" %.3f", missed_by_x[b] / std::max(1e-9, total_by_x[b]));
+    std::printf("\nby views whose 2D lines cover it (0,1,2,3): length");
+    for (int b = 0; b < 4; ++b) std::printf(" %.1f", by_views_total[b]);
+    std::printf(", missed fraction");
+    for (int b = 0; b < 4; ++b)
+      std::printf(" %.3f", by_views_missed[b] / std::max(1e-9, by_views_total[b]));
+    std::printf("\nlength inside 0,1,2,3 images:");
+    for (int b = 0; b < 4; ++b) std::printf(" %.1f", in_images[b]);
+    std::printf("\ninside two images of a pair that can place it: %.3f of the length",
+                well_posed / (total[0] + total[1]));
+    std::printf("\noff samples: mean |dy| %.1f mm, |dz| %.1f mm", 1000 * off_dy / std::max(1.0, off_n),
+                1000 * off_dz / std::max(1.0, off_n));
+    std::printf("\nmean |dy| %.1f mm, |dz| %.1f mm (samples within 40 mm)\n",
+                1000 * dy_sum / std::max(1, dyz_n), 1000 * dz_sum / std::max(1, dyz_n));
+    std::printf("model wire %.1f m: near %.3f, far (> 40 mm) %.3f\n", model_total,
+                model_near / std::max(1e-9, model_total), model_far / std::max(1e-9, model_total));
+  }
+};
+
+void Score(const VineModel& truth, const VineModel& model, const std::vector<View2D>& views,
+           const RigCalibration& rig, int count, bool verbose, Tally* tally) {
+  bool post_in_span = false;
+  for (const Post& p : truth.posts) post_in_span |= std::abs(p.base.x()) <= kSpan;
+  for (size_t w = 0; w < truth.wires.size(); ++w) {
+    const std::vector<Eigen::Vector3d> samples = SpanSamples(truth.wires[w]);
+    const int kind = w == 0 ? 0 : 1;
+    const double deviation = StraightLineDeviation(samples);
+    double wire_hit = 0;
+    for (const Eigen::Vector3d& p : samples) {
+      Eigen::Vector3d e;
+      const double d = DistanceToWires(p, model.wires, &e);
+      tally->total[kind] += 0.005;
+      const int bin = std::clamp(static_cast<int>((p.x() + kSpan) / (2 * kSpan) * 5), 0, 4);
+      tally->total_by_x[bin] += 0.005;
+      int covered = 0, seen = 0;
+      for (size_t v = 0; v < views.size(); ++v) {
+        bool in_image = false;
+        covered += CoveredIn(rig.cameras[v], views[v].wires, p, 3.0, 10.0, &in_image);
+        seen += in_image;
+      }
+      tally->in_images[std::min(seen, 3)] += 0.005;
+      {
+        // The wire's local direction: along its polyline at p.
+        const Eigen::Vector3d dir = (truth.wires[w].points.back() - truth.wires[w].points.front()).normalized();
+        std::vector<Eigen::Vector3d> normals;
+        for (size_t v = 0; v < views.size(); ++v) {
+          const auto uv = rig.cameras[v].Project(p);
+          if (uv && rig.cameras[v].InImage(*uv))
+            normals.push_back((p - rig.cameras[v].CentreInPlatform()).cross(dir).normalized());
+        }
+        bool posed = false;
+        for (size_t i = 0; i < normals.size(); ++i)
+          for (size_t j = i + 1; j < normals.size(); ++j)
+            posed |= normals[i].cross(normals[j]).norm() >= std::sin(3.0 * M_PI / 180);
+        if (posed) tally->well_posed += 0.005;
+      }
+      tally->by_views_total[std::min(covered, 3)] += 0.005;
+      if (post_in_span) tally->post_total += 0.005;
+      if (d <= 0.010) {
+        tally->recalled[kind] += 0.005;
+        wire_hit += 1;
+        if (post_in_span) tally->post_recalled += 0.005;
+      } else {
+        tally->missed_by_x[bin] += 0.005;
+        tally->by_views_missed[std::min(covered, 3)] += 0.005;
+        (d <= 0.040 ? tally->off : tally->absent)[kind] += 0.005;
+        if (d <= 0.040) {
+          tally->off_dy += std::abs(e.y());
+          tally->off_dz += std::abs(e.z());
+          tally->off_n += 1;
+        }
+      }
+      if (d <= 0.040) {
+        tally->dy_sum += std::abs(e.y());
+        tally->dz_sum += std::abs(e.z());
+        ++tally->dyz_n;
+      }
+    }
+    if (verbose) {
+      // Per view: metres of the wire over the whole volume (|x| <= 1.1 m) inside the image, and
+      // covered by a 2D wire line.
+      Polyline3 full;
+      full.points = truth.wires[w].points;
+      full.radii.assign(full.points.size(), 0.001);
+      std::printf("  wire %zu per view (in image / covered, |x| <= 1.1 m):", w);
+      for (size_t v = 0; v < views.size(); ++v) {
+        double in = 0, cov = 0;
+        for (const Eigen::Vector3d& p : full.Sample(0.005)) {
+          if (std::abs(p.x()) > 1.1) continue;
+          bool in_image = false;
+          cov += 0.005 * CoveredIn(rig.cameras[v], views[v].wires, p, 3.0, 10.0, &in_image);
+          in += 0.005 * in_image;
+        }
+        std::printf(" %.2f/%.2f", in, cov);
+      }
+      std::printf("\n");
+    }
+    // A straight line can recall all of it within 10 mm when the deviation is under 10 mm.
+    if (deviation <= 0.010) tally->straight_possible[kind] += samples.size() * 0.005;
+    if (verbose)
+      std::printf("  wire %zu z %.3f y %.3f: recall %.2f, straight-line deviation %.1f mm, post %d\n", w,
+                  samples.empty() ? 0.0 : samples[samples.size() / 2].z(),
+                  samples.empty() ? 0.0 : samples[samples.size() / 2].y(),
+                  samples.empty() ? 0.0 : wire_hit / samples.size(), 1000 * deviation,
+                  post_in_span);
+  }
+  for (const Wire& w : model.wires) {
+    for (const Eigen::Vector3d& p : SpanSamples(w)) {
+      const double d = DistanceToWires(p, truth.wires);
+      tally->model_total += 0.005;
+      if (d <= 0.010) tally->model_near += 0.005;
+      else if (d > 0.040) tally->model_far += 0.005;
+    }
+  }
+  const auto m = EvaluateReconstruction(model, truth).value();
+  tally->mean_recall += m.wire_recall / count;
+  tally->mean_precision += m.wire_precision / count;
+}
+
+TEST(TrellisLoss, DISABLED_Report) {
+  const char* env = std::getenv("VB_SEED");
+  const uint64_t first = env ? std::atoi(env) : 1100;
+  const char* count_env = std::getenv("VB_STOPS");
+  const int count = count_env ? std::atoi(count_env) : 8;
+  const char* input_env = std::getenv("VB_INPUT");
+  const bool images = !input_env || std::string(input_env) == "images";
+  const bool verbose = std::getenv("VB_VERBOSE") != nullptr;
+  ReconstructOptions options;
+  if (const char* v = std::getenv("VB_SMOOTH")) options.trellis.wire_fit.smoothness_px = std::atof(v);
+  if (const char* v = std::getenv("VB_INLIER")) options.trellis.wire_fit.inlier_px = std::atof(v);
+  if (const char* v = std::getenv("VB_GATE")) options.trellis.wire_fit.gate_px = std::atof(v);
+  if (const char* v = std::getenv("VB_KNOT")) options.trellis.wire_fit.knot_spacing_m = std::atof(v);
+  Tally straight, sag;
+  // Cane precision: model cane length, the part far from every true cane (false), and of that
+  // the part lying along a true wire or on a true post.
+  double cane_total = 0, cane_false = 0, false_on_wire = 0, false_on_post = 0;
+  // Model cane length within 15 mm of the fruiting / a foliage wire: near a true cane or not.
+  double true_on_fruiting = 0, true_on_foliage = 0, false_on_fruiting = 0, false_on_foliage = 0;
+  for (int k = 0; k < count; ++k) {
+    const uint64_t seed = first + k;
+    const SimulatedStop stop = MakeRenderedStop(seed, images);
+    ASSERT_FALSE(stop.views.empty());
+    const VineModel& truth = stop.scene.vine;
+    const auto matched = MatchWithRigRefinement(stop.views, stop.rig, options, Deadline::Infinite());
+    ASSERT_TRUE(matched.ok()) << matched.status();
+    const std::vector<View2D>& views =
+        matched->refined_views.empty() ? stop.views : matched->refined_views;
+    if (verbose && k == 0)
+      for (const CameraCalibration& camera : matched->rig.cameras) {
+        const Eigen::Vector3d c = camera.CentreInPlatform();
+        const Eigen::Vector3d axis = camera.rotation_camera_from_platform.row(2).transpose();
+        std::printf("%s centre (%.3f %.3f %.3f) pitch %.1f deg\n", camera.name.c_str(), c.x(), c.y(),
+                    c.z(), std::asin(axis.z()) * 180 / M_PI);
+      }
+    const auto full = ReconstructFromViews(stop.views, stop.rig, options, Deadline::Infinite());
+    ASSERT_TRUE(full.ok()) << full.status();
+    for (const Cane& cane : full->model.canes) {
+      for (const Eigen::Vector3d& p : cane.polyline.Sample(0.005)) {
+        cane_total += 0.005;
+        double near_cane = 1e9;
+        for (const Cane& t : truth.canes)
+          near_cane = std::min(near_cane, DistanceToPolyline(p, t.polyline));
+        const bool along_fruiting =
+            !truth.wires.empty() && DistanceToWires(p, {truth.wires.front()}) <= 0.015;
+        const bool along_foliage =
+            truth.wires.size() > 1 &&
+            DistanceToWires(p, std::vector<Wire>(truth.wires.begin() + 1, truth.wires.end())) <= 0.015;
+        if (near_cane <= 0.010) {
+          true_on_fruiting += along_fruiting * 0.005;
+          true_on_foliage += along_foliage * 0.005;
+          continue;
+        }
+        cane_false += 0.005;
+        false_on_fruiting += along_fruiting * 0.005;
+        false_on_foliage += along_foliage * 0.005;
+        if (DistanceToWires(p, truth.wires) <= 0.015) false_on_wire += 0.005;
+        for (const Post& post : truth.posts)
+          if (PointSegmentDistance(p, post.base, post.top) <= post.radius + 0.015) {
+            false_on_post += 0.005;
+            break;
+          }
+      }
+    }
+    for (bool fit_sag : {false, true}) {
+      TrellisOptions trellis_options = options.trellis;
+      trellis_options.fit_sag = fit_sag;
+      const auto trellis = ReconstructTrellis(views, matched->rig, options.volume, trellis_options);
+      ASSERT_TRUE(trellis.ok()) << trellis.status();
+      VineModel model;
+      model.wires = trellis->wires;
+      if (verbose && !fit_sag)
+        for (const Wire& w : model.wires)
+          std::printf("  model wire z %.3f..%.3f y %.3f..%.3f\n", w.points.front().z(),
+                      w.points.back().z(), w.points.front().y(), w.points.back().y());
+      if (verbose)
+        std::printf("seed %llu %s: %zu true wires, %zu model wires\n",
+                    static_cast<unsigned long long>(seed), fit_sag ? "sag" : "straight",
+                    truth.wires.size(), model.wires.size());
+      Score(truth, model, views, matched->rig, count, verbose, fit_sag ? &sag : &straight);
+    }
+  }
+  std::printf("stops %d from %llu (%s)\n", count, static_cast<unsigned long long>(first),
+              images ? "images" : "labels");
+  std::printf("model canes %.1f m: far from true canes %.3f, of which along a true wire %.3f, "
+              "on a true post %.3f (fractions of model cane length)\n",
+              cane_total, cane_false / cane_total, false_on_wire / cane_total,
+              false_on_post / cane_total);
+  std::printf("along the fruiting wire: right %.4f, ghost %.4f; along a foliage wire: right %.4f, "
+              "ghost %.4f (fractions of model cane length)\n",
+              true_on_fruiting / cane_total, false_on_fruiting / cane_total,
+              true_on_foliage / cane_total, false_on_foliage / cane_total);
+  straight.Print("straight wires");
+  sag.Print("sagging wires (fit_sag)");
+}
+
+}  // namespace
+}  // namespace vb::reconstruct
+
+namespace vb::reconstruct {
+namespace {
+
+// The field-of-view ceiling on wire recall of a few rigs, from geometry alone (no rendering): per
+// stop, the share of true wire length over |x| <= 0.8 m on wires that lie, somewhere in the
+// volume, inside two images whose planes through the wire meet at 3 degrees or more (the trellis
+// stage's min_plane_angle_deg), then the mean over stops, as the benchmark averages wire recall; with the rig's cane two-view share
+// (core/view_coverage.h) beside it. Run as DISABLED_Report (VB_SEED, VB_STOPS).
+TEST(TrellisLoss, DISABLED_RigCeiling) {
+  const char* env = std::getenv("VB_SEED");
+  const uint64_t first = env ? std::atoi(env) : 1100;
+  const char* count_env = std::getenv("VB_STOPS");
+  const int count = count_env ? std::atoi(count_env) : 100;
+  struct Variant {
+    const char* name;
+    sim::RigOptions options;
+  };
+  std::vector<Variant> variants(3);
+  variants[0].name = "default (toe-in at rig height)";
+  variants[1].name = "no toe-in (axes parallel)";
+  variants[1].options.toe_in = false;
+  variants[2].name = "apex below (upper pair)";
+  variants[2].options.apex_up = false;
+  for (const Variant& variant : variants) {
+    const RigCalibration rig = sim::MakeRig(variant.options).value();
+    double wire_sum = 0, cane_sum = 0;
+    for (int k = 0; k < count; ++k) {
+      const sim::Scene scene = sim::GenerateScene(first + k, 1).value();
+      double total = 0, posed = 0;
+      for (const Wire& wire : scene.vine.wires) {
+        // A wire that a pair can place anywhere in the volume (|x| <= 1.1 m, at least 0.1 m of
+        // it) is reconstructed along all of it (a line, extended), so it counts whole.
+        const Eigen::Vector3d dir = (wire.points.back() - wire.points.front()).normalized();
+        Polyline3 line;
+        line.points = wire.points;
+        line.radii.assign(wire.points.size(), 0.001);
+        double placed_m = 0;
+        for (const Eigen::Vector3d& p : line.Sample(0.005)) {
+          if (std::abs(p.x()) > 1.1) continue;
+          std::vector<Eigen::Vector3d> normals;
+          for (const CameraCalibration& camera : rig.cameras) {
+            const auto uv = camera.Project(p);
+            if (uv && camera.InImage(*uv))
+              normals.push_back((p - camera.CentreInPlatform()).cross(dir).normalized());
+          }
+          bool ok = false;
+          for (size_t i = 0; i < normals.size(); ++i)
+            for (size_t j = i + 1; j < normals.size(); ++j)
+              ok |= normals[i].cross(normals[j]).norm() >= std::sin(3.0 * M_PI / 180);
+          placed_m += ok * 0.005;
+        }
+        const double span = static_cast<double>(SpanSamples(wire).size());
+        total += span;
+        if (placed_m >= 0.1) posed += span;
+      }
+      wire_sum += total > 0 ? posed / total : 1.0;
+      cane_sum += EvaluateViewCoverage(scene.vine, rig).value().in_two_or_more_fraction;
+    }
+    std::printf("%-32s wire ceiling %.3f, cane length in two views %.3f (stops %d from %llu)\n",
+                variant.name, wire_sum / count, cane_sum / count, count,
+                static_cast<unsigned long long>(first));
+  }
+}
+
+}  // namespace
+}  // namespace vb::reconstruct
