@@ -150,7 +150,8 @@ struct Candidate {
   Joints q;
   double clearance_m = 0;  // Clearance(q), computed once its stroke is known to be free
   Eigen::Isometry3d base_from_tcp;
-  int pose = 0;  // index of the sampled cut pose
+  int pose = 0;    // index of the sampled cut pose
+  int branch = 0;  // IK branch of q (IkSolutions::branch)
 };
 
 // Half-turn twins. With approach_sides = 2, the pose sampled on the other side of the cane is a
@@ -216,14 +217,26 @@ bool TwinPath(const TwinMap& map, const std::vector<Joints>& path, int cut_index
 double MaxJointChange(const Joints& a, const Joints& b) { return (a - b).cwiseAbs().maxCoeff(); }
 
 // The IK solution for the TCP at `waypoint` (TCP frame of the cut) nearest `previous`, if it is
-// within `max_jump` of it in every joint.
+// within `max_jump` of it in every joint; *branch: previous's IK branch in, the solution's out.
+// The solution on previous's branch is tried first: when it is within c <= max_jump of previous
+// and every other branch is more than 2c from it (InverseKinematicsBranch's bound), every other
+// solution is more than c from previous, so it is the one the search over all solutions picks,
+// bit for bit; otherwise all branches are solved and searched.
 std::optional<Joints> NearestSolution(const Candidate& start, const Eigen::Vector3d& waypoint,
                                       const Eigen::Isometry3d& tcp_from_flange,
                                       const JointLimits& limits, const Joints& previous,
-                                      double max_jump) {
+                                      double max_jump, int* branch) {
   Eigen::Isometry3d base_from_tcp = start.base_from_tcp;
   base_from_tcp.translation() += start.base_from_tcp.linear() * waypoint;
-  const IkSolutions ik = InverseKinematics(base_from_tcp * tcp_from_flange, limits, &previous);
+  const Eigen::Isometry3d base_from_flange = base_from_tcp * tcp_from_flange;
+  Joints same_branch;
+  double apart = 0;
+  if (InverseKinematicsBranch(base_from_flange, limits, &previous, *branch, &same_branch,
+                              &apart)) {
+    const double change = MaxJointChange(same_branch, previous);
+    if (change <= max_jump && apart > 2 * change + 1e-9) return same_branch;
+  }
+  const IkSolutions ik = InverseKinematics(base_from_flange, limits, &previous);
   int best = -1;
   double best_change = max_jump;
   for (int k = 0; k < ik.count; ++k) {
@@ -234,6 +247,7 @@ std::optional<Joints> NearestSolution(const Candidate& start, const Eigen::Vecto
     }
   }
   if (best < 0) return std::nullopt;
+  *branch = ik.branch[best];
   return ik.q[best];
 }
 
@@ -256,17 +270,19 @@ StrokeResult FollowStroke(const Candidate& start, const std::vector<Eigen::Vecto
   for (int end : {0, last}) {
     if (end == cut_index || (mirrored && end == last)) continue;
     const double allowed = max_jump * std::abs(end - cut_index);
-    const auto q =
-        NearestSolution(start, waypoints[end], tcp_from_flange, limits, start.q, allowed);
+    int branch = start.branch;
+    const auto q = NearestSolution(start, waypoints[end], tcp_from_flange, limits, start.q,
+                                   allowed, &branch);
     if (q.has_value() && !checker.IsFree(*q)) return StrokeResult::kCollides;
   }
   path->assign(waypoints.size(), start.q);
   for (int direction : {1, -1}) {
     if (mirrored && direction == 1) continue;
     Joints previous = start.q;
+    int branch = start.branch;
     for (int i = cut_index + direction; i >= 0 && i <= last; i += direction) {
-      const auto q =
-          NearestSolution(start, waypoints[i], tcp_from_flange, limits, previous, max_jump);
+      const auto q = NearestSolution(start, waypoints[i], tcp_from_flange, limits, previous,
+                                     max_jump, &branch);
       if (!q.has_value()) return StrokeResult::kNoIk;
       if (!checker.IsFree(*q)) return StrokeResult::kCollides;
       previous = *q;
@@ -578,7 +594,8 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
       const IkSolutions ik = InverseKinematics(base_from_flange, robot.limits);
       reachable = reachable || ik.count > 0;
       if (blocked) continue;
-      for (int i = 0; i < ik.count; ++i) solutions.push_back({ik.q[i], 0.0, pose, pose_index});
+      for (int i = 0; i < ik.count; ++i)
+        solutions.push_back({ik.q[i], 0.0, pose, pose_index, ik.branch[i]});
     }
     if (solutions.empty()) continue;
     if (checker == nullptr || !SameObstacles(local, checker_scene)) {
