@@ -15,7 +15,7 @@
 //                                   [--roll-steps N] [--max-tilt-deg D] [--tilt-steps N]
 //                                   [--max-slide-m M] [--alternatives N]
 //                                   [--last-resort-max-slide-m M] [--last-resort-max-roll-deg D]
-//                                   [--last-resort-roll-steps N]
+//                                   [--last-resort-roll-steps N] [--share-rolled-twins 0|1]
 // Cuts left without a motion by a pass that plans none are tried once more, as PlanVine does,
 // sliding up to PlanOptions' last_resort_max_slide_m (--last-resort-max-slide-m; 0: off), with
 // --last-resort-max-roll-deg / --last-resort-roll-steps wider rolls there too.
@@ -59,6 +59,21 @@ double Median(std::vector<double> v) {
 }
 
 // FNV-1a over the bits of every joint value.
+// FNV-1a over every joint value rounded to 1e-7 rad: equal for motions that differ by rounding
+// only (--share-rolled-twins 0 against 1).
+uint64_t RoundedHash(const std::vector<Joints>& path) {
+  uint64_t h = 1469598103934665603ull;
+  for (const Joints& q : path) {
+    for (int j = 0; j < 6; ++j) {
+      const long long v = std::llround(q[j] * 1e7);
+      unsigned char bytes[sizeof v];
+      std::memcpy(bytes, &v, sizeof v);
+      for (unsigned char b : bytes) h = (h ^ b) * 1099511628211ull;
+    }
+  }
+  return h;
+}
+
 uint64_t Hash(const std::vector<Joints>& path, uint64_t h) {
   for (const Joints& q : path) {
     for (int j = 0; j < 6; ++j) {
@@ -106,13 +121,16 @@ int Main(int argc, char** argv) {
       last_resort.roll_steps = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--alternatives") && i + 1 < argc)
       options.cut_motion.alternatives = std::atoi(argv[++i]);
+    else if (!std::strcmp(argv[i], "--share-rolled-twins") && i + 1 < argc)
+      options.cut_motion.share_rolled_twins = last_resort.share_rolled_twins =
+          std::atoi(argv[++i]) != 0;
     else {
       std::fprintf(stderr,
                    "usage: %s [--seed-base N] [--vines N] [--passes N] [--repeat N]"
                    " [--fingerprint FILE] [--orientations N] [--max-roll-deg D] [--roll-steps N]"
                    " [--max-tilt-deg D] [--tilt-steps N] [--max-slide-m M] [--alternatives N]"
                    " [--last-resort-max-slide-m M] [--last-resort-max-roll-deg D]"
-                   " [--last-resort-roll-steps N]\n",
+                   " [--last-resort-roll-steps N] [--share-rolled-twins 0|1]\n",
                    argv[0]);
       return 2;
     }
@@ -195,12 +213,17 @@ int Main(int argc, char** argv) {
         if (out) {
           uint64_t h = Hash(m.path, 1469598103934665603ull);
           for (const auto& a : m.alternatives) h = Hash(a, h);
-          std::fprintf(out, "%llu %d %lld %s %.12g %.6g %d %zu %016llx\n",
+          // Then the motion rounded, and the set of motions rounded, in any order (a sum).
+          uint64_t set = m.path.empty() ? 0 : RoundedHash(m.path);
+          for (const auto& a : m.alternatives) set += RoundedHash(a);
+          std::fprintf(out, "%llu %d %lld %s %.12g %.6g %d %zu %016llx %016llx %016llx\n",
                        static_cast<unsigned long long>(seed), pass,
                        static_cast<long long>(m.cut_id.value),
                        std::string(CutMotionOutcomeName(m.outcome)).c_str(), m.clearance_m,
                        m.slid_m, m.cut_index, m.alternatives.size(),
-                       static_cast<unsigned long long>(h));
+                       static_cast<unsigned long long>(h),
+                       static_cast<unsigned long long>(m.path.empty() ? 0 : RoundedHash(m.path)),
+                       static_cast<unsigned long long>(set));
         }
         const bool last = pass + 1 == passes;
         if (m.outcome == CutMotionOutcome::kPlanned) {

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "absl/strings/str_cat.h"
+#include "workers/plan/motion_choice.h"
 
 namespace vb::plan {
 
@@ -149,20 +150,93 @@ struct Candidate {
   Joints q;
   double clearance_m = 0;  // Clearance(q), computed once its stroke is known to be free
   Eigen::Isometry3d base_from_tcp;
-  int pose = 0;  // index of the sampled cut pose
+  int pose = 0;    // index of the sampled cut pose
+  int branch = 0;  // IK branch of q (IkSolutions::branch)
 };
+
+// Half-turn twins. With approach_sides = 2, the pose sampled on the other side of the cane is a
+// sampled pose rolled by pi about the TCP z axis (y -> -y, x -> -x, z kept; the other side at
+// tilt +t is the first side at tilt -t, same orientation and roll, bit for bit: SampleCutPoses).
+// When the bodies the flange carries are symmetric under that roll and the TCP is on the flange
+// axis (motion_choice.h RollSymmetric), the other side's IK solutions are the first side's with
+// joint 6 turned by pi, and every configuration, motion and clearance of the twin is the same
+// geometry as the original's: the arm below the flange does not move, and the flange bodies map
+// onto each other. So only the first side is sampled, and each of its strokes stands for its
+// twin too (found, checked and ranked once).
+struct TwinMap {
+  bool on = false;
+  std::vector<int> waypoint;  // waypoint[i]: the twin's index of the TCP at waypoints[i]
+};
+
+TwinMap MakeTwinMap(const RobotModel& robot, const CutMotionOptions& options,
+                    const std::vector<Eigen::Vector3d>& waypoints) {
+  TwinMap map;
+  if (!options.share_rolled_twins || options.approach_sides != 2 || !RollSymmetric(robot))
+    return map;
+  // Joint 6 takes q6 + pi or q6 - pi, whichever is within [-pi, pi] like the IK's nearest-0
+  // choice at the cut; the limits must hold that whole range (a stroke drifting past them is
+  // checked per configuration).
+  if (robot.limits.lower[5] > -M_PI || robot.limits.upper[5] < M_PI) return map;
+  // The twin's waypoint i is at the original's rolled TCP offset (-x, -y, z): the same index for
+  // the secateur's stroke along z, the reversed one for the mill end's sweep along x.
+  // A waypoint that the roll leaves in place keeps its index (the secateur's retract repeats its
+  // approach: the first match would be the approach's); the map must be one to one.
+  const int n = static_cast<int>(waypoints.size());
+  map.waypoint.assign(n, -1);
+  std::vector<char> used(n, 0);
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3d rolled(-waypoints[i].x(), -waypoints[i].y(), waypoints[i].z());
+    if (waypoints[i] == rolled) map.waypoint[i] = i;
+    for (int j = 0; j < n && map.waypoint[i] < 0; ++j) {
+      if (waypoints[j] == rolled && !used[j]) map.waypoint[i] = j;
+    }
+    if (map.waypoint[i] < 0 || used[map.waypoint[i]]) return TwinMap{};
+    used[map.waypoint[i]] = 1;
+  }
+  map.on = true;
+  return map;
+}
+
+// The twin of a free stroke `path` (see TwinMap): joint 6 turned by pi toward 0 at the cut, the
+// same turn along the stroke (the IK's nearest solution keeps it: steps are far below pi), in the
+// twin's waypoint order. False where a configuration leaves the joint limits (the IK then has no
+// continuous solution either).
+bool TwinPath(const TwinMap& map, const std::vector<Joints>& path, int cut_index,
+              const JointLimits& limits, std::vector<Joints>* twin) {
+  const double turn = path[cut_index][5] > 0 ? -M_PI : M_PI;
+  twin->resize(path.size());
+  for (size_t i = 0; i < path.size(); ++i) {
+    Joints q = path[i];
+    q[5] += turn;
+    if (q[5] < limits.lower[5] || q[5] > limits.upper[5]) return false;
+    (*twin)[map.waypoint[i]] = q;
+  }
+  return true;
+}
 
 double MaxJointChange(const Joints& a, const Joints& b) { return (a - b).cwiseAbs().maxCoeff(); }
 
 // The IK solution for the TCP at `waypoint` (TCP frame of the cut) nearest `previous`, if it is
-// within `max_jump` of it in every joint.
+// within `max_jump` of it in every joint; *branch: previous's IK branch in, the solution's out.
+// The solution on previous's branch is tried first: when it is within c <= max_jump of previous
+// and every other branch is more than 2c from it (InverseKinematicsBranch's bound), every other
+// solution is more than c from previous, so it is the one the search over all solutions picks,
+// bit for bit; otherwise all branches are solved and searched.
 std::optional<Joints> NearestSolution(const Candidate& start, const Eigen::Vector3d& waypoint,
                                       const Eigen::Isometry3d& tcp_from_flange,
                                       const JointLimits& limits, const Joints& previous,
-                                      double max_jump) {
+                                      double max_jump, int* branch) {
   Eigen::Isometry3d base_from_tcp = start.base_from_tcp;
   base_from_tcp.translation() += start.base_from_tcp.linear() * waypoint;
-  const IkSolutions ik = InverseKinematics(base_from_tcp * tcp_from_flange, limits, &previous);
+  const Eigen::Isometry3d base_from_flange = base_from_tcp * tcp_from_flange;
+  Joints same_branch;
+  double apart = 0;
+  if (InverseKinematicsBranch(base_from_flange, limits, &previous, *branch, &same_branch,
+                              &apart)) {
+    const double change = MaxJointChange(same_branch, previous);
+    if (change <= max_jump && apart > 2 * change + 1e-9) return same_branch;
+  }
+  const IkSolutions ik = InverseKinematics(base_from_flange, limits, &previous);
   int best = -1;
   double best_change = max_jump;
   for (int k = 0; k < ik.count; ++k) {
@@ -173,6 +247,7 @@ std::optional<Joints> NearestSolution(const Candidate& start, const Eigen::Vecto
     }
   }
   if (best < 0) return std::nullopt;
+  *branch = ik.branch[best];
   return ik.q[best];
 }
 
@@ -195,17 +270,19 @@ StrokeResult FollowStroke(const Candidate& start, const std::vector<Eigen::Vecto
   for (int end : {0, last}) {
     if (end == cut_index || (mirrored && end == last)) continue;
     const double allowed = max_jump * std::abs(end - cut_index);
-    const auto q =
-        NearestSolution(start, waypoints[end], tcp_from_flange, limits, start.q, allowed);
+    int branch = start.branch;
+    const auto q = NearestSolution(start, waypoints[end], tcp_from_flange, limits, start.q,
+                                   allowed, &branch);
     if (q.has_value() && !checker.IsFree(*q)) return StrokeResult::kCollides;
   }
   path->assign(waypoints.size(), start.q);
   for (int direction : {1, -1}) {
     if (mirrored && direction == 1) continue;
     Joints previous = start.q;
+    int branch = start.branch;
     for (int i = cut_index + direction; i >= 0 && i <= last; i += direction) {
-      const auto q =
-          NearestSolution(start, waypoints[i], tcp_from_flange, limits, previous, max_jump);
+      const auto q = NearestSolution(start, waypoints[i], tcp_from_flange, limits, previous,
+                                     max_jump, &branch);
       if (!q.has_value()) return StrokeResult::kNoIk;
       if (!checker.IsFree(*q)) return StrokeResult::kCollides;
       previous = *q;
@@ -381,6 +458,14 @@ class FlangeBodies {
   std::vector<HalfSpace> planes_;
 };
 
+// A stroke whose configurations are all free, with its cut configuration's clearance (the bound
+// it is ranked by) and its group: a stroke and its half-turn twin share one.
+struct FreeStroke {
+  double cut_clearance;
+  std::vector<Joints> path;
+  int group;
+};
+
 // Cut configurations closer than this in every joint are one choice, not two.
 constexpr double kDistinctRad = 0.5;
 
@@ -429,6 +514,7 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
   const std::vector<Eigen::Vector3d> waypoints =
       StrokeWaypoints(StrokeOf(robot.tool), options, &cut_index);
   const bool mirrored = IsMirrored(waypoints, cut_index);
+  const TwinMap twins = MakeTwinMap(robot, options, waypoints);
   double stroke_travel_m = 0;  // farthest stroke waypoint from the cut
   for (const Eigen::Vector3d& w : waypoints) stroke_travel_m = std::max(stroke_travel_m, w.norm());
   const int slides = options.max_slide_m > 0
@@ -496,6 +582,8 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
       else poses = poses.subspan(unrolled_poses);
     }
     for (int pose_index = 0; pose_index < static_cast<int>(poses.size()); ++pose_index) {
+      // Sides alternate (sampling order), and stage offsets are whole sets of sides.
+      if (twins.on && pose_index % 2 == 1) continue;  // the other side: a twin of the first's
       const Eigen::Isometry3d& pose = poses[pose_index];
       if (deadline.Expired()) return Fail(motion, CutMotionOutcome::kDeadline, what + ": deadline");
       const Eigen::Isometry3d base_from_flange = pose * tcp_from_flange;
@@ -506,7 +594,8 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
       const IkSolutions ik = InverseKinematics(base_from_flange, robot.limits);
       reachable = reachable || ik.count > 0;
       if (blocked) continue;
-      for (int i = 0; i < ik.count; ++i) solutions.push_back({ik.q[i], 0.0, pose, pose_index});
+      for (int i = 0; i < ik.count; ++i)
+        solutions.push_back({ik.q[i], 0.0, pose, pose_index, ik.branch[i]});
     }
     if (solutions.empty()) continue;
     if (checker == nullptr || !SameObstacles(local, checker_scene)) {
@@ -522,7 +611,7 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
     for (size_t i = 0; i < solutions.size(); ++i) {
       if (free[i]) candidates.push_back(solutions[i]);
     }
-    free_at_cut += static_cast<int>(candidates.size());
+    free_at_cut += static_cast<int>(candidates.size()) * (twins.on ? 2 : 1);
     // Boolean checks first, exact clearance only for strokes that are free: in clutter most
     // strokes collide, and Clearance costs several IsFree. A path's clearance is at most its cut
     // configuration's, which bounds the search once enough paths are found. The best
@@ -536,8 +625,10 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
     };
     // Free strokes are evaluated by decreasing clearance of their cut configuration (the bound
     // on their path's clearance), so the bar rises early and the rest stop at one comparison.
-    std::vector<std::pair<double, std::vector<Joints>>> free_strokes;
-    std::vector<Joints> path;
+    std::vector<FreeStroke> free_strokes;
+    // Per original stroke: EvaluatePath's result once evaluated (shared with its twin).
+    std::vector<std::optional<std::optional<double>>> evaluated;
+    std::vector<Joints> path, twin_path;
     // The stroke's TCP poses are fixed by the cut pose too: where a flange body collides along
     // it, no IK branch can follow the stroke (decided once per pose, for all its branches).
     // Such strokes count as followed in the message, whether or not IK would have failed first.
@@ -558,9 +649,10 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
       }
       return b == 1;
     };
+    const int per_candidate = twins.on ? 2 : 1;  // strokes a candidate stands for
     for (Candidate& candidate : candidates) {
       if (blocked(candidate)) {
-        ++strokes_followed;
+        strokes_followed += per_candidate;
         continue;
       }
       if (deadline.Expired()) return Fail(motion, CutMotionOutcome::kDeadline, what + ": deadline");
@@ -568,22 +660,46 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
           FollowStroke(candidate, waypoints, cut_index, mirrored, tcp_from_flange, robot.limits,
                        options.max_joint_jump_rad, *checker, &path);
       if (stroke == StrokeResult::kNoIk) continue;
-      ++strokes_followed;
-      if (stroke == StrokeResult::kCollides) continue;
+      if (stroke == StrokeResult::kCollides) {
+        strokes_followed += per_candidate;
+        continue;
+      }
+      const bool has_twin = twins.on && TwinPath(twins, path, cut_index, robot.limits, &twin_path);
+      strokes_followed += has_twin ? 2 : 1;
       candidate.clearance_m = checker->ClearanceAbove(candidate.q, options.min_clearance_m,
                                                       std::numeric_limits<double>::infinity());
       // Exact (double): a batched float check may pass a configuration within ~1e-5 m of contact.
       if (!(candidate.clearance_m > options.min_clearance_m)) continue;
-      free_strokes.emplace_back(candidate.clearance_m, path);
+      const int group = static_cast<int>(evaluated.size());
+      evaluated.emplace_back();
+      // A stroke and its twin tie on clearance (sampling both sides, rounding broke the tie).
+      // The twin goes first: the plan depends on that choice through its alternatives and
+      // paths (tuning seeds 1110-1199: 0.978 of reachable cuts planned with the twin first,
+      // 0.969 with the original first, 0.974 when rounding decided; docs/plan.md).
+      if (has_twin) free_strokes.push_back({candidate.clearance_m, twin_path, group});
+      free_strokes.push_back({candidate.clearance_m, path, group});
     }
     std::stable_sort(free_strokes.begin(), free_strokes.end(),
-                     [](const auto& a, const auto& b) { return a.first > b.first; });
-    for (auto& [cut_clearance, path] : free_strokes) {
+                     [](const FreeStroke& a, const FreeStroke& b) {
+                       return a.cut_clearance > b.cut_clearance;
+                     });
+    for (FreeStroke& stroke : free_strokes) {
+      const double cut_clearance = stroke.cut_clearance;
+      std::vector<Joints>& path = stroke.path;
       if (deadline.Expired()) return Fail(motion, CutMotionOutcome::kDeadline, what + ": deadline");
       if (cut_clearance <= bar()) break;  // sorted: no later stroke can beat the bar either
-      const std::optional<double> clearance = EvaluatePath(
-          *checker, path, cut_index, mirrored, cut_clearance,
-          std::max(bar(), options.min_clearance_m), options.max_step_m);
+      const double must_beat = std::max(bar(), options.min_clearance_m);
+      std::optional<double> clearance;
+      // A twin's path has its original's clearance and motions: evaluated once. The bar only
+      // rises, so a result that was below it stays below it.
+      std::optional<std::optional<double>>& known = evaluated[stroke.group];
+      if (known.has_value()) {
+        clearance = known->has_value() && **known > must_beat ? *known : std::nullopt;
+      } else {
+        clearance = EvaluatePath(*checker, path, cut_index, mirrored, cut_clearance, must_beat,
+                                 options.max_step_m);
+        known = clearance;
+      }
       if (!clearance.has_value()) continue;
       // A path whose cut configuration is near a better one adds no choice: keep the better.
       const Joints& q = path[cut_index];

@@ -58,6 +58,12 @@ struct CutMotionOptions {
   // halves the gain of rolls on tuning seeds (docs/plan.md), though the scene's capsules only
   // approximate the canes (a truncated cane is resampled into other capsules).
   double min_clearance_m = 0.0;
+  // With approach_sides = 2 and a tool symmetric under a half turn about its axis
+  // (motion_choice.h RollSymmetric; joint 6 limits holding [-pi, pi]), the other side's poses are
+  // the first side's rolled by pi: sample the first side only and take each free stroke's twin
+  // (joint 6 + or - pi) as the other side's, with the same clearance (half the work; the motions
+  // are those of both sides up to rounding). false: sample and check both sides.
+  bool share_rolled_twins = true;
 
   // INVALID_ARGUMENT naming the field ("options.sweep_m: ..."): counts < 1 (sides > 2, tilt_steps
   // or roll_steps < 0, alternatives < 0), max_tilt_rad or max_roll_rad outside [0, pi/2),

@@ -7,8 +7,11 @@
 #include <cstdio>
 #include <limits>
 #include <memory>
+#include <string>
+#include <utility>
 #include <vector>
 
+#include "absl/strings/str_cat.h"
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
 #include "sim/vine_generator.h"
@@ -214,6 +217,35 @@ TEST(SampleCutPoses, RollsTurnTheJawsAboutTheToolAxisAfterTheUnrolledPoses) {
   EXPECT_NEAR(max_tilt, 0.3, 1e-9);
   EXPECT_NEAR(max_roll, 0.6, 1e-9);
   EXPECT_TRUE(half_step);
+}
+
+TEST(SampleCutPoses, EachOtherSidePoseIsAFirstSidePoseRolledByPi) {
+  // Sides alternate; the other side's pose at tilt +t is the first side's at tilt -t (same
+  // orientation and roll) with x and y reversed, bit for bit: cut_motion.cc samples one side only
+  // and takes the other's motions as half-turn twins.
+  CutMotionOptions options;
+  options.max_tilt_rad = 0.4;
+  options.tilt_steps = 2;
+  options.max_roll_rad = 0.6;
+  options.roll_steps = 2;
+  const Eigen::Vector3d p(0.4, 0.1, 0.3), d = Eigen::Vector3d(0.2, -0.1, 1).normalized();
+  const auto poses = SampleCutPoses(p, d, options);
+  ASSERT_EQ(poses.size(), 16u * 2u * 5u * 5u);
+  std::vector<int> twin_of(poses.size(), -1);
+  for (size_t i = 1; i < poses.size(); i += 2) {
+    for (size_t j = 0; j < poses.size(); j += 2) {
+      const Eigen::Matrix3d& a = poses[i].linear();
+      const Eigen::Matrix3d& b = poses[j].linear();
+      if (a.col(0) == -b.col(0) && a.col(1) == -b.col(1) && a.col(2) == b.col(2) &&
+          poses[i].translation() == poses[j].translation()) {
+        EXPECT_EQ(twin_of[j], -1) << "two poses roll onto pose " << j;
+        twin_of[j] = static_cast<int>(i);
+      }
+    }
+  }
+  for (size_t j = 0; j < poses.size(); j += 2) EXPECT_GE(twin_of[j], 0) << j;
+  // With tilts, a twin is not its neighbour: the pairing is by geometry, not by index.
+  EXPECT_NE(twin_of[2 * 16 * 2], 2 * 16 * 2 + 1);
 }
 
 TEST(CutMotionOptions, ValidateRejectsBadRolls) {
@@ -618,6 +650,99 @@ TEST(CutMotion, MotionsOnSimulatedVinesAreFreeWhenRecheckedDenselyWithFcl) {
   std::printf("cut motions on seeds 1100-1109: %d of %d planned\n", planned, cuts);
   ASSERT_GT(cuts, 50);
   EXPECT_GE(planned, cuts / 5);  // measured: see docs/plan.md; a broken planner plans none
+}
+
+// a and b are the same motion, or half-turn twins (cut_motion.cc): joints 1-5 equal, joint 6
+// equal or turned by the same half turn throughout (within 1e-9), in order or (a sweep's twin)
+// reversed.
+bool SameOrTwin(const std::vector<Joints>& a, const std::vector<Joints>& b) {
+  if (a.size() != b.size() || a.empty()) return false;
+  for (bool reversed : {false, true}) {
+    const double turn = (reversed ? b.back() : b.front())[5] - a.front()[5];
+    if (!(std::abs(turn) < 1e-9 || std::abs(std::abs(turn) - M_PI) < 1e-9)) continue;
+    bool same = true;
+    for (size_t i = 0; i < a.size() && same; ++i) {
+      const Joints& y = b[reversed ? b.size() - 1 - i : i];
+      same = (a[i].head<5>() - y.head<5>()).cwiseAbs().maxCoeff() < 1e-9 &&
+             std::abs(y[5] - a[i][5] - turn) < 1e-9;
+    }
+    if (same) return true;
+  }
+  return false;
+}
+
+TEST(CutMotion, SharedTwinsGiveTheMotionsOfBothSidesOnSimulatedVines) {
+  // share_rolled_twins samples one side of the cane and takes the other side's motions as the
+  // half-turn twins of its own: the outcomes, slides and clearances must be those of sampling
+  // both sides, and every motion the same up to which twin of a pair is listed.
+  CutMotionOptions secateur_options;  // as PlanOptions: tilts and rolls
+  secateur_options.max_tilt_rad = 30.0 * M_PI / 180.0;
+  secateur_options.tilt_steps = 1;
+  secateur_options.max_roll_rad = 45.0 * M_PI / 180.0;
+  secateur_options.roll_steps = 2;
+  // Room for every distinct motion: a list cut short may end on either motion of a tie.
+  secateur_options.alternatives = 40;
+  CutMotionOptions mill_end_options;
+  mill_end_options.alternatives = 40;
+  const std::pair<ToolGeometry, CutMotionOptions> setups[] = {
+      {SecateurTool(), secateur_options}, {MillEndTool(), mill_end_options}};
+  for (const auto& [tool, options] : setups) {
+    const RobotModel robot = DefaultUr5(tool);
+    CutMotionOptions both_sides = options;
+    both_sides.share_rolled_twins = false;
+    int planned = 0, alternatives = 0;
+    for (uint64_t seed = 1100; seed < 1103; ++seed) {
+      sim::VineGeneratorOptions vine_options;
+      vine_options.neighbours = false;
+      auto generated = sim::GenerateScene(seed, 0, vine_options);
+      ASSERT_TRUE(generated.ok()) << generated.status();
+      auto scene = CollisionScene::Build(generated->vine, DefaultPlatform(), robot);
+      ASSERT_TRUE(scene.ok()) << scene.status();
+      const std::vector<Cut> cuts = CutsNearCaneBases(generated->vine);
+      const auto shared =
+          PlanCutMotions(robot, generated->vine, *scene, cuts, options, Deadline::Infinite());
+      const auto sampled =
+          PlanCutMotions(robot, generated->vine, *scene, cuts, both_sides, Deadline::Infinite());
+      ASSERT_EQ(shared.size(), sampled.size());
+      for (size_t i = 0; i < shared.size(); ++i) {
+        const CutMotion& m = shared[i];
+        const CutMotion& ref = sampled[i];
+        const std::string where =
+            absl::StrCat(tool.name, " seed ", seed, " cut ", m.cut_id.value);
+        ASSERT_EQ(m.outcome, ref.outcome) << where << ": " << m.message << " / " << ref.message;
+        if (m.outcome != CutMotionOutcome::kPlanned) continue;
+        ++planned;
+        EXPECT_EQ(m.slid_m, ref.slid_m) << where;
+        EXPECT_EQ(m.cut_index, ref.cut_index) << where;
+        EXPECT_NEAR(m.clearance_m, ref.clearance_m, 1e-9) << where;
+        ASSERT_EQ(m.alternatives.size(), ref.alternatives.size()) << where;
+        // Motions that tie on clearance (twins; with the axisymmetric mill end also two arms
+        // reaching the same tool pose, equal to ~1e-14 m) are listed in either order.
+        auto listed = [&](const std::vector<Joints>& a) {
+          return SameOrTwin(a, ref.path) ||
+                 std::any_of(ref.alternatives.begin(), ref.alternatives.end(),
+                             [&](const std::vector<Joints>& b) { return SameOrTwin(a, b); });
+        };
+        EXPECT_TRUE(listed(m.path)) << where;
+        // The IK takes every joint nearest 0 at the cut, a twin's joint 6 too (not a turn off).
+        EXPECT_LE(std::abs(m.path[m.cut_index][5]), M_PI + 1e-9) << where;
+        for (const std::vector<Joints>& a : m.alternatives) {
+          ++alternatives;
+          EXPECT_TRUE(listed(a)) << where;
+          EXPECT_LE(std::abs(a[m.cut_index][5]), M_PI + 1e-9) << where;
+        }
+        // The twin really puts the TCP on the cut: forward kinematics of the listed path.
+        const Eigen::Isometry3d tcp =
+            ForwardKinematics(m.path[m.cut_index]) * robot.tool.flange_from_tcp;
+        EXPECT_LT((tcp.translation() - robot.platform_from_arm_base.inverse() *
+                                           m.cut_point_in_platform).norm(),
+                  1e-9)
+            << where;
+      }
+    }
+    EXPECT_GT(planned, 5) << tool.name;  // a broken planner plans none
+    EXPECT_GT(alternatives, planned) << tool.name;
+  }
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "absl/strings/str_cat.h"
 
@@ -130,8 +131,17 @@ bool WrapIntoLimits(const JointLimits& limits, const Joints* near, Joints* q) {
   return true;
 }
 
-IkSolutions InverseKinematics(const Eigen::Isometry3d& base_from_flange, const JointLimits& limits,
-                              const Joints* near) {
+namespace {
+
+// The distance between two angles modulo whole turns, for a difference x in [0, 2 pi].
+double TurnDistance(double x) { return std::min(std::abs(x), std::abs(kTwoPi - std::abs(x))); }
+
+// InverseKinematics, restricted to branch `only` (4 b1 + 2 b5 + b3; -1: all). Every branch is
+// computed by the same operations whichever are asked for, so one branch's solution is bit for
+// bit the one the full solve gives. *apart (if not null): the smallest TurnDistance between the
+// asked branch's value and another branch's in the joint where they split (q1, q5 or q3).
+IkSolutions Solve(const Eigen::Isometry3d& base_from_flange, const JointLimits& limits,
+                  const Joints* near, int only, double* apart) {
   IkSolutions out;
   const DhParameters& dh = Ur5Dh();
   if (!base_from_flange.matrix().allFinite()) return out;
@@ -152,13 +162,20 @@ IkSolutions InverseKinematics(const Eigen::Isometry3d& base_from_flange, const J
   const std::array<double, 2> q1s = {psi + shoulder, psi + M_PI - shoulder};
   const int shoulder_branches = std::abs(sin_arg) >= 1.0 ? 1 : 2;
 
+  if (apart != nullptr) {
+    *apart = std::numeric_limits<double>::infinity();
+    if (shoulder_branches == 2) *apart = TurnDistance(M_PI - 2.0 * shoulder);
+  }
   for (int b1 = 0; b1 < shoulder_branches; ++b1) {
+    if (only >= 0 && b1 != only / 4) continue;
     const double q1 = q1s[b1];
     const double s1 = std::sin(q1), c1 = std::cos(q1);
     double q5_abs = 0;
     if (!SafeAcos((p6.x() * s1 - p6.y() * c1 - dh.d[3]) / dh.d[5], &q5_abs)) continue;
     const int wrist_branches = q5_abs == 0.0 || q5_abs == M_PI ? 1 : 2;
+    if (apart != nullptr && wrist_branches == 2) *apart = std::min(*apart, TurnDistance(2 * q5_abs));
     for (int b5 = 0; b5 < wrist_branches; ++b5) {
+      if (only >= 0 && b5 != (only / 2) % 2) continue;
       const double q5 = b5 == 0 ? q5_abs : -q5_abs;
       const double s5 = std::sin(q5);
       double q6;
@@ -176,19 +193,39 @@ IkSolutions InverseKinematics(const Eigen::Isometry3d& base_from_flange, const J
       double q3_abs = 0;
       if (!SafeAcos((px * px + py * py - a2 * a2 - a3 * a3) / (2.0 * a2 * a3), &q3_abs)) continue;
       const int elbow_branches = q3_abs == 0.0 || q3_abs == M_PI ? 1 : 2;
+      if (apart != nullptr && elbow_branches == 2)
+        *apart = std::min(*apart, TurnDistance(2 * q3_abs));
       const double q234 = std::atan2(t14.linear()(1, 0), t14.linear()(0, 0));
       for (int b3 = 0; b3 < elbow_branches; ++b3) {
+        if (only >= 0 && b3 != only % 2) continue;
         const double q3 = b3 == 0 ? q3_abs : -q3_abs;
         const double q2 =
             std::atan2(py, px) - std::atan2(a3 * std::sin(q3), a2 + a3 * std::cos(q3));
         Joints q;
         q << q1, q2, q3, q234 - q2 - q3, q5, q6;
         if (!WrapIntoLimits(limits, near, &q)) continue;
+        out.branch[out.count] = static_cast<signed char>(4 * b1 + 2 * b5 + b3);
         out.q[out.count++] = q;
       }
     }
   }
   return out;
+}
+
+}  // namespace
+
+IkSolutions InverseKinematics(const Eigen::Isometry3d& base_from_flange, const JointLimits& limits,
+                              const Joints* near) {
+  return Solve(base_from_flange, limits, near, -1, nullptr);
+}
+
+bool InverseKinematicsBranch(const Eigen::Isometry3d& base_from_flange, const JointLimits& limits,
+                             const Joints* near, int branch, Joints* q, double* apart_rad) {
+  if (branch < 0 || branch > 7) return false;
+  const IkSolutions one = Solve(base_from_flange, limits, near, branch, apart_rad);
+  if (one.count == 0) return false;
+  *q = one.q[0];
+  return true;
 }
 
 }  // namespace vb::plan

@@ -50,6 +50,7 @@ Eigen::Isometry3d ForwardKinematics(const Joints& q, const DhParameters& dh = Ur
 // wrist branch (2) x elbow branch (2), dropped branches compacted away.
 struct IkSolutions {
   std::array<Joints, 8> q;
+  std::array<signed char, 8> branch{};  // q[i]'s branch: 4 shoulder + 2 wrist + elbow (0 or 1 each)
   int count = 0;
 };
 
@@ -64,6 +65,16 @@ struct IkSolutions {
 // Unreachable or non-finite pose (or non-finite `near`): count 0. Thread-safe.
 IkSolutions InverseKinematics(const Eigen::Isometry3d& base_from_flange, const JointLimits& limits,
                               const Joints* near = nullptr);
+
+// The solution of one branch (IkSolutions::branch numbering) of InverseKinematics, the same bit
+// for bit, without computing the other branches; false if that branch has no solution within the
+// limits (or does not exist at this pose, or `branch` is not in 0..7). *apart_rad receives a
+// lower bound on how far every other branch's solution is from it in some joint, modulo whole
+// turns (+inf if there is no other branch): a solution within c of some configuration in every
+// joint is the unique nearest one to it whenever *apart_rad > 2c. For following a path branch by
+// branch (cut_motion.cc).
+bool InverseKinematicsBranch(const Eigen::Isometry3d& base_from_flange, const JointLimits& limits,
+                             const Joints* near, int branch, Joints* q, double* apart_rad);
 
 // Wraps every joint of q by multiples of 2*pi to the equivalent nearest `near` (or 0) inside
 // `limits`; false (q unspecified) if some joint has no equivalent inside them.

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "workers/plan/ur5_kinematics.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -130,6 +131,45 @@ TEST(Ur5InverseKinematics, SolutionsLieNearestTheGivenConfiguration) {
     found = found || (ik.q[k] - near).norm() < 1e-9;
   }
   EXPECT_TRUE(found);
+}
+
+TEST(Ur5InverseKinematics, OneBranchIsTheFullSolveOfThatBranchAndOthersLieApart) {
+  std::mt19937 rng(29);
+  const JointLimits limits;
+  int branches = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    const Joints q = RandomJoints(rng);
+    const Joints near = RandomJoints(rng);
+    const Eigen::Isometry3d pose = ForwardKinematics(q);
+    const IkSolutions all = InverseKinematics(pose, limits, &near);
+    for (int branch = 0; branch < 8; ++branch) {
+      Joints one;
+      double apart = -1;
+      const bool found = InverseKinematicsBranch(pose, limits, &near, branch, &one, &apart);
+      int k = 0;
+      while (k < all.count && all.branch[k] != branch) ++k;
+      ASSERT_EQ(found, k < all.count) << "trial " << trial << " branch " << branch;
+      if (!found) continue;
+      ++branches;
+      // Bit for bit the full solve's solution of that branch.
+      for (int j = 0; j < 6; ++j) EXPECT_EQ(one[j], all.q[k][j]) << trial << " " << branch;
+      // Every other solution is at least `apart` from it in some joint, modulo whole turns.
+      for (int m = 0; m < all.count; ++m) {
+        if (m == k) continue;
+        double farthest = 0;
+        for (int j = 0; j < 6; ++j) {
+          const double d = std::remainder(all.q[m][j] - one[j], 2 * M_PI);
+          farthest = std::max(farthest, std::abs(d));
+        }
+        EXPECT_GE(farthest, apart - 1e-9) << trial << " " << branch << " vs " << all.branch[m];
+      }
+    }
+  }
+  EXPECT_GT(branches, 1000);  // most random poses have all 8 within the default limits
+  Joints unused;
+  double apart = 0;
+  EXPECT_FALSE(InverseKinematicsBranch(ForwardKinematics(Joints::Zero()), limits, nullptr, 8,
+                                       &unused, &apart));
 }
 
 TEST(Ur5InverseKinematics, UnreachablePoseHasNoSolution) {
