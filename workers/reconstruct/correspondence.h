@@ -7,7 +7,7 @@
 //     with b's segments; runs of crossings of one segment of b at consistent depths are candidate
 //     matches (match_candidates.h). Samples whose segment runs nearly along the epipolar line
 //     are skipped: that pair is ill-conditioned there, and a triangle rig always has a better one.
-//     A run may continue across such a stretch (max_ill_conditioned_gap_samples).
+//     A run may continue across such a stretch (max_ill_conditioned_gap_samples; off by default).
 //  2. each candidate is triangulated and refined by a Levenberg-Marquardt fit of a 3D polyline
 //     minimising reprojection error in a and b, then checked in the other views
 //     (polyline_fit.h);
@@ -41,8 +41,9 @@ struct CorrespondenceOptions {
   int min_hits = 5;                     // shortest candidate, in samples
   int max_gap_samples = 3;              // samples a candidate may skip
   // Samples not searched for min_epipolar_sin that a candidate may skip on top of
-  // max_gap_samples (CandidateOptions; 8 chosen on tuning seeds 1100-1139, docs/reconstruction.md).
-  int max_ill_conditioned_gap_samples = 8;
+  // max_gap_samples (CandidateOptions). Off: 8 gained little on tuning seeds and lost precision on
+  // synthetic views (docs/reconstruction.md, section 3).
+  int max_ill_conditioned_gap_samples = 0;
   PolylineFitOptions fit;               // the 3D polyline fit
   double max_rms_px = 8.0;              // candidates fitting worse are dropped before scoring
   MatchClassifier classifier = DefaultMatchClassifier();  // candidate probabilities

@@ -94,7 +94,7 @@ struct CandidateOptions {
   int max_gap_samples = 3;         // samples a run may skip
   // Samples not searched (min_epipolar_sin) that a run may skip on top of max_gap_samples: where
   // a segment turns along the epipolar line for a while, the run resumes beyond (0: it breaks).
-  int max_ill_conditioned_gap_samples = 8;
+  int max_ill_conditioned_gap_samples = 0;
   double max_depth_slope = 3.0;    // depth change per unit of lateral distance along a run
   double depth_tolerance_m = 0.006;  // plus this per step
 };
