@@ -391,3 +391,49 @@ TEST(MatchSegments, DISABLED_PipelineLoss) {
 }
 }  // namespace
 }  // namespace vb::reconstruct
+
+namespace vb::reconstruct {
+namespace {
+
+// The first pass (the rig as calibrated) is scored by ReconstructOptions::first_pass_classifier,
+// the second by correspondence.classifier; with rig refinement off only the first pass runs.
+TEST(MatchWithRigRefinement, FirstPassUsesTheFirstPassClassifier) {
+  VineModel model;
+  model.canes.push_back(MakeCane(1, {-0.15, 0.78, 0.9}, {0.1, 0.85, 1.25}, 0.004));
+  const RigCalibration rig = Rig(3);
+  const std::vector<View2D> views = SyntheticViews(model, rig);
+  ReconstructOptions options;
+  options.rig_refine.enabled = false;
+  const auto kept = MatchWithRigRefinement(views, rig, options, Deadline::Infinite());
+  ASSERT_TRUE(kept.ok()) << kept.status();
+  EXPECT_FALSE(kept->pieces.empty());
+  options.first_pass_classifier.multi_view[0] = -100.0;  // rejects every candidate
+  options.first_pass_classifier.two_view[0] = -100.0;
+  const auto none = MatchWithRigRefinement(views, rig, options, Deadline::Infinite());
+  ASSERT_TRUE(none.ok()) << none.status();
+  EXPECT_TRUE(none->pieces.empty());
+  // The second pass's classifier plays no part here.
+  options = {};
+  options.rig_refine.enabled = false;
+  options.correspondence.classifier.multi_view[0] = -100.0;
+  options.correspondence.classifier.two_view[0] = -100.0;
+  const auto first = MatchWithRigRefinement(views, rig, options, Deadline::Infinite());
+  ASSERT_TRUE(first.ok()) << first.status();
+  EXPECT_EQ(first->pieces.size(), kept->pieces.size());
+}
+
+TEST(MatchWithRigRefinement, NonFiniteFirstPassClassifierRejects) {
+  VineModel model;
+  model.canes.push_back(MakeCane(1, {-0.15, 0.78, 0.9}, {0.1, 0.85, 1.25}, 0.004));
+  const RigCalibration rig = Rig(3);
+  const std::vector<View2D> views = SyntheticViews(model, rig);
+  ReconstructOptions options;
+  options.first_pass_classifier.two_view[3] = NAN;
+  const auto r = MatchWithRigRefinement(views, rig, options, Deadline::Infinite());
+  EXPECT_EQ(r.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(std::string(r.status().message()).find("first_pass_classifier"), std::string::npos)
+      << r.status();
+}
+
+}  // namespace
+}  // namespace vb::reconstruct

@@ -23,6 +23,18 @@ MatchClassifier DefaultMatchClassifier() {
   return c;
 }
 
+MatchClassifier CalibratedRigMatchClassifier() {
+  // Trained by MatchClassifier.DISABLED_TrainOnSimulatedStops with VB_TRAIN_PASS=first on
+  // candidates of the real 2D stage (ExtractStructure) on rendered stops without fiducials, seeds
+  // 1000-1099, vine 1, calibration 1 px off, the rig as calibrated: once on the renderer's label
+  // images and once on the segmenter's output: 179482 candidates, 21702 right; training AUC 0.972
+  // (multi-view), 0.957 (two-view). These were the default weights until 2026-11-22.
+  MatchClassifier c;
+  c.multi_view = {-3.5899, -0.2461, -0.2559, 0.0031, 0.0655, -7.3093, -0.3162, 1.5653, 1.7336, 0.8547, 0.9052, -5.9593, 5.0423, -3.8213, -0.2812, -0.9800, 0.8279, 1.7564, -13.6510};
+  c.two_view = {-5.9586, -0.3003, -0.8521, -0.2348, 0.5206, -8.4593, -0.2857, 2.7239, 2.9663, 1.0360, 1.1333, 0.0000, 0.0000, 0.0000, 0.0000, -1.0951, 0.0000, 0.0000, -22.1416};
+  return c;
+}
+
 MatchFeatures ComputeMatchFeatures(const MatchCandidate& candidate, const PolylineFit& fit,
                                    const std::vector<ViewSupport>& others,
                                    const WorkingVolume& volume) {
