@@ -125,6 +125,10 @@ absl::Status CorrespondenceOptions::Validate() const {
   if (max_gap_samples < 0) {
     return Invalid("max_gap_samples", absl::StrCat("must be >= 0, got ", max_gap_samples));
   }
+  if (max_ill_conditioned_gap_samples < 0) {
+    return Invalid("max_ill_conditioned_gap_samples",
+                   absl::StrCat("must be >= 0, got ", max_ill_conditioned_gap_samples));
+  }
   if (!(fit.control_spacing_m > 0.0) || fit.max_control_points < 2 || fit.max_iterations < 0 ||
       !(fit.smoothness_weight >= 0.0) || !std::isfinite(fit.control_spacing_m) ||
       !std::isfinite(fit.smoothness_weight)) {
@@ -166,6 +170,7 @@ absl::StatusOr<std::vector<ScoredCandidate>> ScoreCandidates(
   candidate_options.min_epipolar_sin = options.min_epipolar_sin;
   candidate_options.min_hits = options.min_hits;
   candidate_options.max_gap_samples = options.max_gap_samples;
+  candidate_options.max_ill_conditioned_gap_samples = options.max_ill_conditioned_gap_samples;
   Eigen::AlignedBox3d margin_box = options.volume.box;
   margin_box.min().array() -= 0.05;
   margin_box.max().array() += 0.05;

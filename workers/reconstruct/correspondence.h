@@ -7,6 +7,7 @@
 //     with b's segments; runs of crossings of one segment of b at consistent depths are candidate
 //     matches (match_candidates.h). Samples whose segment runs nearly along the epipolar line
 //     are skipped: that pair is ill-conditioned there, and a triangle rig always has a better one.
+//     A run may continue across such a stretch (max_ill_conditioned_gap_samples; off by default).
 //  2. each candidate is triangulated and refined by a Levenberg-Marquardt fit of a 3D polyline
 //     minimising reprojection error in a and b, then checked in the other views
 //     (polyline_fit.h);
@@ -39,6 +40,10 @@ struct CorrespondenceOptions {
   double min_epipolar_sin = 0.2;        // skip samples within ~12 deg of the epipolar line
   int min_hits = 5;                     // shortest candidate, in samples
   int max_gap_samples = 3;              // samples a candidate may skip
+  // Samples not searched for min_epipolar_sin that a candidate may skip on top of
+  // max_gap_samples (CandidateOptions). Off: 8 gained little on tuning seeds and lost precision on
+  // synthetic views (docs/reconstruction.md, section 3).
+  int max_ill_conditioned_gap_samples = 0;
   PolylineFitOptions fit;               // the 3D polyline fit
   double max_rms_px = 8.0;              // candidates fitting worse are dropped before scoring
   MatchClassifier classifier = DefaultMatchClassifier();  // candidate probabilities
@@ -54,6 +59,7 @@ struct CorrespondenceOptions {
 
   // INVALID_ARGUMENT naming the field for non-finite or out-of-range values (sample_step_px
   // outside [0.5, 50], min_epipolar_sin outside [0, 1), min_hits < 2, max_gap_samples < 0,
+  // max_ill_conditioned_gap_samples < 0,
   // empty volume, alpha <= 0 or NaN, non-finite classifier weights, invalid gibbs options...).
   absl::Status Validate() const;
 };

@@ -140,6 +140,59 @@ TEST(MatchSegments, BadInputRejects) {
   bad_options = {};
   bad_options.sample_step_px = NAN;
   EXPECT_EQ(code(MatchSegments(views, rig, bad_options, inf)), absl::StatusCode::kInvalidArgument);
+  bad_options = {};
+  bad_options.max_ill_conditioned_gap_samples = -1;
+  const auto gap = MatchSegments(views, rig, bad_options, inf);
+  EXPECT_EQ(code(gap), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(std::string(gap.status().message()).find("max_ill_conditioned_gap_samples"),
+            std::string::npos)
+      << gap.status();
+}
+
+// A cane that runs along the horizontal pair's epipolar lines for 4 cm between two oblique
+// stretches: its samples there are not searched, and the run of crossings breaks in two unless
+// it may bridge them (CandidateOptions::max_ill_conditioned_gap_samples).
+TEST(FindCandidates, BridgesAStretchAlongTheEpipolarLineOnlyWhenAllowed) {
+  VineModel model;
+  Cane cane = MakeCane(1, {-0.10, 0.8, 0.95}, {0.10, 0.8, 1.11}, 0.004);
+  cane.polyline.points = {{-0.10, 0.8, 0.95}, {-0.02, 0.8, 1.03}, {0.02, 0.8, 1.03},
+                          {0.10, 0.8, 1.11}};
+  cane.polyline.radii.assign(4, 0.004);
+  model.canes.push_back(cane);
+  const RigCalibration rig = Rig(2);
+  const std::vector<View2D> views = SyntheticViews(model, rig);
+  ASSERT_EQ(views[0].segments.size(), 1u);
+  ASSERT_EQ(views[1].segments.size(), 1u);
+  const ViewSamples a(views[0], rig.cameras[0], 4.0);
+  const ViewSamples b(views[1], rig.cameras[1], 4.0);
+  CandidateOptions options;
+  options.volume = CorrespondenceOptions{}.volume;
+  options.max_ill_conditioned_gap_samples = 0;
+  // Does some candidate have hits on both oblique stretches, all on the cane?
+  const auto spans = [&](const std::vector<MatchCandidate>& candidates) {
+    bool any = false;
+    for (const MatchCandidate& c : candidates) {
+      double lo = INFINITY, hi = -INFINITY, worst = 0.0;
+      for (const EpipolarHit& hit : c.hits) {
+        lo = std::min(lo, hit.point.x());
+        hi = std::max(hi, hit.point.x());
+        worst = std::max(worst, DistanceToPolyline(hit.point, cane.polyline));
+      }
+      if (lo < -0.03 && hi > 0.03) {
+        EXPECT_LT(worst, 0.005);
+        any = true;
+      }
+    }
+    return any;
+  };
+  const std::vector<MatchCandidate> broken =
+      FindCandidates(0, a, rig.cameras[0], 1, b, rig.cameras[1], options);
+  EXPECT_GE(broken.size(), 2u);
+  EXPECT_FALSE(spans(broken));
+  options.max_ill_conditioned_gap_samples = 12;
+  const std::vector<MatchCandidate> bridged =
+      FindCandidates(0, a, rig.cameras[0], 1, b, rig.cameras[1], options);
+  EXPECT_TRUE(spans(bridged));
 }
 
 TEST(MatchSegments, ExpiredDeadlineFails) {
@@ -336,5 +389,51 @@ TEST(MatchSegments, DISABLED_PipelineLoss) {
   std::printf("mean: pieces recall %.3f precision %.3f | model recall %.3f precision %.3f\n",
               sums[0], sums[1], sums[2], sums[3]);
 }
+}  // namespace
+}  // namespace vb::reconstruct
+
+namespace vb::reconstruct {
+namespace {
+
+// The first pass (the rig as calibrated) is scored by ReconstructOptions::first_pass_classifier,
+// the second by correspondence.classifier; with rig refinement off only the first pass runs.
+TEST(MatchWithRigRefinement, FirstPassUsesTheFirstPassClassifier) {
+  VineModel model;
+  model.canes.push_back(MakeCane(1, {-0.15, 0.78, 0.9}, {0.1, 0.85, 1.25}, 0.004));
+  const RigCalibration rig = Rig(3);
+  const std::vector<View2D> views = SyntheticViews(model, rig);
+  ReconstructOptions options;
+  options.rig_refine.enabled = false;
+  const auto kept = MatchWithRigRefinement(views, rig, options, Deadline::Infinite());
+  ASSERT_TRUE(kept.ok()) << kept.status();
+  EXPECT_FALSE(kept->pieces.empty());
+  options.first_pass_classifier.multi_view[0] = -100.0;  // rejects every candidate
+  options.first_pass_classifier.two_view[0] = -100.0;
+  const auto none = MatchWithRigRefinement(views, rig, options, Deadline::Infinite());
+  ASSERT_TRUE(none.ok()) << none.status();
+  EXPECT_TRUE(none->pieces.empty());
+  // The second pass's classifier plays no part here.
+  options = {};
+  options.rig_refine.enabled = false;
+  options.correspondence.classifier.multi_view[0] = -100.0;
+  options.correspondence.classifier.two_view[0] = -100.0;
+  const auto first = MatchWithRigRefinement(views, rig, options, Deadline::Infinite());
+  ASSERT_TRUE(first.ok()) << first.status();
+  EXPECT_EQ(first->pieces.size(), kept->pieces.size());
+}
+
+TEST(MatchWithRigRefinement, NonFiniteFirstPassClassifierRejects) {
+  VineModel model;
+  model.canes.push_back(MakeCane(1, {-0.15, 0.78, 0.9}, {0.1, 0.85, 1.25}, 0.004));
+  const RigCalibration rig = Rig(3);
+  const std::vector<View2D> views = SyntheticViews(model, rig);
+  ReconstructOptions options;
+  options.first_pass_classifier.two_view[3] = NAN;
+  const auto r = MatchWithRigRefinement(views, rig, options, Deadline::Infinite());
+  EXPECT_EQ(r.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(std::string(r.status().message()).find("first_pass_classifier"), std::string::npos)
+      << r.status();
+}
+
 }  // namespace
 }  // namespace vb::reconstruct

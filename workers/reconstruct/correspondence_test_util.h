@@ -9,9 +9,11 @@
 #include <vector>
 
 #include "core/deadline.h"
+#include "sim/fiducials.h"
 #include "sim/renderer.h"
 #include "sim/rig.h"
 #include "sim/vine_generator.h"
+#include "workers/reconstruct/fiducials.h"
 #include "workers/reconstruct/match_classifier.h"
 #include "workers/reconstruct/piece3d.h"
 #include "workers/reconstruct/segmenter.h"
@@ -99,8 +101,11 @@ inline SimulatedStop MakeSimulatedStop(uint64_t seed, double break_px = 100.0) {
 // reported calibration 1 px off), its views from the real 2D stage (ExtractStructure) run on
 // the renderer's label images (`segment` false) or on the segmenter's classes of the rendered
 // image (`segment` true; rendered as rgb8, where the bench demosaics a Bayer mosaic: vb_capture
-// is not linked here). Returns a stop without views if rendering or the 2D stage fails.
-inline SimulatedStop MakeRenderedStop(uint64_t seed, bool segment) {
+// is not linked here). With `fiducials`, as the bench by default: the platform's fiducials are
+// drawn and listed in both rigs, found in each image (DetectFiducials) and cleared from the
+// classes (ClearFiducials), and each view carries its detections for the rig refinement.
+// Returns a stop without views if rendering or the 2D stage fails.
+inline SimulatedStop MakeRenderedStop(uint64_t seed, bool segment, bool fiducials = false) {
   SimulatedStop stop;
   const int vine = 1;
   const uint64_t noise_seed = seed * 1000003 + vine;  // as app/bench_command.cc
@@ -111,6 +116,10 @@ inline SimulatedStop MakeRenderedStop(uint64_t seed, bool segment) {
     for (const Sphere& s : neighbour.head.spheres) stop.drawn.head.spheres.push_back(s);
   }
   stop.true_rig = sim::MakeRig().value();
+  if (fiducials) {
+    stop.true_rig.fiducials = sim::PlatformFiducials().value();
+    stop.scene.fiducials = stop.true_rig.fiducials;
+  }
   // As capture::MakeSimRig.
   stop.rig = sim::PerturbCalibration(stop.true_rig, 1.0, noise_seed ^ 0xCA11B4A7Eull);
   for (size_t i = 0; i < stop.true_rig.cameras.size(); ++i) {
@@ -123,9 +132,18 @@ inline SimulatedStop MakeRenderedStop(uint64_t seed, bool segment) {
       if (!segmented.ok()) return {};
       classes = std::move(*segmented);
     }
+    std::vector<FiducialObservation> found;
+    if (fiducials) {
+      auto detected = DetectFiducials(view->image, stop.rig.cameras[i], stop.rig.fiducials,
+                                      FiducialDetectOptions{});
+      if (!detected.ok()) return {};
+      found = std::move(*detected);
+      ClearFiducials(found, stop.rig.cameras[i], stop.rig.fiducials, &classes);
+    }
     auto view2d = ExtractStructure(classes, stop.rig.cameras[i], Structure2DOptions{},
                                    Deadline::Infinite());
     if (!view2d.ok()) return {};
+    view2d->fiducials = std::move(found);
     stop.views.push_back(std::move(*view2d));
   }
   return stop;

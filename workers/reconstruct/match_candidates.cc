@@ -219,10 +219,15 @@ std::vector<MatchCandidate> FindCandidates(int view_a, const ViewSamples& a,
   std::vector<std::pair<int, int>> pieces;
   std::vector<std::pair<int, EpipolarHit>> hits;  // (segment_b, hit)
 
+  // conditioned_before[i]: samples before i of the segment that were searched (not skipped as
+  // too near their epipolar line). Gaps of a run are counted in searched samples.
+  std::vector<int> conditioned_before;
   for (int si = 0; si < static_cast<int>(a.segments().size()); ++si) {
     const SegmentSamples& s = a.segments()[si];
     hits.clear();
+    conditioned_before.assign(s.normalised.size() + 1, 0);
     for (int i = 0; i < static_cast<int>(s.normalised.size()); ++i) {
+      conditioned_before[i + 1] = conditioned_before[i];
       const Eigen::Vector2d& x = s.normalised[i];
       const Eigen::Vector3d d = (ra.transpose() * Eigen::Vector3d(x.x(), x.y(), 1.0)).normalized();
       // Epipolar plane normal in a's frame gives the epipolar line's direction at x.
@@ -231,6 +236,7 @@ std::vector<MatchCandidate> FindCandidates(int view_a, const ViewSamples& a,
       if (plane_xy < 1e-12) continue;
       const double sin_a = std::abs(s.tangent[i].dot(plane_in_a.head<2>())) / plane_xy;
       if (sin_a < options.min_epipolar_sin) continue;
+      ++conditioned_before[i + 1];
       double lo, hi;
       if (!ClipRay(ca, d, options.volume.box, &lo, &hi)) continue;
       const Eigen::Vector3d db = rb * d;  // B: the ray direction in b's frame
@@ -299,7 +305,15 @@ std::vector<MatchCandidate> FindCandidates(int view_a, const ViewSamples& a,
         for (int r = 0; r < static_cast<int>(runs.size()); ++r) {
           const EpipolarHit& last = runs[r].hits.back();
           const int gap = hit.sample_a - last.sample_a;
-          if (gap <= 0 || gap > options.max_gap_samples + 1) continue;
+          if (gap <= 0) continue;
+          // Searched samples skipped; plus, up to a limit, samples not searched because the
+          // segment ran along the epipolar line there (the run resumes where it turns away).
+          const int searched_gap =
+              conditioned_before[hit.sample_a] - conditioned_before[last.sample_a + 1];
+          if (searched_gap > options.max_gap_samples ||
+              gap - 1 > options.max_gap_samples + options.max_ill_conditioned_gap_samples) {
+            continue;
+          }
           const double lateral = (hit.xa - last.xa).norm() * hit.depth_a;
           const double depth_error = std::abs(hit.depth_a - last.depth_a);
           if (depth_error > options.depth_tolerance_m + options.max_depth_slope * lateral) continue;

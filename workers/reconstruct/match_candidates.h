@@ -92,6 +92,9 @@ struct CandidateOptions {
   double min_epipolar_sin = 0.2;   // samples more parallel to the epipolar line are skipped
   int min_hits = 5;                // shortest run kept
   int max_gap_samples = 3;         // samples a run may skip
+  // Samples not searched (min_epipolar_sin) that a run may skip on top of max_gap_samples: where
+  // a segment turns along the epipolar line for a while, the run resumes beyond (0: it breaks).
+  int max_ill_conditioned_gap_samples = 0;
   double max_depth_slope = 3.0;    // depth change per unit of lateral distance along a run
   double depth_tolerance_m = 0.006;  // plus this per step
 };

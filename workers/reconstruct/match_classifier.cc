@@ -11,11 +11,24 @@
 namespace vb::reconstruct {
 
 MatchClassifier DefaultMatchClassifier() {
-  // Trained by MatchClassifier.DISABLED_TrainOnSimulatedStops (match_classifier_test.cc) on
-  // candidates of the real 2D stage (ExtractStructure) on rendered stops, seeds 1000-1099, vine 1,
-  // calibration 1 px off: once on the renderer's label images and once on the segmenter's
-  // output: 179482 candidates, 21702 right; training AUC 0.972 (multi-view), 0.957 (two-view).
-  // Held-out seeds 1100-1109 chose CorrespondenceOptions::alpha.
+  // Trained by MatchClassifier.DISABLED_TrainOnSimulatedStops (match_classifier_test.cc;
+  // VB_TRAIN_INPUT=labels,images, VB_TRAIN_PASS=second, the default) on candidates of the
+  // pipeline's second pass (after MatchWithRigRefinement) on rendered stops with the platform's
+  // fiducials, seeds 1000-1099, vine 1, calibration 1 px off: once on the renderer's label images
+  // and once on the segmenter's output: 180511 candidates, 28573 right; training AUC 0.986 (multi-view), 0.975 (two-view). Tuning seeds 1100-1139
+  // re-checked CorrespondenceOptions::alpha (docs/reconstruction.md, section 3).
+  MatchClassifier c;
+  c.multi_view = {-2.9260, -0.1533, -0.2538, 0.1044, 0.0183, -9.4352, -0.3405, 0.2780, 3.2980, 1.0806, 0.8505, -3.8335, 5.9451, -11.2383, -1.0794, -1.4102, -1.5526, 1.9249, -15.7478};
+  c.two_view = {-4.7004, -0.2249, -1.1877, -0.1828, 0.7095, -11.2540, -0.2152, 0.7455, 4.0569, 1.1602, 1.1105, 0.0000, 0.0000, 0.0000, 0.0000, -1.6248, 0.0000, 0.0000, -26.8994};
+  return c;
+}
+
+MatchClassifier CalibratedRigMatchClassifier() {
+  // Trained by MatchClassifier.DISABLED_TrainOnSimulatedStops with VB_TRAIN_PASS=first on
+  // candidates of the real 2D stage (ExtractStructure) on rendered stops without fiducials, seeds
+  // 1000-1099, vine 1, calibration 1 px off, the rig as calibrated: once on the renderer's label
+  // images and once on the segmenter's output: 179482 candidates, 21702 right; training AUC 0.972
+  // (multi-view), 0.957 (two-view). These were the default weights until 2026-11-22.
   MatchClassifier c;
   c.multi_view = {-3.5899, -0.2461, -0.2559, 0.0031, 0.0655, -7.3093, -0.3162, 1.5653, 1.7336, 0.8547, 0.9052, -5.9593, 5.0423, -3.8213, -0.2812, -0.9800, 0.8279, 1.7564, -13.6510};
   c.two_view = {-5.9586, -0.3003, -0.8521, -0.2348, 0.5206, -8.4593, -0.2857, 2.7239, 2.9663, 1.0360, 1.1333, 0.0000, 0.0000, 0.0000, 0.0000, -1.0951, 0.0000, 0.0000, -22.1416};

@@ -27,8 +27,12 @@ struct MatchClassifier {
   MatchFeatures two_view{};
 };
 
-// The committed, trained weights (see match_classifier.cc for how they were produced).
+// The committed, trained weights (see match_classifier.cc for how they were produced): for
+// candidates matched with a refined rig (the second pass of MatchWithRigRefinement, reconstruct.h).
 MatchClassifier DefaultMatchClassifier();
+// Weights for candidates matched with the rig as calibrated, i.e. drifted (the first pass, whose
+// confident pieces refine the rig): trained on such candidates.
+MatchClassifier CalibratedRigMatchClassifier();
 
 // Features: 1, log(length / 0.1 m), log(0.25 + RMS reprojection error in a, px), the same in b,
 // log(0.25 + max residual px), mean |log| radius ratio between the views, log(1 + turning per

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <thread>
 
 #include "absl/strings/str_cat.h"
@@ -53,6 +54,13 @@ absl::Status CheckRig(const RigCalibration& rig) {
   return absl::OkStatus();
 }
 
+// Step 3's options for the first pass, with the rig as calibrated.
+CorrespondenceOptions FirstPassOptions(const ReconstructOptions& options) {
+  CorrespondenceOptions first = options.correspondence;
+  first.classifier = options.first_pass_classifier;
+  return first;
+}
+
 // MatchWithRigRefinement after validation; `first_pass`, if given, is the first pass's result
 // (the caller timed it separately) and is moved from.
 absl::StatusOr<MatchedStop> MatchAndRefine(const std::vector<View2D>& views,
@@ -63,7 +71,7 @@ absl::StatusOr<MatchedStop> MatchAndRefine(const std::vector<View2D>& views,
   std::vector<Piece3D> computed;
   if (first_pass == nullptr) {
     VB_ASSIGN_OR_RETURN(computed,
-                        MatchSegments(views, calibrated_rig, options.correspondence, deadline));
+                        MatchSegments(views, calibrated_rig, FirstPassOptions(options), deadline));
     first_pass = &computed;
   }
   MatchedStop out;
@@ -96,6 +104,13 @@ absl::Status ReconstructOptions::Validate() const {
   if (volume.box.isEmpty()) return absl::InvalidArgumentError("options.volume: empty box");
   VB_RETURN_IF_ERROR(structure.Validate());
   VB_RETURN_IF_ERROR(correspondence.Validate());
+  for (int i = 0; i < kMatchFeatureCount; ++i) {
+    if (!std::isfinite(first_pass_classifier.multi_view[i]) ||
+        !std::isfinite(first_pass_classifier.two_view[i])) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("options.first_pass_classifier: weight ", i, " not finite"));
+    }
+  }
   VB_RETURN_IF_ERROR(assembly.Validate());
   VB_RETURN_IF_ERROR(head.Validate());
   VB_RETURN_IF_ERROR(connect.Validate());
@@ -124,7 +139,7 @@ absl::StatusOr<ReconstructResult> ReconstructFromViews(const std::vector<View2D>
   ReconstructResult result;
   auto t = std::chrono::steady_clock::now();
   VB_ASSIGN_OR_RETURN(std::vector<Piece3D> pieces,
-                      MatchSegments(views, calibrated_rig, options.correspondence, deadline));
+                      MatchSegments(views, calibrated_rig, FirstPassOptions(options), deadline));
   result.timings.correspondence_s = SecondsSince(t);
 
   t = std::chrono::steady_clock::now();

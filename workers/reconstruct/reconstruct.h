@@ -44,6 +44,9 @@ struct ReconstructOptions {
   FitOptions fit;
   TrellisOptions trellis;
   RigRefineOptions rig_refine;           // step 3b: refine the rig on confident matches, re-match
+  // Step 3's classifier for the first pass, with the rig as calibrated (correspondence.classifier
+  // scores the second pass, with the refined rig).
+  MatchClassifier first_pass_classifier = CalibratedRigMatchClassifier();
   FiducialDetectOptions fiducials;       // the platform's fiducials, for 3b (rig.fiducials)
   bool refine = true;                    // run the joint Ceres refinement (step 7)
   int threads = 2;                       // threads for the per-view steps
