@@ -37,11 +37,14 @@ SilhouetteMaps MakeMaps(const View2D& view) {
   return maps;
 }
 
-enum class CubeVerdict { kOutside, kInside, kBoundary };
+// kHidden: not carved by any view, but near no thick wood in any view either: it is behind
+// posts in every view that sees it.
+enum class CubeVerdict { kOutside, kInside, kBoundary, kHidden };
 
 struct Cube {
   Eigen::Vector3d centre;
   double side;
+  bool seen_as_wood = true;  // near thick wood in every view that sees it (not kept by a post)
 };
 
 class Carver {
@@ -51,11 +54,12 @@ class Carver {
     for (const View2D& view : views) maps_.push_back(MakeMaps(view));
   }
 
-  CubeVerdict Judge(const Cube& cube) const {
+  CubeVerdict Judge(const Cube& cube, bool* seen_as_wood) const {
     const double radius = 0.5 * std::sqrt(3.0) * cube.side;
     int seen = 0;
     bool all_inside = true;
     bool touches_wood = false;  // behind posts in every view is not evidence of a head
+    *seen_as_wood = true;
     for (size_t v = 0; v < maps_.size(); ++v) {
       const CameraCalibration& camera = rig_.cameras[v];
       const auto uv = camera.Project(cube.centre);
@@ -73,22 +77,27 @@ class Carver {
       if (maps_[v].to_background.at<float>(y, x) < r_px) all_inside = false;
       if (maps_[v].to_thick.at<float>(y, x) <= r_px + options_.silhouette_margin_px)
         touches_wood = true;
+      else
+        *seen_as_wood = false;
     }
-    if (seen < options_.min_views || !touches_wood) return CubeVerdict::kOutside;
+    if (seen < options_.min_views) return CubeVerdict::kOutside;
+    if (!touches_wood) return CubeVerdict::kHidden;
     return all_inside ? CubeVerdict::kInside : CubeVerdict::kBoundary;
   }
 
   void Carve(const Cube& cube, std::vector<Cube>* kept) const {
-    const CubeVerdict verdict = Judge(cube);
-    if (verdict == CubeVerdict::kOutside) return;
+    bool seen_as_wood = true;
+    const CubeVerdict verdict = Judge(cube, &seen_as_wood);
+    // A post's shadow is no evidence of a head (it runs the height of the images).
+    if (verdict == CubeVerdict::kOutside || verdict == CubeVerdict::kHidden) return;
     if (verdict == CubeVerdict::kInside || cube.side <= options_.min_cell_m * 1.0001) {
-      kept->push_back(cube);
+      kept->push_back({cube.centre, cube.side, seen_as_wood});
       return;
     }
     const double q = cube.side / 4.0;
     for (int i = 0; i < 8; ++i) {
       const Eigen::Vector3d offset((i & 1) ? q : -q, (i & 2) ? q : -q, (i & 4) ? q : -q);
-      Carve({cube.centre + offset, cube.side / 2.0}, kept);
+      Carve({cube.centre + offset, cube.side / 2.0, true}, kept);
     }
   }
 
@@ -246,6 +255,21 @@ absl::StatusOr<HeadAndTrunk> ReconstructHeadAndTrunk(const std::vector<View2D>& 
         }
       }
 
+  // Voxels seen as wood: near the thick silhouette in every view that sees them. The others are
+  // kept only because a post hides them in some view; beside a post that is a column as wide as
+  // the post's shadow, which says nothing of the trunk's or head's width (tuning stop 1294: a
+  // post beside the trunk made the "trunk" 16 cm wide, so the head never widened past it and
+  // collapsed to its top). They stay in the hull but are left out of the slabs' statistics.
+  std::vector<uint8_t> wood(labels.size(), 0);
+  bool any_wood = false;
+  for (size_t c = 0; c < kept.size(); ++c) {
+    if (!kept[c].seen_as_wood) continue;
+    for (size_t flat : voxels_of_cube[c]) {
+      wood[flat] = 1;
+      any_wood = any_wood || labels[flat] == best_label;
+    }
+  }
+
   // Slabs of the component: x extent per slab, and the depth of the slab's widest row. Seen
   // from a rig on one side, the hull of a trunk is a diamond long in depth whose widest point is
   // at the trunk's true depth (perspective makes the back half longer, so the centroid is not).
@@ -263,13 +287,14 @@ absl::StatusOr<HeadAndTrunk> ReconstructHeadAndTrunk(const std::vector<View2D>& 
         const Eigen::Vector3i ijk(x, y, z);
         if (labels[grid.Flat(ijk)] != best_label) continue;
         const Eigen::Vector3d p = grid.Centre(ijk);
+        top_z = std::max(top_z, p.z());
+        if (any_wood && !wood[grid.Flat(ijk)]) continue;
         const int s = z / voxels_per_slab;
         min_x[s] = std::min(min_x[s], p.x());
         max_x[s] = std::max(max_x[s], p.x());
         ++row_count[s][y];
         row_sum_x[s][y] += p.x();
         ++count[s];
-        top_z = std::max(top_z, p.z());
       }
   for (int s = 0; s < slabs; ++s) {
     if (count[s] == 0) continue;
@@ -415,6 +440,26 @@ absl::StatusOr<HeadAndTrunk> ReconstructHeadAndTrunk(const std::vector<View2D>& 
     if (std::abs(kept[c].centre.y() - head_y) > half_depth + 0.5 * kept[c].side) continue;
     result.head.spheres.push_back({kept[c].centre, 0.5 * std::sqrt(3.0) * kept[c].side});
   }
+  // Within the head's extent, what posts hide in every view may be head (tuning stop 1294: a
+  // post beside the trunk hid a quarter of the head from all three cameras): keep it too, so
+  // that the head stays enclosed. Elsewhere a post's shadow is not kept (it is no evidence).
+  const Eigen::Vector3d hidden_min(head_min_x, head_y - half_depth, head_bottom_z);
+  const Eigen::Vector3d hidden_max(head_max_x, head_y + half_depth, top_z);
+  Eigen::Vector3i from, to;
+  grid.Index(hidden_min.cwiseMax(volume.box.min()), &from);
+  grid.Index(hidden_max.cwiseMin(volume.box.max() - Eigen::Vector3d::Constant(1e-9)), &to);
+  from = from.cwiseMax(0).cwiseMin(size - Eigen::Vector3i::Ones());
+  to = to.cwiseMax(0).cwiseMin(size - Eigen::Vector3i::Ones());
+  for (int z = from.z(); z <= to.z(); ++z)
+    for (int y = from.y(); y <= to.y(); ++y)
+      for (int x = from.x(); x <= to.x(); ++x) {
+        const Eigen::Vector3i ijk(x, y, z);
+        if (labels[grid.Flat(ijk)] != 0) continue;  // in the hull already
+        bool seen_as_wood = true;
+        const Cube cell{grid.Centre(ijk), options.min_cell_m};
+        if (carver.Judge(cell, &seen_as_wood) != CubeVerdict::kHidden) continue;
+        result.head.spheres.push_back({cell.centre, 0.5 * std::sqrt(3.0) * cell.side});
+      }
   return result;
 }
 

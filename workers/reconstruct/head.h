@@ -15,7 +15,9 @@
 // A trinocular rig looks at the vine from nearly one direction (+-8 deg), so a visual hull is
 // long in depth (y). The head's depth is therefore bounded by its measured width and height,
 // centred on the trunk axis: an assumption (heads are about as deep as wide) stated in
-// docs/reconstruction.md. Thread-safe (pure function).
+// docs/reconstruction.md. Posts: their pixels do not carve; a cube hidden by posts in every view
+// is kept only within the head's extent (it may be head), and slab widths count only cubes seen
+// as wood in every view. Thread-safe (pure function).
 #pragma once
 
 #include <optional>
