@@ -8,7 +8,6 @@
 // trajectory planned with our checker against FCL meshes with the margins removed. With
 // --per-vine true, also each vine's stages (our checker); trajectory_fingerprint hashes every
 // trajectory planned with our checker (equal fingerprints: the same trajectories).
-#include <time.h>
 
 #include <algorithm>
 #include <array>
@@ -24,6 +23,7 @@
 #include "absl/strings/str_split.h"
 #include "app/commands.h"
 #include "app/plan_flags.h"
+#include "core/measure.h"
 #include "core/statistics.h"
 #include "core/status_macros.h"
 #include "sim/vine_generator.h"
@@ -89,21 +89,6 @@ double IkNs(const plan::JointLimits& limits) {
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
   Sink(solutions);
   return 1e9 * s / poses.size();
-}
-
-double ThreadCpuS() {
-  timespec ts;
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
-
-// FNV-1a over the bits of a value: the trajectories' fingerprint.
-template <typename T>
-uint64_t Fnv(const T& value, uint64_t h) {
-  unsigned char bytes[sizeof(T)];
-  std::memcpy(bytes, &value, sizeof(T));
-  for (unsigned char b : bytes) h = (h ^ b) * 1099511628211ull;
-  return h;
 }
 
 // The same path queries replanned by one checker.
@@ -181,7 +166,7 @@ absl::Status RunBenchPlan(Flags& flags) {
   int blend_vias = 0, blend_stops = 0, blend_shrinks = 0;  // transit timing, our checker
   // Every sample (time and joints) of every trajectory planned with our checker and every
   // unplanned cut, in order: two builds with the same fingerprint planned the same trajectories.
-  uint64_t fingerprint = 1469598103934665603ull;
+  uint64_t fingerprint = kFnv1aOffset;
   // Joint travel of the transits (rad, summed along their samples), our checker: per transit its
   // most-moving joint; per joint the total over all vines; per vine the wrist roll (joint 6).
   std::vector<double> transit_max_joint_rad, wrist_roll_rad_per_vine;
@@ -205,10 +190,10 @@ absl::Status RunBenchPlan(Flags& flags) {
       plan::PlanOptions options = setup.options;
       options.checker = kind;
       if (baseline) options.path.time_limit_s *= baseline_time_scale;
-      const double cpu_start_s = ThreadCpuS();
+      const double cpu_start_s = ThreadCpuSeconds();
       auto result = plan::PlanVine(scene.vine, decision->plan, setup.robot, setup.platform,
                                    options, Deadline::In(60.0 * (baseline ? baseline_time_scale : 1)));
-      const double cpu_s = ThreadCpuS() - cpu_start_s;
+      const double cpu_s = ThreadCpuSeconds() - cpu_start_s;
       if (!result.ok()) {
         ++failures;
         std::cerr << "seed " << seed << " " << plan::CheckerKindName(kind) << ": "
@@ -267,15 +252,15 @@ absl::Status RunBenchPlan(Flags& flags) {
       for (const UnplannedCut& u : result->trajectory.unplanned) ++r.unplanned[u.reason];
       if (kind != CheckerKind::kPrimitives) continue;
       for (const TrajectorySegment& segment : result->trajectory.segments) {
-        fingerprint = Fnv(segment.cut_id.value, Fnv(static_cast<int>(segment.kind), fingerprint));
+        fingerprint = Fnv1a(segment.cut_id.value, Fnv1a(static_cast<int>(segment.kind), fingerprint));
         for (const TrajectoryPoint& point : segment.points) {
-          fingerprint = Fnv(point.t, fingerprint);
-          for (double q : point.q) fingerprint = Fnv(q, fingerprint);
+          fingerprint = Fnv1a(point.t, fingerprint);
+          for (double q : point.q) fingerprint = Fnv1a(q, fingerprint);
         }
       }
       for (const UnplannedCut& u : result->trajectory.unplanned) {
-        fingerprint = Fnv(u.cut_id.value, fingerprint);
-        for (char c : u.reason) fingerprint = Fnv(c, fingerprint);
+        fingerprint = Fnv1a(u.cut_id.value, fingerprint);
+        for (char c : u.reason) fingerprint = Fnv1a(c, fingerprint);
       }
       execution_s.push_back(result->trajectory.duration_s);
       double transit = 0, cutting = 0;

@@ -19,7 +19,6 @@
 // Cuts left without a motion by a pass that plans none are tried once more, as PlanVine does,
 // sliding up to PlanOptions' last_resort_max_slide_m (--last-resort-max-slide-m; 0: off), with
 // --last-resort-max-roll-deg / --last-resort-roll-steps wider rolls there too.
-#include <time.h>
 
 #include <algorithm>
 #include <cmath>
@@ -33,6 +32,8 @@
 #include <vector>
 
 #include "core/deadline.h"
+#include "core/measure.h"
+#include "core/statistics.h"
 #include "sim/vine_generator.h"
 #include "workers/decide/decide.h"
 #include "workers/plan/collision_scene.h"
@@ -45,43 +46,20 @@
 namespace vb::plan {
 namespace {
 
-double ThreadCpuS() {
-  timespec ts;
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
-
-double Median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  const size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
-// FNV-1a over the bits of every joint value.
 // FNV-1a over every joint value rounded to 1e-7 rad: equal for motions that differ by rounding
 // only (--share-rolled-twins 0 against 1).
 uint64_t RoundedHash(const std::vector<Joints>& path) {
-  uint64_t h = 1469598103934665603ull;
+  uint64_t h = kFnv1aOffset;
   for (const Joints& q : path) {
-    for (int j = 0; j < 6; ++j) {
-      const long long v = std::llround(q[j] * 1e7);
-      unsigned char bytes[sizeof v];
-      std::memcpy(bytes, &v, sizeof v);
-      for (unsigned char b : bytes) h = (h ^ b) * 1099511628211ull;
-    }
+    for (int j = 0; j < 6; ++j) h = Fnv1a(static_cast<long long>(std::llround(q[j] * 1e7)), h);
   }
   return h;
 }
 
+// FNV-1a over the bits of every joint value.
 uint64_t Hash(const std::vector<Joints>& path, uint64_t h) {
   for (const Joints& q : path) {
-    for (int j = 0; j < 6; ++j) {
-      const double v = q[j];
-      unsigned char bytes[sizeof v];
-      std::memcpy(bytes, &v, sizeof v);
-      for (unsigned char b : bytes) h = (h ^ b) * 1099511628211ull;
-    }
+    for (int j = 0; j < 6; ++j) h = Fnv1a(q[j], h);
   }
   return h;
 }
@@ -185,18 +163,18 @@ int Main(int argc, char** argv) {
       std::vector<CutMotion> motions;
       double best_cpu = 1e30, best_wall = 1e30;
       for (int r = 0; r < repeat; ++r) {
-        const double c0 = ThreadCpuS();
+        const double c0 = ThreadCpuSeconds();
         const auto w0 = std::chrono::steady_clock::now();
         // One cut at a time (each cut is planned on its own): CPU time by outcome.
         motions.clear();
         std::vector<double> cut_cpu;
         for (const Cut& c : here) {
-          const double t0 = ThreadCpuS();
+          const double t0 = ThreadCpuSeconds();
           motions.push_back(PlanCutMotions(robot, model, *collision_scene, std::span(&c, 1),
                                            options.cut_motion, Deadline::Infinite())[0]);
-          cut_cpu.push_back(ThreadCpuS() - t0);
+          cut_cpu.push_back(ThreadCpuSeconds() - t0);
         }
-        best_cpu = std::min(best_cpu, ThreadCpuS() - c0);
+        best_cpu = std::min(best_cpu, ThreadCpuSeconds() - c0);
         if (r == 0) {
           for (size_t k = 0; k < motions.size(); ++k)
             cpu_by_outcome[std::string(CutMotionOutcomeName(motions[k].outcome))] += cut_cpu[k];
@@ -211,7 +189,7 @@ int Main(int argc, char** argv) {
       for (size_t k = 0; k < motions.size(); ++k) {
         const CutMotion& m = motions[k];
         if (out) {
-          uint64_t h = Hash(m.path, 1469598103934665603ull);
+          uint64_t h = Hash(m.path, kFnv1aOffset);
           for (const auto& a : m.alternatives) h = Hash(a, h);
           // Then the motion rounded, and the set of motions rounded, in any order (a sum).
           uint64_t set = m.path.empty() ? 0 : RoundedHash(m.path);
@@ -260,7 +238,7 @@ int Main(int argc, char** argv) {
         }
       }
       if (made_now.empty() && use_last_resort && !retry.empty()) {
-        const double t0 = ThreadCpuS();
+        const double t0 = ThreadCpuSeconds();
         for (const Cut& c : retry) {
           const CutMotion m = PlanCutMotions(robot, model, *collision_scene, std::span(&c, 1),
                                              last_resort, Deadline::Infinite())[0];
@@ -280,7 +258,7 @@ int Main(int argc, char** argv) {
           clearance_sum += m.clearance_m;
           slid += m.slid_m > 0;
         }
-        cpu += ThreadCpuS() - t0;
+        cpu += ThreadCpuSeconds() - t0;
         std::vector<Cut> still;
         for (const Cut& c : retry) {
           if (std::none_of(made_now.begin(), made_now.end(),

@@ -8,7 +8,6 @@
 // hashed (FNV-1a over their bits) into one fingerprint: two builds whose fingerprints agree gave
 // the same margins bit for bit. Prints one JSON object. Run:
 //   build/bench/vb_margins_bench [--seed-base 1110] [--vines 90] [--repeat 5] [--alternatives N]
-#include <time.h>
 
 #include <algorithm>
 #include <cstdint>
@@ -17,6 +16,8 @@
 #include <vector>
 
 #include "core/deadline.h"
+#include "core/measure.h"
+#include "core/statistics.h"
 #include "sim/vine_generator.h"
 #include "workers/decide/decide.h"
 #include "workers/plan/collision_scene.h"
@@ -28,26 +29,6 @@
 
 namespace vb::plan {
 namespace {
-
-double ThreadCpuS() {
-  timespec ts;
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
-
-double Median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  const size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
-uint64_t HashDouble(double v, uint64_t h) {
-  unsigned char bytes[sizeof v];
-  std::memcpy(bytes, &v, sizeof v);
-  for (unsigned char b : bytes) h = (h ^ b) * 1099511628211ull;
-  return h;
-}
 
 int Main(int argc, char** argv) {
   int seed_base = 1110, vines = 90, repeat = 5;
@@ -73,7 +54,7 @@ int Main(int argc, char** argv) {
   const PlatformGeometry platform = DefaultPlatform();
   const Eigen::Isometry3d base_from_platform = robot.platform_from_arm_base.inverse();
   std::vector<double> cpu_s;
-  uint64_t fingerprint = 1469598103934665603ull;
+  uint64_t fingerprint = kFnv1aOffset;
   int64_t configurations = 0, obstacles = 0;
   for (int v = 0; v < vines; ++v) {
     const uint64_t seed = seed_base + v;
@@ -110,15 +91,15 @@ int Main(int argc, char** argv) {
     MarginSummary summary;
     for (int r = 0; r < repeat; ++r) {
       inflated = *scene;
-      const double t0 = ThreadCpuS();
+      const double t0 = ThreadCpuSeconds();
       summary = InflateMargins(robot, protect, options.margins, &inflated);
-      best = std::min(best, ThreadCpuS() - t0);
+      best = std::min(best, ThreadCpuSeconds() - t0);
     }
     cpu_s.push_back(best);
     configurations += summary.configurations;
     obstacles += static_cast<int64_t>(inflated.obstacles.size());
-    for (const Obstacle& o : inflated.obstacles) fingerprint = HashDouble(o.margin_m, fingerprint);
-    for (const HalfSpace& h : inflated.planes) fingerprint = HashDouble(h.margin_m, fingerprint);
+    for (const Obstacle& o : inflated.obstacles) fingerprint = Fnv1a(o.margin_m, fingerprint);
+    for (const HalfSpace& h : inflated.planes) fingerprint = Fnv1a(h.margin_m, fingerprint);
   }
   double total = 0;
   for (double s : cpu_s) total += s;
