@@ -62,7 +62,10 @@ struct CutMotionOptions {
   // (motion_choice.h RollSymmetric; joint 6 limits holding [-pi, pi]), the other side's poses are
   // the first side's rolled by pi: sample the first side only and take each free stroke's twin
   // (joint 6 + or - pi) as the other side's, with the same clearance (half the work; the motions
-  // are those of both sides up to rounding). false: sample and check both sides.
+  // are those of both sides up to rounding). false: sample and check both sides. The twin is not
+  // checked again, which is exact for checkers of capsule models (RollSymmetric compares them);
+  // PlanVine turns it off for CheckerKind::kFclMesh, whose tessellation the roll does not map
+  // onto itself.
   bool share_rolled_twins = true;
 
   // INVALID_ARGUMENT naming the field ("options.sweep_m: ..."): counts < 1 (sides > 2, tilt_steps

@@ -284,7 +284,11 @@ absl::StatusOr<std::vector<int>> PlanPass(const VineModel& model, const std::vec
   const CheckerFactory make_checker = [&](const RobotModel& r, const CollisionScene& s) {
     return MakeChecker(options.checker, r, s);
   };
-  std::vector<CutMotion> motions = PlanCutMotions(p.robot, model, scene, cuts, options.cut_motion,
+  // Half-turn twins are exact for capsule models only: a tessellated mesh is not symmetric under
+  // the roll (fcl_checker.cc), so with FCL meshes both sides are sampled and checked.
+  CutMotionOptions cut_options = options.cut_motion;
+  if (options.checker == CheckerKind::kFclMesh) cut_options.share_rolled_twins = false;
+  std::vector<CutMotion> motions = PlanCutMotions(p.robot, model, scene, cuts, cut_options,
                                                   p.deadline, make_checker);
   if (options.last_resort_max_slide_m > options.cut_motion.max_slide_m &&
       std::none_of(motions.begin(), motions.end(), [](const CutMotion& m) {
@@ -294,7 +298,7 @@ absl::StatusOr<std::vector<int>> PlanPass(const VineModel& model, const std::vec
     // (canes at the head that block each other) are searched once more, sliding further.
     const auto last_resort_start = std::chrono::steady_clock::now();
     p.last_resort_used = true;
-    CutMotionOptions wider = options.cut_motion;
+    CutMotionOptions wider = cut_options;
     wider.max_slide_m = options.last_resort_max_slide_m;
     std::vector<Cut> blocked;
     std::vector<size_t> blocked_at;
