@@ -63,7 +63,8 @@ struct PathOptions {
   // more together (0 = never) while the tree rooted at the goals holds at most
   // walled_in_goal_fraction of them (PathResult::walled_in): its extensions keep colliding, and
   // the start's tree grows alone. A bound in work, like max_tree_states, so it ends the same
-  // whatever the load; such a query is remembered as failed (remember_failures).
+  // whatever the load; such a query is remembered as failed (remember_failures). At or above
+  // max_tree_states (when that bound is set) it never fires: the bound ends the query first.
   int walled_in_after_states = 0;
   double walled_in_goal_fraction = 0.1;
 

@@ -65,7 +65,8 @@ struct PlanOptions {
   // one is free, and the tool may roll about its axis by up to 45 degrees (two steps) where no
   // unrolled pose is free at a slide; oblique cuts heal as well on dormant canes, and near the
   // head the canes crowd. Eight alternative motions per cut rather than three: on tuning seeds
-  // 1110-1199, 66 s of execution per vine instead of 72 s and fewer failed queries, the same
+  // 1110-1199, 66 s of execution per vine instead of 72 s at 1.4 rad/s^2 and fewer failed
+  // queries, the same
   // share of cuts planned (docs/plan.md "The plan stage"). At 5 rad/s^2 (s12), 3-6 planned fewer
   // cuts, executed in 35.7-39.9 s, and cost the same CPU per vine (paths dearer by as much).
   CutMotionOptions cut_motion = [] {
