@@ -145,7 +145,8 @@ absl::Status RunBenchPlan(Flags& flags) {
   VB_ASSIGN_OR_RETURN(PlanSetup setup, ParsePlanSetup(flags));
   VB_RETURN_IF_ERROR(flags.Finish());
   (void)json_flag;
-  if (vines < 1 || vines > 10000) return absl::InvalidArgumentError("--vines must be in [1, 10000]");
+  if (vines < 1 || vines > 10000)
+    return absl::InvalidArgumentError("--vines must be in [1, 10000]");
   if (seed_base < 0) return absl::InvalidArgumentError("--seed-base must be >= 0");
   if (baseline_vines < 0 || baseline_full_vines < 0)
     return absl::InvalidArgumentError("--baseline-vines and --baseline-full-vines must be >= 0");
@@ -252,7 +253,8 @@ absl::Status RunBenchPlan(Flags& flags) {
       for (const UnplannedCut& u : result->trajectory.unplanned) ++r.unplanned[u.reason];
       if (kind != CheckerKind::kPrimitives) continue;
       for (const TrajectorySegment& segment : result->trajectory.segments) {
-        fingerprint = Fnv1a(segment.cut_id.value, Fnv1a(static_cast<int>(segment.kind), fingerprint));
+        fingerprint =
+            Fnv1a(segment.cut_id.value, Fnv1a(static_cast<int>(segment.kind), fingerprint));
         for (const TrajectoryPoint& point : segment.points) {
           fingerprint = Fnv1a(point.t, fingerprint);
           for (double q : point.q) fingerprint = Fnv1a(q, fingerprint);
@@ -347,7 +349,8 @@ absl::Status RunBenchPlan(Flags& flags) {
                                                  ? double(r->second.planned) / r->second.reachable
                                                  : 0.0)
                                            : nlohmann::json();
-    j["vine_median_s"] = r != records.end() ? nlohmann::json(Median(r->second.vine_s)) : nlohmann::json();
+    j["vine_median_s"] =
+        r != records.end() ? nlohmann::json(Median(r->second.vine_s)) : nlohmann::json();
     out[std::string(plan::CheckerKindName(kind))] = j;
   }
   out["trajectory_fingerprint"] = absl::StrCat(absl::Hex(fingerprint, absl::kZeroPad16));

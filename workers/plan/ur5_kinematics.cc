@@ -173,7 +173,8 @@ IkSolutions Solve(const Eigen::Isometry3d& base_from_flange, const JointLimits& 
     double q5_abs = 0;
     if (!SafeAcos((p6.x() * s1 - p6.y() * c1 - dh.d[3]) / dh.d[5], &q5_abs)) continue;
     const int wrist_branches = q5_abs == 0.0 || q5_abs == M_PI ? 1 : 2;
-    if (apart != nullptr && wrist_branches == 2) *apart = std::min(*apart, TurnDistance(2 * q5_abs));
+    if (apart != nullptr && wrist_branches == 2)
+      *apart = std::min(*apart, TurnDistance(2 * q5_abs));
     for (int b5 = 0; b5 < wrist_branches; ++b5) {
       if (only >= 0 && b5 != (only / 2) % 2) continue;
       const double q5 = b5 == 0 ? q5_abs : -q5_abs;

@@ -15,7 +15,8 @@ MatchClassifier DefaultMatchClassifier() {
   // VB_TRAIN_INPUT=labels,images, VB_TRAIN_PASS=second, the default) on candidates of the
   // pipeline's second pass (after MatchWithRigRefinement) on rendered stops with the platform's
   // fiducials, seeds 1000-1099, vine 1, calibration 1 px off: once on the renderer's label images
-  // and once on the segmenter's output: 180511 candidates, 28573 right; training AUC 0.986 (multi-view), 0.975 (two-view). Tuning seeds 1100-1139
+  // and once on the segmenter's output: 180511 candidates, 28573 right; training AUC 0.986
+  // (multi-view), 0.975 (two-view). Tuning seeds 1100-1139
   // re-checked CorrespondenceOptions::alpha (docs/reconstruction.md, section 3).
   MatchClassifier c;
   c.multi_view = {-2.9260, -0.1533, -0.2538, 0.1044, 0.0183, -9.4352, -0.3405, 0.2780, 3.2980, 1.0806, 0.8505, -3.8335, 5.9451, -11.2383, -1.0794, -1.4102, -1.5526, 1.9249, -15.7478};

@@ -223,7 +223,10 @@ absl::Status TrellisOptions::Validate() const {
     if (!std::isfinite(v) || v <= 0)
       return absl::InvalidArgumentError(absl::StrCat("trellis options: ", name, " must be > 0"));
   }
-  return wire_fit.Validate();
+  if (absl::Status s = wire_fit.Validate(); !s.ok()) {
+    return absl::InvalidArgumentError(absl::StrCat("trellis options: wire_fit: ", std::string(s.message())));
+  }
+  return absl::OkStatus();
 }
 
 absl::StatusOr<Trellis> ReconstructTrellis(const std::vector<View2D>& views,
