@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "absl/strings/str_cat.h"
+#include "workers/plan/flange_bodies.h"
 #include "workers/plan/motion_choice.h"
 
 namespace vb::plan {
@@ -343,120 +344,6 @@ bool SameObstacles(const CollisionScene& a, const CollisionScene& b) {
   }
   return true;
 }
-
-// The bodies fixed to the flange (wrist 3 and the tool, DH frame 6) sit where the TCP pose puts
-// them, whatever the IK branch: a TCP pose where one of them overlaps an obstacle has no free
-// configuration, and its IK and checks can be skipped. In clutter almost every sampled cut pose
-// is such a pose (>99% of the IK solutions at the cut collided on seeds 1110-1117).
-class FlangeBodies {
- public:
-  explicit FlangeBodies(const RobotModel& robot) {
-    const Eigen::Vector3d tcp = robot.tool.flange_from_tcp.translation();
-    for (const LinkBody& body : robot.BodiesWithTool()) {
-      if (body.frame != 6) continue;
-      for (const Capsule& c : body.capsules) {
-        // Whatever the pose, the capsule's axis stays within [near_m, far_m] of the TCP.
-        Body body;
-        body.capsule = c;
-        body.near_m = PointSegmentDistance(tcp, c.a, c.b);
-        body.far_m = std::max((c.a - tcp).norm(), (c.b - tcp).norm());
-        bodies_.push_back(std::move(body));
-      }
-    }
-    // The tool's capsules (added last) are the likeliest to touch the vine: test them first.
-    std::reverse(bodies_.begin(), bodies_.end());
-  }
-
-  // Keeps, per flange body, the obstacles of `scene` that it can touch with the TCP on
-  // `tcp_point` (Collides(..., false)) or within `tcp_travel_m` of it (Collides(..., true)),
-  // closest to `tcp_point` first: a blocked pose is usually blocked by the wood nearest the cut.
-  void Select(const CollisionScene& scene, const Eigen::Vector3d& tcp_point, double tcp_travel_m) {
-    struct Near {
-      NearObstacle o;
-      double nearest, farthest;  // of its axis from tcp_point
-    };
-    double reach = 0;  // of any flange body from the TCP
-    for (const Body& body : bodies_) reach = std::max(reach, body.far_m + body.capsule.radius);
-    std::vector<Near> near;
-    for (const Obstacle& o : scene.obstacles) {
-      const double radius = o.capsule.radius + o.margin_m;
-      const double nearest = PointSegmentDistance(tcp_point, o.capsule.a, o.capsule.b);
-      if (nearest - radius > reach + tcp_travel_m + 1e-9) continue;
-      near.push_back({{o.capsule.a, o.capsule.b, 0.5 * (o.capsule.a + o.capsule.b), radius,
-                       0.5 * (o.capsule.b - o.capsule.a).norm() + radius},
-                      nearest, std::max((o.capsule.a - tcp_point).norm(), (o.capsule.b - tcp_point).norm())});
-    }
-    std::stable_sort(near.begin(), near.end(),
-                     [](const Near& x, const Near& y) { return x.nearest < y.nearest; });
-    for (Body& body : bodies_) {
-      for (int travel = 0; travel < 2; ++travel) {
-        const double t = travel ? tcp_travel_m : 0.0;
-        std::vector<NearObstacle>& list = body.near[travel];
-        list.clear();
-        for (const Near& n : near) {
-          // Contact needs the axes within the radii (+1e-9 m against rounding) somewhere in the
-          // shell [near_m - t, far_m + t] about tcp_point.
-          const double reach = body.capsule.radius + n.o.radius + 1e-9;
-          if (n.nearest > body.far_m + t + reach) continue;
-          if (n.farthest < body.near_m - t - reach) continue;
-          list.push_back(n.o);
-        }
-      }
-    }
-    planes_ = scene.planes;
-  }
-
-  // True if a flange body overlaps a selected obstacle or a plane by more than kToleranceM at
-  // `base_from_flange` (the TCP on the selected point, or within the travel of it when
-  // `along_stroke`). Exact, in double: a checker that works in float (the primitive checker's
-  // ~1e-6 m) rejects every such pose too.
-  bool Collides(const Eigen::Isometry3d& base_from_flange, bool along_stroke) const {
-    for (const Body& body : bodies_) {
-      const Capsule& c = body.capsule;
-      const Eigen::Vector3d a = base_from_flange * c.a, b = base_from_flange * c.b;
-      const Eigen::Vector3d centre = 0.5 * (a + b), ab = b - a;
-      const double ab_squared = ab.squaredNorm();
-      const double bound = 0.5 * std::sqrt(ab_squared) + c.radius;
-      for (const HalfSpace& h : planes_) {
-        if (std::max(h.normal.dot(a), h.normal.dot(b)) + c.radius + h.margin_m >
-            h.offset + kToleranceM) {
-          return true;
-        }
-      }
-      for (const NearObstacle& o : body.near[along_stroke ? 1 : 0]) {
-        // Bounding spheres apart: the capsules are too (cheaper than the segment distance).
-        const double apart = bound + o.bound;
-        if ((centre - o.centre).squaredNorm() > apart * apart) continue;
-        // Tighter, still cheaper than the segment distance: the obstacle's ball against the
-        // flange capsule's segment, squared (1e-9 m of slack against rounding; contact needs
-        // less than the radii minus kToleranceM).
-        const double u =
-            ab_squared > 0 ? std::clamp((o.centre - a).dot(ab) / ab_squared, 0.0, 1.0) : 0.0;
-        const double ball = c.radius + o.bound + 1e-9;
-        if ((a + u * ab - o.centre).squaredNorm() > ball * ball) continue;
-        if (SegmentSegmentDistance(a, b, o.a, o.b) < c.radius + o.radius - kToleranceM) {
-          return true;
-        }
-      }
-    }
-    return false;
-  }
-
- private:
-  static constexpr double kToleranceM = 1e-5;
-  struct NearObstacle {
-    Eigen::Vector3d a, b, centre;
-    double radius;  // with the margin
-    double bound;   // bounding sphere about `centre`
-  };
-  struct Body {
-    Capsule capsule;  // flange frame
-    double near_m, far_m;  // nearest and farthest point of its axis from the TCP
-    std::vector<NearObstacle> near[2];  // Select's obstacles: at the cut point, along the stroke
-  };
-  std::vector<Body> bodies_;
-  std::vector<HalfSpace> planes_;
-};
 
 // A stroke whose configurations are all free, with its cut configuration's clearance (the bound
 // it is ranked by) and its group: a stroke and its half-turn twin share one.

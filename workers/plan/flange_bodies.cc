@@ -1,0 +1,99 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "workers/plan/flange_bodies.h"
+
+#include <algorithm>
+#include <cmath>
+#include <utility>
+
+#include "core/geometry.h"
+
+namespace vb::plan {
+
+FlangeBodies::FlangeBodies(const RobotModel& robot) {
+  const Eigen::Vector3d tcp = robot.tool.flange_from_tcp.translation();
+  for (const LinkBody& body : robot.BodiesWithTool()) {
+    if (body.frame != 6) continue;
+    for (const Capsule& c : body.capsules) {
+      // Whatever the pose, the capsule's axis stays within [near_m, far_m] of the TCP.
+      Body body;
+      body.capsule = c;
+      body.near_m = PointSegmentDistance(tcp, c.a, c.b);
+      body.far_m = std::max((c.a - tcp).norm(), (c.b - tcp).norm());
+      bodies_.push_back(std::move(body));
+    }
+  }
+  // The tool's capsules (added last) are the likeliest to touch the vine: test them first.
+  std::reverse(bodies_.begin(), bodies_.end());
+}
+
+void FlangeBodies::Select(const CollisionScene& scene, const Eigen::Vector3d& tcp_point,
+                          double tcp_travel_m) {
+  struct Near {
+    NearObstacle o;
+    double nearest, farthest;  // of its axis from tcp_point
+  };
+  double reach = 0;  // of any flange body from the TCP
+  for (const Body& body : bodies_) reach = std::max(reach, body.far_m + body.capsule.radius);
+  std::vector<Near> near;
+  for (const Obstacle& o : scene.obstacles) {
+    const double radius = o.capsule.radius + o.margin_m;
+    const double nearest = PointSegmentDistance(tcp_point, o.capsule.a, o.capsule.b);
+    if (nearest - radius > reach + tcp_travel_m + 1e-9) continue;
+    near.push_back({{o.capsule.a, o.capsule.b, 0.5 * (o.capsule.a + o.capsule.b), radius,
+                     0.5 * (o.capsule.b - o.capsule.a).norm() + radius},
+                    nearest,
+                    std::max((o.capsule.a - tcp_point).norm(), (o.capsule.b - tcp_point).norm())});
+  }
+  std::stable_sort(near.begin(), near.end(),
+                   [](const Near& x, const Near& y) { return x.nearest < y.nearest; });
+  for (Body& body : bodies_) {
+    for (int travel = 0; travel < 2; ++travel) {
+      const double t = travel ? tcp_travel_m : 0.0;
+      std::vector<NearObstacle>& list = body.near[travel];
+      list.clear();
+      for (const Near& n : near) {
+        // Contact needs the axes within the radii (+1e-9 m against rounding) somewhere in the
+        // shell [near_m - t, far_m + t] about tcp_point.
+        const double reach = body.capsule.radius + n.o.radius + 1e-9;
+        if (n.nearest > body.far_m + t + reach) continue;
+        if (n.farthest < body.near_m - t - reach) continue;
+        list.push_back(n.o);
+      }
+    }
+  }
+  planes_ = scene.planes;
+}
+
+bool FlangeBodies::Collides(const Eigen::Isometry3d& base_from_flange, bool along_stroke) const {
+  for (const Body& body : bodies_) {
+    const Capsule& c = body.capsule;
+    const Eigen::Vector3d a = base_from_flange * c.a, b = base_from_flange * c.b;
+    const Eigen::Vector3d centre = 0.5 * (a + b), ab = b - a;
+    const double ab_squared = ab.squaredNorm();
+    const double bound = 0.5 * std::sqrt(ab_squared) + c.radius;
+    for (const HalfSpace& h : planes_) {
+      if (std::max(h.normal.dot(a), h.normal.dot(b)) + c.radius + h.margin_m >
+          h.offset + kToleranceM) {
+        return true;
+      }
+    }
+    for (const NearObstacle& o : body.near[along_stroke ? 1 : 0]) {
+      // Bounding spheres apart: the capsules are too (cheaper than the segment distance).
+      const double apart = bound + o.bound;
+      if ((centre - o.centre).squaredNorm() > apart * apart) continue;
+      // Tighter, still cheaper than the segment distance: the obstacle's ball against the
+      // flange capsule's segment, squared (1e-9 m of slack against rounding; contact needs
+      // less than the radii minus kToleranceM).
+      const double u =
+          ab_squared > 0 ? std::clamp((o.centre - a).dot(ab) / ab_squared, 0.0, 1.0) : 0.0;
+      const double ball = c.radius + o.bound + 1e-9;
+      if ((a + u * ab - o.centre).squaredNorm() > ball * ball) continue;
+      if (SegmentSegmentDistance(a, b, o.a, o.b) < c.radius + o.radius - kToleranceM) {
+        return true;
+      }
+    }
+  }
+  return false;
+}
+
+}  // namespace vb::plan
