@@ -10,6 +10,15 @@
 namespace vb::reconstruct {
 namespace {
 
+// The head metrics (enclosure, volume ratio) of a reconstructed head against the true one.
+ReconstructionMetrics HeadMetrics(const HeadModel& reconstructed, const HeadModel& truth) {
+  VineModel model;
+  model.head = reconstructed;
+  VineModel true_model;
+  true_model.head = truth;
+  return EvaluateReconstruction(model, true_model).value();
+}
+
 // Enclosure of the true head by the carved spheres, on simulated vines drawn without rendering
 // (so any miss is the carving's, not the segmentation's). Seeds from the development range.
 TEST(ReconstructHeadAndTrunk, EnclosesTheTrueHeadAndFindsTheTrunk) {
@@ -21,13 +30,7 @@ TEST(ReconstructHeadAndTrunk, EnclosesTheTrueHeadAndFindsTheTrunk) {
         ReconstructHeadAndTrunk(views, rig, WorkingVolume(), HeadOptions(), Deadline::Infinite());
     ASSERT_TRUE(result.ok()) << result.status();
     ASSERT_FALSE(result->head.spheres.empty());
-    VineModel model;
-    model.head = result->head;
-    const ReconstructionMetrics m = EvaluateReconstruction(model, [&] {
-      VineModel truth;
-      truth.head = scene.vine.head;
-      return truth;
-    }()).value();
+    const ReconstructionMetrics m = HeadMetrics(result->head, scene.vine.head);
     EXPECT_GE(m.head_enclosed_fraction, 0.99) << "seed " << seed;
     EXPECT_LT(m.head_volume_ratio, 25.0) << "seed " << seed;
     // The trunk axis from slab centres lies near the true trunk; its base, extrapolated to the
@@ -63,11 +66,7 @@ TEST(ReconstructHeadAndTrunk, WeakWideningStillEnclosesATallHead) {
   const auto result =
       ReconstructHeadAndTrunk(views, rig, WorkingVolume(), HeadOptions(), Deadline::Infinite());
   ASSERT_TRUE(result.ok()) << result.status();
-  VineModel model;
-  model.head = result->head;
-  VineModel truth;
-  truth.head = vine.head;
-  const ReconstructionMetrics m = EvaluateReconstruction(model, truth).value();
+  const ReconstructionMetrics m = HeadMetrics(result->head, vine.head);
   EXPECT_GE(m.head_enclosed_fraction, 0.99);
   EXPECT_LT(m.head_volume_ratio, 25.0);
 }
@@ -105,11 +104,7 @@ TEST(ReconstructHeadAndTrunk, PostBesideTheTrunkStillEnclosesTheHead) {
   const auto result =
       ReconstructHeadAndTrunk(views, rig, WorkingVolume(), HeadOptions(), Deadline::Infinite());
   ASSERT_TRUE(result.ok()) << result.status();
-  VineModel model;
-  model.head = result->head;
-  VineModel truth;
-  truth.head = vine.head;
-  const ReconstructionMetrics m = EvaluateReconstruction(model, truth).value();
+  const ReconstructionMetrics m = HeadMetrics(result->head, vine.head);
   EXPECT_GE(m.head_enclosed_fraction, 0.99);
   EXPECT_LT(m.head_volume_ratio, 30.0);
   // The trunk axis is the trunk's, not the post's shadow behind it.
