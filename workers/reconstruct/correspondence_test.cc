@@ -348,12 +348,7 @@ TEST(MatchSegments, DISABLED_Diagnose) {
 // labels or images; VB_SEED first seed, VB_STOPS count): the bench metrics of the raw pieces
 // of MatchSegments (each as a cane) against those of ReconstructFromViews.
 TEST(MatchSegments, DISABLED_PipelineLoss) {
-  const char* env = std::getenv("VB_SEED");
-  const uint64_t first = env ? std::atoi(env) : 1100;
-  const char* count_env = std::getenv("VB_STOPS");
-  const int count = count_env ? std::atoi(count_env) : 8;
-  const char* input_env = std::getenv("VB_INPUT");
-  const bool images = input_env && std::string(input_env) == "images";
+  const auto [first, count, images, fiducials] = ReportStopsFromEnv(1100, 8);
   ReconstructOptions options;
   if (const char* alpha = std::getenv("VB_ALPHA")) options.correspondence.alpha = std::atof(alpha);
   double sums[4] = {0, 0, 0, 0};

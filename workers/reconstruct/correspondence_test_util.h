@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
+#include <string>
 #include <vector>
 
 #include "core/deadline.h"
@@ -224,6 +226,28 @@ inline Metrics Evaluate(const std::vector<Piece3D>& pieces, const VineModel& vin
   m.coverage = covered / std::max(m.truth_m, 1e-9);
   m.precision = precise / std::max(m.pieces_m, 1e-9);
   return m;
+}
+
+// The stops a disabled diagnosis report runs on, from the environment: VB_SEED (the first seed),
+// VB_STOPS (how many), VB_INPUT (images: rendered and segmented, as MakeRenderedStop's `segment`;
+// anything else: the renderer's labels; unset: `images_by_default`) and VB_FIDUCIALS (0: without
+// the platform's fiducials).
+struct ReportStops {
+  uint64_t first;
+  int count;
+  bool images;
+  bool fiducials;
+};
+inline ReportStops ReportStopsFromEnv(uint64_t default_first, int default_count,
+                                      bool images_by_default = false) {
+  const char* seed = std::getenv("VB_SEED");
+  const char* stops = std::getenv("VB_STOPS");
+  const char* input = std::getenv("VB_INPUT");
+  const char* fiducials = std::getenv("VB_FIDUCIALS");
+  return {seed ? static_cast<uint64_t>(std::atoi(seed)) : default_first,
+          stops ? std::atoi(stops) : default_count,
+          input ? std::string(input) == "images" : images_by_default,
+          !fiducials || std::string(fiducials) != "0"};
 }
 
 }  // namespace vb::reconstruct

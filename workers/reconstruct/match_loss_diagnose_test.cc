@@ -66,15 +66,8 @@ class PointGrid {
 };
 
 TEST(MatchLoss, DISABLED_Report) {
-  const char* env = std::getenv("VB_SEED");
-  const uint64_t first = env ? std::atoi(env) : 1300;
-  const char* count_env = std::getenv("VB_STOPS");
-  const int count = count_env ? std::atoi(count_env) : 4;
-  const char* input_env = std::getenv("VB_INPUT");
-  const bool images = input_env && std::string(input_env) == "images";
   // VB_FIDUCIALS=0: without the platform's fiducials (the bench's default draws and uses them).
-  const char* fiducials_env = std::getenv("VB_FIDUCIALS");
-  const bool fiducials = !fiducials_env || std::string(fiducials_env) != "0";
+  const auto [first, count, images, fiducials] = ReportStopsFromEnv(1300, 4);
   const ReconstructOptions options;
   const double threshold = 1.0 / (1.0 + options.correspondence.alpha);
   enum Stage { kInImage, kForeground, kSkeleton, kConditioned, kRaw, kFitted, kProbable, kPiece,
@@ -267,14 +260,7 @@ namespace {
 // mean of each feature and its mean contribution w_i * f_i to the logit. Run as the report above
 // (VB_SEED, VB_STOPS, VB_INPUT, VB_FIDUCIALS) with --gtest_filter='MatchLoss.DISABLED_LowScores'.
 TEST(MatchLoss, DISABLED_LowScores) {
-  const char* env = std::getenv("VB_SEED");
-  const uint64_t first = env ? std::atoi(env) : 1300;
-  const char* count_env = std::getenv("VB_STOPS");
-  const int count = count_env ? std::atoi(count_env) : 4;
-  const char* input_env = std::getenv("VB_INPUT");
-  const bool images = input_env && std::string(input_env) == "images";
-  const char* fiducials_env = std::getenv("VB_FIDUCIALS");
-  const bool fiducials = !fiducials_env || std::string(fiducials_env) != "0";
+  const auto [first, count, images, fiducials] = ReportStopsFromEnv(1300, 4);
   const ReconstructOptions options;
   const double threshold = 1.0 / (1.0 + options.correspondence.alpha);
   // [0]: right, below threshold; [1]: right, above; [2]: wrong, above.

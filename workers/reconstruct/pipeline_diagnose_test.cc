@@ -67,12 +67,7 @@ int Majority(const Polyline3& line, const VineModel& truth) {
 }
 
 TEST(PipelineStages, DISABLED_Report) {
-  const char* env = std::getenv("VB_SEED");
-  const uint64_t first = env ? std::atoi(env) : 1100;
-  const char* count_env = std::getenv("VB_STOPS");
-  const int count = count_env ? std::atoi(count_env) : 8;
-  const char* input_env = std::getenv("VB_INPUT");
-  const bool images = input_env && std::string(input_env) == "images";
+  const auto [first, count, images, fiducials] = ReportStopsFromEnv(1100, 8);
   const bool verbose = std::getenv("VB_VERBOSE") != nullptr;
   ReconstructOptions options;
   if (const char* v = std::getenv("VB_MIN_JOIN")) options.connect.min_join_probability = std::atof(v);

@@ -147,7 +147,7 @@ void Score(const VineModel& truth, const VineModel& model, const std::vector<Vie
     const double deviation = StraightLineDeviation(samples);
     double wire_hit = 0;
     for (const Eigen::Vector3d& p : samples) {
-      Eigen::Vector3d e;
+      Eigen::Vector3d e = Eigen::Vector3d::Zero();
       const double d = DistanceToWires(p, model.wires, &e);
       tally->total[kind] += 0.005;
       const int bin = std::clamp(static_cast<int>((p.x() + kSpan) / (2 * kSpan) * 5), 0, 4);
@@ -238,12 +238,7 @@ void Score(const VineModel& truth, const VineModel& model, const std::vector<Vie
 }
 
 TEST(TrellisLoss, DISABLED_Report) {
-  const char* env = std::getenv("VB_SEED");
-  const uint64_t first = env ? std::atoi(env) : 1100;
-  const char* count_env = std::getenv("VB_STOPS");
-  const int count = count_env ? std::atoi(count_env) : 8;
-  const char* input_env = std::getenv("VB_INPUT");
-  const bool images = !input_env || std::string(input_env) == "images";
+  const auto [first, count, images, fiducials] = ReportStopsFromEnv(1100, 8, true);
   const bool verbose = std::getenv("VB_VERBOSE") != nullptr;
   ReconstructOptions options;
   if (const char* v = std::getenv("VB_SMOOTH")) options.trellis.wire_fit.smoothness_px = std::atof(v);
@@ -345,10 +340,7 @@ namespace {
 // stage's min_plane_angle_deg), then the mean over stops, as the benchmark averages wire recall; with the rig's cane two-view share
 // (core/view_coverage.h) beside it. Run as DISABLED_Report (VB_SEED, VB_STOPS).
 TEST(TrellisLoss, DISABLED_RigCeiling) {
-  const char* env = std::getenv("VB_SEED");
-  const uint64_t first = env ? std::atoi(env) : 1100;
-  const char* count_env = std::getenv("VB_STOPS");
-  const int count = count_env ? std::atoi(count_env) : 100;
+  const auto [first, count, images, fiducials] = ReportStopsFromEnv(1100, 100);
   struct Variant {
     const char* name;
     sim::RigOptions options;
