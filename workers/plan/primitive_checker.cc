@@ -237,7 +237,7 @@ bool PrimitiveChecker::Impl::Free(const Joints& q) {
 }
 
 double PrimitiveChecker::Impl::SegClearance(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double r,
-                    double best) const {
+                    double best, int* nearest) const {
   for (const HalfSpace& h : planes) {
     best = std::min(best, h.offset - std::max(h.normal.dot(a), h.normal.dot(b)) - r - h.margin_m);
   }
@@ -254,11 +254,15 @@ double PrimitiveChecker::Impl::SegClearance(const Eigen::Vector3d& a, const Eige
     if (too_far(leaf_balls[l])) continue;
     const double lower = CapsuleCapsuleGap(a, b, r, leaf_bounds[l].a, leaf_bounds[l].b,
                                            leaf_bounds[l].radius);
-    if (lower >= best) continue;
+    if (lower >= best + kBallSlackM) continue;  // slack: the bound is computed, not exact
     const int end = std::min<int>(pieces.size(), (l + 1) * kLeaf);
     for (int k = l * kLeaf; k < end; ++k) {
       if (too_far(piece_balls[k])) continue;
-      best = std::min(best, CapsuleCapsuleGap(a, b, r, pieces[k].a, pieces[k].b, pieces[k].rad));
+      const double gap = CapsuleCapsuleGap(a, b, r, pieces[k].a, pieces[k].b, pieces[k].rad);
+      if (gap < best) {
+        best = gap;
+        if (nearest) *nearest = k;
+      }
     }
   }
   return best;
@@ -269,9 +273,32 @@ double PrimitiveChecker::Impl::Clearance(const Joints& q, double floor, double c
   // Starting from `cap` prunes more leaves (their bound >= best); min is exact, so the result
   // is min(cap, clearance) bit for bit.
   double best = cap;
-  for (size_t i = 0; i < all.size(); ++i) {
-    best = SegClearance(world_a[i], world_b[i], all[i].radius, best);
+  // The pair nearest at the last query first: the same gap of the same inputs, so the min is
+  // unchanged, but the balls and leaf bounds below then skip far more (the vine is mostly near
+  // one capsule of the tool).
+  const int seed_capsule = last_capsule, seed_piece = last_piece;
+  if (seed_capsule >= 0) {
+    const prim::Piece& p = pieces[seed_piece];
+    best = std::min(best, CapsuleCapsuleGap(world_a[seed_capsule], world_b[seed_capsule],
+                                            all[seed_capsule].radius, p.a, p.b, p.rad));
     if (best <= floor) return best;
+  }
+  last_capsule = last_piece = -1;
+  // Distal capsules first (the tool is the nearest to the vine): the min is the same in any order.
+  for (size_t i = all.size(); i-- > 0;) {
+    int nearest = -1;
+    const double before = best;
+    best = SegClearance(world_a[i], world_b[i], all[i].radius, best, &nearest);
+    if (nearest >= 0 && best < before) {
+      last_capsule = static_cast<int>(i);
+      last_piece = nearest;
+    }
+    if (best <= floor) return best;
+  }
+  if (last_capsule < 0 && seed_capsule >= 0 && best < cap) {
+    // Nothing below the seed pair's gap: it is still the nearest.
+    last_capsule = seed_capsule;
+    last_piece = seed_piece;
   }
   for (const auto& [i, j] : self_pairs) {
     best = std::min(best, CapsuleCapsuleGap(world_a[i], world_b[i], all[i].radius, world_a[j],

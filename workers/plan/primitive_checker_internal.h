@@ -278,10 +278,15 @@ struct PrimitiveChecker::Impl {
                      double r) const;
   template <bool kWide>
   bool Free(const Joints& q);
+  // *nearest (if given) receives the piece that lowered `best` last (unchanged if none did).
   double SegClearance(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double r,
-                      double best) const;
+                      double best, int* nearest = nullptr) const;
   // min(cap, clearance at q) if above `floor`, else some value <= floor (returns early).
   double Clearance(const Joints& q, double floor, double cap);
+  // The arm capsule and piece that gave the last Clearance its value (-1: none yet; a plane or
+  // self pair). Consecutive queries are mostly nearby configurations with the same nearest pair:
+  // its gap, computed first, starts the branch-and-bound low.
+  int last_capsule = -1, last_piece = -1;
 
   // Batched checks (primitive_checker_batch.cc; VAMP's idea: configurations in SIMD lanes).
   std::vector<float> leaf_lo, leaf_hi;  // leaf boxes, 3 floats per leaf
