@@ -35,6 +35,7 @@ void FlangeBodies::Select(const CollisionScene& scene, const Eigen::Vector3d& tc
   double reach = 0;  // of any flange body from the TCP
   for (const Body& body : bodies_) reach = std::max(reach, body.far_m + body.capsule.radius);
   std::vector<Near> near;
+  near.reserve(scene.obstacles.size());
   for (const Obstacle& o : scene.obstacles) {
     const double radius = o.capsule.radius + o.margin_m;
     const double nearest = PointSegmentDistance(tcp_point, o.capsule.a, o.capsule.b);
@@ -44,14 +45,19 @@ void FlangeBodies::Select(const CollisionScene& scene, const Eigen::Vector3d& tc
                     nearest,
                     std::max((o.capsule.a - tcp_point).norm(), (o.capsule.b - tcp_point).norm())});
   }
-  std::stable_sort(near.begin(), near.end(),
-                   [](const Near& x, const Near& y) { return x.nearest < y.nearest; });
+  // Nearest first, ties in scene order (a stable sort, on indices: the entries are large).
+  std::vector<int> order(near.size());
+  for (size_t i = 0; i < near.size(); ++i) order[i] = static_cast<int>(i);
+  std::sort(order.begin(), order.end(), [&](int x, int y) {
+    return near[x].nearest < near[y].nearest || (near[x].nearest == near[y].nearest && x < y);
+  });
   for (Body& body : bodies_) {
     for (int travel = 0; travel < 2; ++travel) {
       const double t = travel ? tcp_travel_m : 0.0;
       std::vector<NearObstacle>& list = body.near[travel];
       list.clear();
-      for (const Near& n : near) {
+      for (int i : order) {
+        const Near& n = near[i];
         // Contact needs the axes within the radii (+1e-9 m against rounding) somewhere in the
         // shell [near_m - t, far_m + t] about tcp_point.
         const double reach = body.capsule.radius + n.o.radius + 1e-9;
@@ -61,7 +67,19 @@ void FlangeBodies::Select(const CollisionScene& scene, const Eigen::Vector3d& tc
       }
     }
   }
-  planes_ = scene.planes;
+  // Planes that no flange body can cross from here are left out: every point of a body's axis is
+  // within far_m of the TCP, itself within the travel of tcp_point, so the test's max over its
+  // ends of n . x, plus its radius and the margin, is at most n . tcp_point + travel + reach +
+  // margin (1e-9 m of slack against rounding).
+  for (int travel = 0; travel < 2; ++travel) {
+    const double t = travel ? tcp_travel_m : 0.0;
+    planes_[travel].clear();
+    for (const HalfSpace& h : scene.planes) {
+      if (h.normal.dot(tcp_point) + t + reach + h.margin_m + 1e-9 < h.offset + kToleranceM)
+        continue;
+      planes_[travel].push_back(h);
+    }
+  }
 }
 
 bool FlangeBodies::Collides(const Eigen::Isometry3d& base_from_flange, bool along_stroke) const {
@@ -71,7 +89,7 @@ bool FlangeBodies::Collides(const Eigen::Isometry3d& base_from_flange, bool alon
     const Eigen::Vector3d centre = 0.5 * (a + b), ab = b - a;
     const double ab_squared = ab.squaredNorm();
     const double bound = 0.5 * std::sqrt(ab_squared) + c.radius;
-    for (const HalfSpace& h : planes_) {
+    for (const HalfSpace& h : planes_[along_stroke ? 1 : 0]) {
       if (std::max(h.normal.dot(a), h.normal.dot(b)) + c.radius + h.margin_m >
           h.offset + kToleranceM) {
         return true;

@@ -43,7 +43,7 @@ class FlangeBodies {
     std::vector<NearObstacle> near[2];  // Select's obstacles: at the cut point, along the stroke
   };
   std::vector<Body> bodies_;
-  std::vector<HalfSpace> planes_;
+  std::vector<HalfSpace> planes_[2];  // those a body may cross: at the cut point, along the stroke
 };
 
 }  // namespace vb::plan

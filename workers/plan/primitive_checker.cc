@@ -284,8 +284,7 @@ double PrimitiveChecker::Impl::Clearance(const Joints& q, double floor, double c
     if (best <= floor) return best;
   }
   last_capsule = last_piece = -1;
-  // Distal capsules first (the tool is the nearest to the vine): the min is the same in any order.
-  for (size_t i = all.size(); i-- > 0;) {
+  for (size_t i = 0; i < all.size(); ++i) {
     int nearest = -1;
     const double before = best;
     best = SegClearance(world_a[i], world_b[i], all[i].radius, best, &nearest);
