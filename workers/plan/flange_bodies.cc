@@ -38,6 +38,12 @@ void FlangeBodies::Select(const CollisionScene& scene, const Eigen::Vector3d& tc
   near.reserve(scene.obstacles.size());
   for (const Obstacle& o : scene.obstacles) {
     const double radius = o.capsule.radius + o.margin_m;
+    // The obstacle's ball first (cheaper than the point-segment distance; 1e-6 m of slack, far
+    // above the rounding, so it only skips what the exact test below skips).
+    const Eigen::Vector3d centre = 0.5 * (o.capsule.a + o.capsule.b);
+    const double far = reach + tcp_travel_m + radius + 0.5 * (o.capsule.b - o.capsule.a).norm() +
+                       1e-6;
+    if ((centre - tcp_point).squaredNorm() > far * far) continue;
     const double nearest = PointSegmentDistance(tcp_point, o.capsule.a, o.capsule.b);
     if (nearest - radius > reach + tcp_travel_m + 1e-9) continue;
     near.push_back({{o.capsule.a, o.capsule.b, 0.5 * (o.capsule.a + o.capsule.b), radius,

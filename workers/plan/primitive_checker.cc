@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <utility>
 #include <vector>
 
 // The 8-lane helpers (SegTouchesSet8) are only ever inlined, into IsFree's AVX2 variant or as
@@ -112,23 +113,41 @@ BoxSet MakeBoxSet(const std::vector<Box>& boxes, int begin, int end) {
 
 // Orders pieces [begin, end) by recursive median splits along the longest axis of their
 // centres, splitting at multiples of 64 (a node) or 8 (a leaf) so that consecutive runs of 8 and
-// 64 pieces are spatially compact.
-void SplitOrder(std::vector<Piece>& pieces, int begin, int end) {
+// 64 pieces are spatially compact. Works on indices and the pieces' a + b (twice their centres;
+// moving 56-byte pieces at every level cost more than the splits), then permutes once. Which
+// pieces share a leaf changes no check's result: every coarse level only culls with slack, and
+// each piece is tested on its own (primitive_checker.h).
+void SplitOrder(const std::vector<Eigen::Vector3d>& sums, std::vector<int>& order, int begin,
+                int end) {
   const int n = end - begin;
   if (n <= kLeaf) return;
   const int unit = n > kLeaf * kLeaf ? kLeaf * kLeaf : kLeaf;
   const int half_units = ((n + unit - 1) / unit + 1) / 2;
   const int mid = begin + std::min(n - 1, half_units * unit);
-  Eigen::AlignedBox3d box;
-  for (int i = begin; i < end; ++i) box.extend(0.5 * (pieces[i].a + pieces[i].b));
+  Eigen::Vector3d lo = sums[order[begin]], hi = lo;
+  for (int i = begin + 1; i < end; ++i) {
+    lo = lo.cwiseMin(sums[order[i]]);
+    hi = hi.cwiseMax(sums[order[i]]);
+  }
   int axis = 0;
-  box.sizes().maxCoeff(&axis);
-  std::nth_element(pieces.begin() + begin, pieces.begin() + mid, pieces.begin() + end,
-                   [axis](const Piece& p, const Piece& q) {
-                     return p.a[axis] + p.b[axis] < q.a[axis] + q.b[axis];
-                   });
-  SplitOrder(pieces, begin, mid);
-  SplitOrder(pieces, mid, end);
+  (hi - lo).maxCoeff(&axis);
+  std::nth_element(order.begin() + begin, order.begin() + mid, order.begin() + end,
+                   [&](int p, int q) { return sums[p][axis] < sums[q][axis]; });
+  SplitOrder(sums, order, begin, mid);
+  SplitOrder(sums, order, mid, end);
+}
+
+void SplitOrder(std::vector<Piece>& pieces) {
+  std::vector<Eigen::Vector3d> sums;
+  sums.reserve(pieces.size());
+  for (const Piece& p : pieces) sums.push_back(p.a + p.b);
+  std::vector<int> order(pieces.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
+  SplitOrder(sums, order, 0, static_cast<int>(order.size()));
+  std::vector<Piece> ordered;
+  ordered.reserve(pieces.size());
+  for (int i : order) ordered.push_back(pieces[i]);
+  pieces = std::move(ordered);
 }
 
 double CapsuleCapsuleGap(const Eigen::Vector3d& a0, const Eigen::Vector3d& a1, double ra,
@@ -403,7 +422,7 @@ PrimitiveChecker::PrimitiveChecker(const RobotModel& robot, const CollisionScene
                                o.capsule.radius + o.margin_m});
     }
   }
-  SplitOrder(m.pieces, 0, static_cast<int>(m.pieces.size()));
+  SplitOrder(m.pieces);
   const int n_pieces = static_cast<int>(m.pieces.size());
   const int n_leaves = (n_pieces + kLeaf - 1) / kLeaf;
   for (int l = 0; l < n_leaves; ++l) {
