@@ -23,6 +23,7 @@
 #pragma once
 
 #include <memory>
+#include <span>
 
 #include "workers/plan/collision_checker.h"
 
@@ -54,6 +55,14 @@ class PrimitiveChecker : public CollisionChecker {
   // (SSE2 / NEON) that every machine runs, for tests and benchmarks.
   void UseBaselineSimd();
   bool uses_avx2() const;
+
+  // Leaves out the obstacles of the scene it was built on whose indices (into
+  // scene.obstacles) are listed, replacing any earlier exclusion (none: the whole scene again).
+  // Every check then answers as a checker built on the scene without them would: the hierarchy's
+  // bounds still hold their pieces, which only culls less, and each piece is tested on its own,
+  // so which pieces share a leaf changes no result. Rebuilding costs far more (cut motions leave
+  // out the cut cane near each cut point, cut_motion.cc). Out-of-range indices are ignored.
+  void Exclude(std::span<const int> obstacles);
 
   // Number of obstacle pieces, leaves and nodes (for benchmarks and tests).
   int pieces() const;

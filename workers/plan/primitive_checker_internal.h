@@ -9,6 +9,8 @@
 #include <utility>
 #include <vector>
 
+#include "Eigen/Geometry"
+
 #include "workers/plan/primitive_checker.h"
 
 namespace vb::plan::prim {
@@ -257,6 +259,13 @@ struct PrimitiveChecker::Impl {
   bool base_blocked = false;
 
   std::vector<prim::Piece> pieces;        // in leaf order
+  // Exclude(): the pieces of each obstacle of the scene, which pieces are left out, and which
+  // obstacles (their lanes in `leaves` are padding lanes while they are).
+  std::vector<std::vector<int>> obstacle_pieces;
+  std::vector<char> piece_excluded;
+  std::vector<int> excluded;
+  std::vector<Eigen::AlignedBox3d> leaf_boxes;  // the leaves' boxes (double), for refitting
+  void UpdateBaseBlocked();  // base_blocked for the obstacles not excluded
   std::vector<prim::Bound> leaf_bounds;   // one per leaf
   std::vector<prim::Ball> piece_balls, leaf_balls;  // about pieces and leaf_bounds (Clearance)
   std::vector<prim::CapsuleSet> leaves;
