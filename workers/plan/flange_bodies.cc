@@ -111,7 +111,13 @@ bool FlangeBodies::Collides(const Eigen::Isometry3d& base_from_flange, bool alon
       const double u =
           ab_squared > 0 ? std::clamp((o.centre - a).dot(ab) / ab_squared, 0.0, 1.0) : 0.0;
       const double ball = c.radius + o.bound + 1e-9;
-      if ((a + u * ab - o.centre).squaredNorm() > ball * ball) continue;
+      const double centre_squared = (a + u * ab - o.centre).squaredNorm();
+      if (centre_squared > ball * ball) continue;
+      // The obstacle's centre is on its axis, so the axes are at most that far apart: well
+      // within the radii (1e-9 m below the contact test's bound, far above the rounding of
+      // either distance), it collides without the segment distance.
+      const double inside = c.radius + o.radius - kToleranceM - 1e-9;
+      if (inside > 0 && centre_squared < inside * inside) return true;
       if (SegmentSegmentDistance(a, b, o.a, o.b) < c.radius + o.radius - kToleranceM) {
         return true;
       }
