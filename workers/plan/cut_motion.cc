@@ -2,6 +2,7 @@
 #include "workers/plan/cut_motion.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -302,9 +303,9 @@ StrokeResult FollowStroke(const Candidate& start, const std::vector<Eigen::Vecto
 // configurations is free; nullopt otherwise (it cannot win). A mirrored path's second half
 // repeats its first (the same configurations, the same motions reversed): only the first half and
 // the cut are evaluated.
-std::optional<double> EvaluatePath(CollisionChecker& checker, const std::vector<Joints>& path,
-                                   int cut_index, bool mirrored, double cut_clearance,
-                                   double must_beat, double max_step_m) {
+std::optional<double> EvaluatePath(CollisionChecker& checker, PrimitiveChecker* primitive,
+                                   const std::vector<Joints>& path, int cut_index, bool mirrored,
+                                   double cut_clearance, double must_beat, double max_step_m) {
   const size_t end = mirrored ? static_cast<size_t>(cut_index) + 1 : path.size();
   double clearance = cut_clearance;
   if (!(clearance > must_beat)) return std::nullopt;
@@ -313,6 +314,21 @@ std::optional<double> EvaluatePath(CollisionChecker& checker, const std::vector<
     // Only whether it stays above must_beat, and then the min, matter: the checker may stop early.
     clearance = checker.ClearanceAbove(path[i], must_beat, clearance);
     if (!(clearance > must_beat)) return std::nullopt;
+  }
+  if (primitive != nullptr) {
+    // Each configuration is an end of two motions: its lanes' verdict once for all (AreFree
+    // decides it exactly as IsMotionFree's batch of ends does), then the motions' interiors.
+    std::array<bool, 64> free{};
+    for (size_t i = 0; i < end; i += free.size()) {
+      const size_t count = std::min(free.size(), end - i);
+      primitive->AreFree(std::span<const Joints>(&path[i], count), std::span<bool>(free.data(), count));
+      for (size_t k = 0; k < count; ++k)
+        if (!free[k]) return std::nullopt;
+    }
+    for (size_t i = 1; i < end; ++i) {
+      if (!primitive->IsMotionInteriorFree(path[i - 1], path[i], max_step_m)) return std::nullopt;
+    }
+    return clearance;
   }
   for (size_t i = 1; i < end; ++i) {
     if (!checker.IsMotionFree(path[i - 1], path[i], max_step_m)) return std::nullopt;
@@ -512,10 +528,11 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
       shared.primitive = dynamic_cast<PrimitiveChecker*>(shared.checker.get());
     }
     CollisionChecker* active = nullptr;
+    PrimitiveChecker* active_primitive = nullptr;  // `active`, when it is the shared one
     if (shared.primitive != nullptr &&
         local.obstacles.size() + local_excluded.size() == scene.obstacles.size()) {
       shared.primitive->Exclude(local_excluded);
-      active = shared.primitive;
+      active = active_primitive = shared.primitive;
     } else {
       if (checker == nullptr || !SameObstacles(local, checker_scene)) {
         checker = make_checker(robot, local);
@@ -617,7 +634,7 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
       if (known.has_value()) {
         clearance = known->has_value() && **known > must_beat ? *known : std::nullopt;
       } else {
-        clearance = EvaluatePath(*active, path, cut_index, mirrored, cut_clearance, must_beat,
+        clearance = EvaluatePath(*active, active_primitive, path, cut_index, mirrored, cut_clearance, must_beat,
                                  options.max_step_m);
         known = clearance;
       }

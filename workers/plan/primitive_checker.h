@@ -46,6 +46,10 @@ class PrimitiveChecker : public CollisionChecker {
   // obstacle hierarchy (with the union of their boxes); the first collision ends the check. Same
   // samples as CollisionChecker::IsMotionFree (MotionSteps with lever_m()).
   bool IsMotionFree(const Joints& a, const Joints& b, double max_step_m) override;
+  // IsMotionFree without its two ends: the same interior samples, checked the same way. For
+  // callers that already checked the ends with AreFree, whose lanes decide each configuration
+  // exactly as IsMotionFree's batch of the two ends does (the same code, lane by lane).
+  bool IsMotionInteriorFree(const Joints& a, const Joints& b, double max_step_m);
   double Clearance(const Joints& q) override;
   // Branch-and-bound from `cap`, and stops once the clearance is at or below `floor`.
   double ClearanceAbove(const Joints& q, double floor, double cap) override;
@@ -72,6 +76,7 @@ class PrimitiveChecker : public CollisionChecker {
   struct Impl;
 
  private:
+  bool InteriorFree(const Joints& a, const Joints& b, int n);  // n: MotionSteps
   std::unique_ptr<Impl> impl_;
 };
 

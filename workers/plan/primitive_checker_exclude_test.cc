@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
-// PrimitiveChecker::Exclude: a checker built once with obstacles left out answers as one built on
-// the scene without them (cut_motion.cc reuses one checker for every cut and slide).
+// What cut_motion.cc relies on to reuse one primitive checker for every cut and slide
+// (PrimitiveChecker::Exclude answers as a checker built on the scene without the excluded
+// obstacles) and to check each stroke configuration once (IsMotionInteriorFree).
 #include <algorithm>
 #include <memory>
 #include <random>
@@ -108,6 +109,40 @@ TEST(PrimitiveCheckerExclude, AnswersAsACheckerBuiltWithoutTheObstacles) {
   }
   // The exclusions mattered (else this test could not fail).
   EXPECT_GT(differ_from_full, 5) << "of " << compared;
+}
+
+}  // namespace
+}  // namespace vb::plan
+
+namespace vb::plan {
+namespace {
+
+// IsMotionInteriorFree with the ends checked by AreFree is IsMotionFree, verdict for verdict.
+TEST(PrimitiveCheckerInterior, WithTheEndsFromAreFreeIsIsMotionFree) {
+  const RobotModel robot = DefaultUr5(SecateurTool());
+  const CollisionScene scene = VineScene(1108, robot);
+  PrimitiveChecker checker(robot, scene);
+  std::mt19937 rng(1108);
+  std::uniform_real_distribution<double> step(-0.08, 0.08);
+  int free = 0, blocked_inside = 0, blocked_at_ends = 0;
+  for (int round = 0; round < 6; ++round) {
+    const Eigen::Vector3d point = scene.obstacles[(round * 37) % scene.obstacles.size()].capsule.a;
+    for (const Joints& a : ConfigurationsAt(robot, point + Eigen::Vector3d(0, -0.05, 0), rng)) {
+      Joints b = a;
+      for (int j = 0; j < 6; ++j) b[j] += step(rng);
+      const Joints ends[2] = {a, b};
+      bool ends_free[2];
+      checker.AreFree(ends, ends_free);
+      const bool interior = checker.IsMotionInteriorFree(a, b, 0.005);
+      ASSERT_EQ(checker.IsMotionFree(a, b, 0.005), ends_free[0] && ends_free[1] && interior);
+      if (!(ends_free[0] && ends_free[1])) ++blocked_at_ends;
+      else (interior ? free : blocked_inside)++;
+    }
+  }
+  // Every kind of motion was met (else this test could not fail).
+  EXPECT_GT(free, 10);
+  EXPECT_GT(blocked_inside, 3);
+  EXPECT_GT(blocked_at_ends, 10);
 }
 
 }  // namespace
