@@ -51,12 +51,13 @@ void FlangeBodies::Select(const CollisionScene& scene, const Eigen::Vector3d& tc
                     nearest,
                     std::max((o.capsule.a - tcp_point).norm(), (o.capsule.b - tcp_point).norm())});
   }
-  // Nearest first, ties in scene order (a stable sort, on indices: the entries are large).
+  // Nearest first, ties in scene order (a stable sort, on (distance, index) keys: the entries
+  // are large).
+  std::vector<std::pair<double, int>> keys(near.size());
+  for (size_t i = 0; i < near.size(); ++i) keys[i] = {near[i].nearest, static_cast<int>(i)};
+  std::sort(keys.begin(), keys.end());
   std::vector<int> order(near.size());
-  for (size_t i = 0; i < near.size(); ++i) order[i] = static_cast<int>(i);
-  std::sort(order.begin(), order.end(), [&](int x, int y) {
-    return near[x].nearest < near[y].nearest || (near[x].nearest == near[y].nearest && x < y);
-  });
+  for (size_t i = 0; i < near.size(); ++i) order[i] = keys[i].second;
   for (Body& body : bodies_) {
     for (int travel = 0; travel < 2; ++travel) {
       const double t = travel ? tcp_travel_m : 0.0;
@@ -101,7 +102,9 @@ bool FlangeBodies::Collides(const Eigen::Isometry3d& base_from_flange, bool alon
         return true;
       }
     }
-    for (const NearObstacle& o : body.near[along_stroke ? 1 : 0]) {
+    std::vector<NearObstacle>& list = body.near[along_stroke ? 1 : 0];
+    for (size_t i = 0; i < list.size(); ++i) {
+      const NearObstacle& o = list[i];
       // Bounding spheres apart: the capsules are too (cheaper than the segment distance).
       const double apart = bound + o.bound;
       if ((centre - o.centre).squaredNorm() > apart * apart) continue;
@@ -117,8 +120,9 @@ bool FlangeBodies::Collides(const Eigen::Isometry3d& base_from_flange, bool alon
       // within the radii (1e-9 m below the contact test's bound, far above the rounding of
       // either distance), it collides without the segment distance.
       const double inside = c.radius + o.radius - kToleranceM - 1e-9;
-      if (inside > 0 && centre_squared < inside * inside) return true;
-      if (SegmentSegmentDistance(a, b, o.a, o.b) < c.radius + o.radius - kToleranceM) {
+      if ((inside > 0 && centre_squared < inside * inside) ||
+          SegmentSegmentDistance(a, b, o.a, o.b) < c.radius + o.radius - kToleranceM) {
+        if (i > 0) std::swap(list[i], list[i / 2]);
         return true;
       }
     }
