@@ -326,6 +326,7 @@ double PrimitiveChecker::Impl::Clearance(const Joints& q, double floor, double c
   }
   last_capsule = last_piece = -1;
   for (size_t i = 0; i < all.size(); ++i) {
+    if (all[i].frame == 0) continue;  // the base: its gap is known (below)
     int nearest = -1;
     const double before = best;
     best = SegClearance(world_a[i], world_b[i], all[i].radius, best, &nearest);
@@ -335,6 +336,10 @@ double PrimitiveChecker::Impl::Clearance(const Joints& q, double floor, double c
     }
     if (best <= floor) return best;
   }
+  // The base never moves: min(best, its gap) is what its SegClearance from `best` returns (that
+  // only skips pieces that cannot go below best).
+  best = std::min(best, base_clearance);
+  if (best <= floor) return best;
   if (last_capsule < 0 && seed_capsule >= 0 && best < cap) {
     // Nothing below the seed pair's gap: it is still the nearest.
     last_capsule = seed_capsule;
@@ -503,10 +508,11 @@ PrimitiveChecker::PrimitiveChecker(const RobotModel& robot, const CollisionScene
 void PrimitiveChecker::Impl::UpdateBaseBlocked() {
   // The base never moves: decide once (per set of obstacles) whether it touches anything.
   base_blocked = false;
+  base_clearance = std::numeric_limits<double>::infinity();
   for (const ArmCapsule& c : fixed) {
-    if (SegClearance(c.a, c.b, c.radius, std::numeric_limits<double>::infinity()) < 0) {
-      base_blocked = true;
-    }
+    const double gap = SegClearance(c.a, c.b, c.radius, std::numeric_limits<double>::infinity());
+    base_clearance = std::min(base_clearance, gap);
+    if (gap < 0) base_blocked = true;
   }
 }
 

@@ -257,6 +257,7 @@ struct PrimitiveChecker::Impl {
   // culling, Botterill et al. 2017 section 3.4: the others are never tested for it).
   std::vector<std::vector<HalfSpace>> planes_of;
   bool base_blocked = false;
+  double base_clearance = 0;  // the base's (frame 0) gap to the obstacles and planes
 
   std::vector<prim::Piece> pieces;        // in leaf order
   // Exclude(): the pieces of each obstacle of the scene, which pieces are left out, and which
