@@ -16,6 +16,9 @@
 //                                   [--max-slide-m M] [--alternatives N]
 //                                   [--last-resort-max-slide-m M] [--last-resort-max-roll-deg D]
 //                                   [--last-resort-roll-steps N] [--share-rolled-twins 0|1]
+//                                   [--per-cut 0|1]
+// The cuts of a pass are planned in one PlanCutMotions call, as PlanVine does; --per-cut 1 plans
+// them one call each (each with its own checker) and reports the CPU time by outcome.
 // Cuts left without a motion by a pass that plans none are tried once more, as PlanVine does,
 // sliding up to PlanOptions' last_resort_max_slide_m (--last-resort-max-slide-m; 0: off), with
 // --last-resort-max-roll-deg / --last-resort-roll-steps wider rolls there too.
@@ -66,6 +69,7 @@ uint64_t Hash(const std::vector<Joints>& path, uint64_t h) {
 
 int Main(int argc, char** argv) {
   int seed_base = 1110, vines = 90, passes = 6, repeat = 1;
+  bool per_cut = false;
   const char* fingerprint = nullptr;
   PlanOptions options;
   // Cuts left without a motion by a pass that plans none are tried once more with these (as
@@ -77,6 +81,7 @@ int Main(int argc, char** argv) {
     else if (!std::strcmp(argv[i], "--vines") && i + 1 < argc) vines = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--passes") && i + 1 < argc) passes = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--repeat") && i + 1 < argc) repeat = std::atoi(argv[++i]);
+    else if (!std::strcmp(argv[i], "--per-cut") && i + 1 < argc) per_cut = std::atoi(argv[++i]) != 0;
     else if (!std::strcmp(argv[i], "--fingerprint") && i + 1 < argc) fingerprint = argv[++i];
     // Cut-motion options (default: PlanOptions').
     else if (!std::strcmp(argv[i], "--orientations") && i + 1 < argc)
@@ -108,7 +113,7 @@ int Main(int argc, char** argv) {
                    " [--fingerprint FILE] [--orientations N] [--max-roll-deg D] [--roll-steps N]"
                    " [--max-tilt-deg D] [--tilt-steps N] [--max-slide-m M] [--alternatives N]"
                    " [--last-resort-max-slide-m M] [--last-resort-max-roll-deg D]"
-                   " [--last-resort-roll-steps N] [--share-rolled-twins 0|1]\n",
+                   " [--last-resort-roll-steps N] [--share-rolled-twins 0|1] [--per-cut 0|1]\n",
                    argv[0]);
       return 2;
     }
@@ -165,17 +170,23 @@ int Main(int argc, char** argv) {
       for (int r = 0; r < repeat; ++r) {
         const double c0 = ThreadCpuSeconds();
         const auto w0 = std::chrono::steady_clock::now();
-        // One cut at a time (each cut is planned on its own): CPU time by outcome.
+        // All the pass's cuts in one call, as PlanVine makes it (one checker for them all,
+        // cut_motion.cc SharedChecker); with --per-cut one cut at a time: CPU time by outcome.
         motions.clear();
         std::vector<double> cut_cpu;
-        for (const Cut& c : here) {
-          const double t0 = ThreadCpuSeconds();
-          motions.push_back(PlanCutMotions(robot, model, *collision_scene, std::span(&c, 1),
-                                           options.cut_motion, Deadline::Infinite())[0]);
-          cut_cpu.push_back(ThreadCpuSeconds() - t0);
+        if (per_cut) {
+          for (const Cut& c : here) {
+            const double t0 = ThreadCpuSeconds();
+            motions.push_back(PlanCutMotions(robot, model, *collision_scene, std::span(&c, 1),
+                                             options.cut_motion, Deadline::Infinite())[0]);
+            cut_cpu.push_back(ThreadCpuSeconds() - t0);
+          }
+        } else {
+          motions = PlanCutMotions(robot, model, *collision_scene, here, options.cut_motion,
+                                   Deadline::Infinite());
         }
         best_cpu = std::min(best_cpu, ThreadCpuSeconds() - c0);
-        if (r == 0) {
+        if (r == 0 && per_cut) {
           for (size_t k = 0; k < motions.size(); ++k)
             cpu_by_outcome[std::string(CutMotionOutcomeName(motions[k].outcome))] += cut_cpu[k];
         }

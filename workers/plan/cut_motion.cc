@@ -2,6 +2,7 @@
 #include "workers/plan/cut_motion.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -14,6 +15,7 @@
 #include "absl/strings/str_cat.h"
 #include "workers/plan/flange_bodies.h"
 #include "workers/plan/motion_choice.h"
+#include "workers/plan/primitive_checker.h"
 
 namespace vb::plan {
 
@@ -301,9 +303,9 @@ StrokeResult FollowStroke(const Candidate& start, const std::vector<Eigen::Vecto
 // configurations is free; nullopt otherwise (it cannot win). A mirrored path's second half
 // repeats its first (the same configurations, the same motions reversed): only the first half and
 // the cut are evaluated.
-std::optional<double> EvaluatePath(CollisionChecker& checker, const std::vector<Joints>& path,
-                                   int cut_index, bool mirrored, double cut_clearance,
-                                   double must_beat, double max_step_m) {
+std::optional<double> EvaluatePath(CollisionChecker& checker, PrimitiveChecker* primitive,
+                                   const std::vector<Joints>& path, int cut_index, bool mirrored,
+                                   double cut_clearance, double must_beat, double max_step_m) {
   const size_t end = mirrored ? static_cast<size_t>(cut_index) + 1 : path.size();
   double clearance = cut_clearance;
   if (!(clearance > must_beat)) return std::nullopt;
@@ -312,6 +314,21 @@ std::optional<double> EvaluatePath(CollisionChecker& checker, const std::vector<
     // Only whether it stays above must_beat, and then the min, matter: the checker may stop early.
     clearance = checker.ClearanceAbove(path[i], must_beat, clearance);
     if (!(clearance > must_beat)) return std::nullopt;
+  }
+  if (primitive != nullptr) {
+    // Each configuration is an end of two motions: its lanes' verdict once for all (AreFree
+    // decides it exactly as IsMotionFree's batch of ends does), then the motions' interiors.
+    std::array<bool, 64> free{};
+    for (size_t i = 0; i < end; i += free.size()) {
+      const size_t count = std::min(free.size(), end - i);
+      primitive->AreFree(std::span<const Joints>(&path[i], count), std::span<bool>(free.data(), count));
+      for (size_t k = 0; k < count; ++k)
+        if (!free[k]) return std::nullopt;
+    }
+    for (size_t i = 1; i < end; ++i) {
+      if (!primitive->IsMotionInteriorFree(path[i - 1], path[i], max_step_m)) return std::nullopt;
+    }
+    return clearance;
   }
   for (size_t i = 1; i < end; ++i) {
     if (!checker.IsMotionFree(path[i - 1], path[i], max_step_m)) return std::nullopt;
@@ -364,9 +381,19 @@ CutMotion Fail(CutMotion motion, CutMotionOutcome outcome, std::string message) 
   return motion;
 }
 
+// One checker on the whole scene for every cut of a PlanCutMotions call, when the factory makes
+// primitive checkers: each slide leaves out the cut cane near its cut point with
+// PrimitiveChecker::Exclude, which answers as a checker built on scene.WithoutCaneNear would
+// (primitive_checker.h), instead of building one per slide. Built on first use.
+struct SharedChecker {
+  bool tried = false;
+  std::unique_ptr<CollisionChecker> checker;
+  PrimitiveChecker* primitive = nullptr;  // checker, when it is one
+};
+
 CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const CollisionScene& scene,
                   const Cut& cut, const CutMotionOptions& options, const Deadline& deadline,
-                  const CheckerFactory& make_checker) {
+                  const CheckerFactory& make_checker, SharedChecker& shared) {
   CutMotion motion;
   motion.cut_id = cut.id;
   motion.cut_point_in_platform = cut.point;
@@ -427,6 +454,7 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
   // Per slide: the scene without the cut cane near the cut, the flange bodies' obstacles and the
   // sampled poses, shared by its unrolled and rolled stages.
   CollisionScene local;
+  std::vector<int> local_excluded;  // indices into scene.obstacles that `local` leaves out
   std::vector<Eigen::Isometry3d> slide_poses;
   Eigen::Vector3d point = cut.point;
   for (int step = 0; step < (slides + 1) * stages; ++step) {
@@ -447,6 +475,15 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
       // cut pose survives the flange bodies' test, and consecutive slides often free the same
       // capsules of the cut cane: an unchanged scene keeps its checker.
       local = scene.WithoutCaneNear(cut.cane_id, point_in_base, options.cut_cane_free_radius_m);
+      // The same obstacles by index (WithoutCaneNear's test), for the shared checker.
+      local_excluded.clear();
+      for (size_t i = 0; i < scene.obstacles.size(); ++i) {
+        const Obstacle& o = scene.obstacles[i];
+        if (o.kind == ObstacleKind::kCane && o.owner_id == cut.cane_id.value &&
+            PointSegmentDistance(point_in_base, o.capsule.a, o.capsule.b) - o.capsule.radius <=
+                options.cut_cane_free_radius_m)
+          local_excluded.push_back(static_cast<int>(i));
+      }
       flange_bodies.Select(local, point_in_base, stroke_travel_m);
       if (in_throat) {
         CollisionScene cut_cane;  // the capsules of the cut cane that `local` leaves out
@@ -485,15 +522,29 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
         solutions.push_back({ik.q[i], 0.0, pose, pose_index, ik.branch[i]});
     }
     if (solutions.empty()) continue;
-    if (checker == nullptr || !SameObstacles(local, checker_scene)) {
-      checker = make_checker(robot, local);
-      checker_scene = local;
+    if (!shared.tried) {
+      shared.tried = true;
+      shared.checker = make_checker(robot, scene);
+      shared.primitive = dynamic_cast<PrimitiveChecker*>(shared.checker.get());
+    }
+    CollisionChecker* active = nullptr;
+    PrimitiveChecker* active_primitive = nullptr;  // `active`, when it is the shared one
+    if (shared.primitive != nullptr &&
+        local.obstacles.size() + local_excluded.size() == scene.obstacles.size()) {
+      shared.primitive->Exclude(local_excluded);
+      active = active_primitive = shared.primitive;
+    } else {
+      if (checker == nullptr || !SameObstacles(local, checker_scene)) {
+        checker = make_checker(robot, local);
+        checker_scene = local;
+      }
+      active = checker.get();
     }
     std::vector<Joints> qs;
     qs.reserve(solutions.size());
     for (const Candidate& c : solutions) qs.push_back(c.q);
     std::unique_ptr<bool[]> free(new bool[qs.size()]);
-    checker->AreFree(qs, std::span<bool>(free.get(), qs.size()));
+    active->AreFree(qs, std::span<bool>(free.get(), qs.size()));
     std::vector<Candidate> candidates;
     for (size_t i = 0; i < solutions.size(); ++i) {
       if (free[i]) candidates.push_back(solutions[i]);
@@ -545,7 +596,7 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
       if (deadline.Expired()) return Fail(motion, CutMotionOutcome::kDeadline, what + ": deadline");
       const StrokeResult stroke =
           FollowStroke(candidate, waypoints, cut_index, mirrored, tcp_from_flange, robot.limits,
-                       options.max_joint_jump_rad, *checker, &path);
+                       options.max_joint_jump_rad, *active, &path);
       if (stroke == StrokeResult::kNoIk) continue;
       if (stroke == StrokeResult::kCollides) {
         strokes_followed += per_candidate;
@@ -553,7 +604,7 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
       }
       const bool has_twin = twins.on && TwinPath(twins, path, cut_index, robot.limits, &twin_path);
       strokes_followed += has_twin ? 2 : 1;
-      candidate.clearance_m = checker->ClearanceAbove(candidate.q, options.min_clearance_m,
+      candidate.clearance_m = active->ClearanceAbove(candidate.q, options.min_clearance_m,
                                                       std::numeric_limits<double>::infinity());
       // Exact (double): a batched float check may pass a configuration within ~1e-5 m of contact.
       if (!(candidate.clearance_m > options.min_clearance_m)) continue;
@@ -583,7 +634,7 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
       if (known.has_value()) {
         clearance = known->has_value() && **known > must_beat ? *known : std::nullopt;
       } else {
-        clearance = EvaluatePath(*checker, path, cut_index, mirrored, cut_clearance, must_beat,
+        clearance = EvaluatePath(*active, active_primitive, path, cut_index, mirrored, cut_clearance, must_beat,
                                  options.max_step_m);
         known = clearance;
       }
@@ -633,6 +684,7 @@ std::vector<CutMotion> PlanCutMotions(const RobotModel& robot, const VineModel& 
                                       const CutMotionOptions& options, const Deadline& deadline,
                                       const CheckerFactory& make_checker) {
   std::vector<CutMotion> motions;
+  SharedChecker shared;
   absl::Status status = options.Validate();
   if (status.ok()) status = robot.Validate();
   for (const Cut& cut : cuts) {
@@ -652,7 +704,7 @@ std::vector<CutMotion> PlanCutMotions(const RobotModel& robot, const VineModel& 
           Fail(motion, CutMotionOutcome::kInvalidInput, std::string(status.message())));
       continue;
     }
-    motions.push_back(PlanOne(robot, model, scene, cut, options, deadline, make_checker));
+    motions.push_back(PlanOne(robot, model, scene, cut, options, deadline, make_checker, shared));
   }
   return motions;
 }

@@ -103,12 +103,15 @@ struct CutMotion {
 };
 
 // Builds the checker for one scene (MakePrimitiveChecker by default; an FCL checker for
-// baselines). Must not return null.
+// baselines). Must not return null. PlanCutMotions calls it once on the whole scene; when that
+// returns a PrimitiveChecker, every cut and slide reuses it with the cut cane near the cut left
+// out (PrimitiveChecker::Exclude, the same answers), otherwise it is called again per slide on
+// scene.WithoutCaneNear(...).
 using CheckerFactory = std::function<std::unique_ptr<CollisionChecker>(const RobotModel&,
                                                                       const CollisionScene&)>;
 
 // One CutMotion per cut, in order. For each cut: sample TCP poses about the cane, solve IK (all
-// branches), follow the stroke, and check every configuration and motion with a checker built on
+// branches), follow the stroke, and check every configuration and motion with a checker on
 // scene.WithoutCaneNear(cut cane, cut point, cut_cane_free_radius_m) -- with a secateur, whose
 // cane lies between the open jaws, the flange bodies must also stay clear of the cut cane's
 // capsules left out there, at every stroke pose (exact test); keep the collision-free

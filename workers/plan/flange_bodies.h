@@ -40,10 +40,13 @@ class FlangeBodies {
   struct Body {
     Capsule capsule;  // flange frame
     double near_m, far_m;  // nearest and farthest point of its axis from the TCP
-    std::vector<NearObstacle> near[2];  // Select's obstacles: at the cut point, along the stroke
+    // Select's obstacles: at the cut point, along the stroke. Collides moves an obstacle that
+    // hits one step toward the front (the order changes no answer; neighbouring poses mostly
+    // hit the same obstacle).
+    mutable std::vector<NearObstacle> near[2];
   };
   std::vector<Body> bodies_;
-  std::vector<HalfSpace> planes_;
+  std::vector<HalfSpace> planes_[2];  // those a body may cross: at the cut point, along the stroke
 };
 
 }  // namespace vb::plan

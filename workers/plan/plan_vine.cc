@@ -16,6 +16,7 @@
 #include "workers/plan/fallen_wood.h"
 #include "workers/plan/motion_choice.h"
 #include "workers/plan/planning.h"
+#include "workers/plan/stub_check.h"
 #include "workers/plan/time_parameterization.h"
 #include "workers/plan/tool.h"
 
@@ -229,33 +230,16 @@ std::vector<Joints> ShiftedForReach(const std::vector<Joints>& path, const Joint
 }
 
 // Drops the motions of `motion` (its path and alternatives) that touch `scene` along their
-// configurations, checked as PlanCutMotions checks them; the first free alternative replaces a
-// path that touches it. False (and `motion` unchanged) if every one does.
+// configurations, checked as PlanCutMotions checks them (stub_check.h: twins and mirrored halves
+// once); the first free alternative replaces a path that touches. False (and `motion` unchanged)
+// if every one does.
 bool KeepMotionsFreeOf(const CollisionScene& scene, const PlanOptions& options,
                        const RobotModel& robot, CutMotion* motion) {
   const std::unique_ptr<CollisionChecker> checker = MakeChecker(options.checker, robot, scene);
-  auto free = [&](const std::vector<Joints>& path) {
-    if (path.empty() || !checker->IsFree(path.front())) return false;
-    for (size_t i = 1; i < path.size(); ++i)
-      if (!checker->IsMotionFree(path[i - 1], path[i], options.cut_motion.max_step_m)) return false;
-    return true;
-  };
-  const bool path_free = free(motion->path);
-  std::vector<bool> alternative_free;
-  for (const std::vector<Joints>& alternative : motion->alternatives)
-    alternative_free.push_back(free(alternative));
-  if (path_free && std::all_of(alternative_free.begin(), alternative_free.end(),
-                               [](bool f) { return f; }))
-    return true;
-  std::vector<std::vector<Joints>> kept;
-  if (path_free) kept.push_back(std::move(motion->path));
-  for (size_t a = 0; a < alternative_free.size(); ++a)
-    if (alternative_free[a]) kept.push_back(std::move(motion->alternatives[a]));
-  if (kept.empty()) return false;
-  motion->path = std::move(kept.front());
-  motion->alternatives.assign(std::make_move_iterator(kept.begin() + 1),
-                              std::make_move_iterator(kept.end()));
-  return true;
+  // Twins are exact for capsule checkers only (as in PlanCutMotions).
+  const bool share_twins = options.checker != CheckerKind::kFclMesh &&
+                           options.cut_motion.share_rolled_twins && RollSymmetric(robot);
+  return KeepMotionsFreeOfStubs(*checker, options.cut_motion.max_step_m, share_twins, motion);
 }
 
 // One pass on the vine as `model` leaves it: cut motions for `pending` (indices into plan.cuts),

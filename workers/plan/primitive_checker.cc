@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <utility>
 #include <vector>
 
 // The 8-lane helpers (SegTouchesSet8) are only ever inlined, into IsFree's AVX2 variant or as
@@ -94,6 +95,26 @@ Box BoxOfPieces(const std::vector<Piece>& pieces, int begin, int end) {
   return box;
 }
 
+// A leaf's bounding capsule for the lanes (float, inflated by kCoarseSlackM).
+std::array<float, 9> LeafCap(const Bound& b) {
+  const Eigen::Vector3d d = b.b - b.a;
+  const double e = d.squaredNorm();
+  return {static_cast<float>(b.a.x()), static_cast<float>(b.a.y()), static_cast<float>(b.a.z()),
+          static_cast<float>(d.x()), static_cast<float>(d.y()), static_cast<float>(d.z()),
+          static_cast<float>(e), e > 0 ? static_cast<float>(1.0 / e) : 0.f,
+          static_cast<float>(b.radius + kCoarseSlackM)};
+}
+
+// Lane k of a BoxSet := box (an empty box is inverted: it overlaps nothing).
+void SetBoxLane(BoxSet& set, int k, const Box& b) {
+  SetLane(set.lox, k, b.min().x());
+  SetLane(set.loy, k, b.min().y());
+  SetLane(set.loz, k, b.min().z());
+  SetLane(set.hix, k, b.max().x());
+  SetLane(set.hiy, k, b.max().y());
+  SetLane(set.hiz, k, b.max().z());
+}
+
 BoxSet MakeBoxSet(const std::vector<Box>& boxes, int begin, int end) {
   BoxSet set;
   for (int k = 0; k < kLeaf; ++k) {
@@ -112,23 +133,43 @@ BoxSet MakeBoxSet(const std::vector<Box>& boxes, int begin, int end) {
 
 // Orders pieces [begin, end) by recursive median splits along the longest axis of their
 // centres, splitting at multiples of 64 (a node) or 8 (a leaf) so that consecutive runs of 8 and
-// 64 pieces are spatially compact.
-void SplitOrder(std::vector<Piece>& pieces, int begin, int end) {
+// 64 pieces are spatially compact. Works on indices and the pieces' a + b (twice their centres;
+// moving 56-byte pieces at every level cost more than the splits), then permutes once. Which
+// pieces share a leaf changes no check's result: every coarse level only culls with slack, and
+// each piece is tested on its own (primitive_checker.h).
+void SplitOrder(const std::vector<Eigen::Vector3d>& sums, std::vector<int>& order, int begin,
+                int end) {
   const int n = end - begin;
   if (n <= kLeaf) return;
   const int unit = n > kLeaf * kLeaf ? kLeaf * kLeaf : kLeaf;
   const int half_units = ((n + unit - 1) / unit + 1) / 2;
   const int mid = begin + std::min(n - 1, half_units * unit);
-  Eigen::AlignedBox3d box;
-  for (int i = begin; i < end; ++i) box.extend(0.5 * (pieces[i].a + pieces[i].b));
+  Eigen::Vector3d lo = sums[order[begin]], hi = lo;
+  for (int i = begin + 1; i < end; ++i) {
+    lo = lo.cwiseMin(sums[order[i]]);
+    hi = hi.cwiseMax(sums[order[i]]);
+  }
   int axis = 0;
-  box.sizes().maxCoeff(&axis);
-  std::nth_element(pieces.begin() + begin, pieces.begin() + mid, pieces.begin() + end,
-                   [axis](const Piece& p, const Piece& q) {
-                     return p.a[axis] + p.b[axis] < q.a[axis] + q.b[axis];
-                   });
-  SplitOrder(pieces, begin, mid);
-  SplitOrder(pieces, mid, end);
+  (hi - lo).maxCoeff(&axis);
+  std::nth_element(order.begin() + begin, order.begin() + mid, order.begin() + end,
+                   [&](int p, int q) { return sums[p][axis] < sums[q][axis]; });
+  SplitOrder(sums, order, begin, mid);
+  SplitOrder(sums, order, mid, end);
+}
+
+// Returns the permutation: the ordered piece k was pieces[order[k]].
+std::vector<int> SplitOrder(std::vector<Piece>& pieces) {
+  std::vector<Eigen::Vector3d> sums;
+  sums.reserve(pieces.size());
+  for (const Piece& p : pieces) sums.push_back(p.a + p.b);
+  std::vector<int> order(pieces.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
+  SplitOrder(sums, order, 0, static_cast<int>(order.size()));
+  std::vector<Piece> ordered;
+  ordered.reserve(pieces.size());
+  for (int i : order) ordered.push_back(pieces[i]);
+  pieces = std::move(ordered);
+  return order;
 }
 
 double CapsuleCapsuleGap(const Eigen::Vector3d& a0, const Eigen::Vector3d& a1, double ra,
@@ -237,7 +278,7 @@ bool PrimitiveChecker::Impl::Free(const Joints& q) {
 }
 
 double PrimitiveChecker::Impl::SegClearance(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double r,
-                    double best) const {
+                    double best, int* nearest) const {
   for (const HalfSpace& h : planes) {
     best = std::min(best, h.offset - std::max(h.normal.dot(a), h.normal.dot(b)) - r - h.margin_m);
   }
@@ -254,11 +295,15 @@ double PrimitiveChecker::Impl::SegClearance(const Eigen::Vector3d& a, const Eige
     if (too_far(leaf_balls[l])) continue;
     const double lower = CapsuleCapsuleGap(a, b, r, leaf_bounds[l].a, leaf_bounds[l].b,
                                            leaf_bounds[l].radius);
-    if (lower >= best) continue;
+    if (lower >= best + kBallSlackM) continue;  // slack: the bound is computed, not exact
     const int end = std::min<int>(pieces.size(), (l + 1) * kLeaf);
     for (int k = l * kLeaf; k < end; ++k) {
-      if (too_far(piece_balls[k])) continue;
-      best = std::min(best, CapsuleCapsuleGap(a, b, r, pieces[k].a, pieces[k].b, pieces[k].rad));
+      if (piece_excluded[k] || too_far(piece_balls[k])) continue;
+      const double gap = CapsuleCapsuleGap(a, b, r, pieces[k].a, pieces[k].b, pieces[k].rad);
+      if (gap < best) {
+        best = gap;
+        if (nearest) *nearest = k;
+      }
     }
   }
   return best;
@@ -269,9 +314,36 @@ double PrimitiveChecker::Impl::Clearance(const Joints& q, double floor, double c
   // Starting from `cap` prunes more leaves (their bound >= best); min is exact, so the result
   // is min(cap, clearance) bit for bit.
   double best = cap;
-  for (size_t i = 0; i < all.size(); ++i) {
-    best = SegClearance(world_a[i], world_b[i], all[i].radius, best);
+  // The pair nearest at the last query first: the same gap of the same inputs, so the min is
+  // unchanged, but the balls and leaf bounds below then skip far more (the vine is mostly near
+  // one capsule of the tool).
+  const int seed_capsule = last_capsule, seed_piece = last_piece;
+  if (seed_capsule >= 0) {
+    const prim::Piece& p = pieces[seed_piece];
+    best = std::min(best, CapsuleCapsuleGap(world_a[seed_capsule], world_b[seed_capsule],
+                                            all[seed_capsule].radius, p.a, p.b, p.rad));
     if (best <= floor) return best;
+  }
+  last_capsule = last_piece = -1;
+  for (size_t i = 0; i < all.size(); ++i) {
+    if (all[i].frame == 0) continue;  // the base: its gap is known (below)
+    int nearest = -1;
+    const double before = best;
+    best = SegClearance(world_a[i], world_b[i], all[i].radius, best, &nearest);
+    if (nearest >= 0 && best < before) {
+      last_capsule = static_cast<int>(i);
+      last_piece = nearest;
+    }
+    if (best <= floor) return best;
+  }
+  // The base never moves: min(best, its gap) is what its SegClearance from `best` returns (that
+  // only skips pieces that cannot go below best).
+  best = std::min(best, base_clearance);
+  if (best <= floor) return best;
+  if (last_capsule < 0 && seed_capsule >= 0 && best < cap) {
+    // Nothing below the seed pair's gap: it is still the nearest.
+    last_capsule = seed_capsule;
+    last_piece = seed_piece;
   }
   for (const auto& [i, j] : self_pairs) {
     best = std::min(best, CapsuleCapsuleGap(world_a[i], world_b[i], all[i].radius, world_a[j],
@@ -368,16 +440,23 @@ PrimitiveChecker::PrimitiveChecker(const RobotModel& robot, const CollisionScene
   }
 
   // Obstacle pieces, split so that none is longer than kMaxPieceM (the union is unchanged).
-  for (const Obstacle& o : scene.obstacles) {
+  std::vector<int> source;  // the obstacle of each piece
+  for (size_t i = 0; i < scene.obstacles.size(); ++i) {
+    const Obstacle& o = scene.obstacles[i];
     const double length = (o.capsule.b - o.capsule.a).norm();
     const int n = std::max(1, static_cast<int>(std::ceil(length / kMaxPieceM)));
     for (int k = 0; k < n; ++k) {
+      source.push_back(static_cast<int>(i));
       m.pieces.push_back(Piece{o.capsule.a + (o.capsule.b - o.capsule.a) * (double(k) / n),
                                o.capsule.a + (o.capsule.b - o.capsule.a) * (double(k + 1) / n),
                                o.capsule.radius + o.margin_m});
     }
   }
-  SplitOrder(m.pieces, 0, static_cast<int>(m.pieces.size()));
+  const std::vector<int> order = SplitOrder(m.pieces);
+  m.obstacle_pieces.assign(scene.obstacles.size(), {});
+  for (size_t k = 0; k < order.size(); ++k)
+    m.obstacle_pieces[source[order[k]]].push_back(static_cast<int>(k));
+  m.piece_excluded.assign(m.pieces.size(), 0);
   const int n_pieces = static_cast<int>(m.pieces.size());
   const int n_leaves = (n_pieces + kLeaf - 1) / kLeaf;
   for (int l = 0; l < n_leaves; ++l) {
@@ -397,19 +476,12 @@ PrimitiveChecker::PrimitiveChecker(const RobotModel& robot, const CollisionScene
   for (const Bound& b : m.leaf_bounds) {
     m.leaf_balls.push_back({0.5 * (b.a + b.b), 0.5 * (b.b - b.a).norm() + b.radius});
   }
-  std::vector<Box> leaf_boxes, node_boxes;
+  std::vector<Box>& leaf_boxes = m.leaf_boxes;
+  std::vector<Box> node_boxes;
   for (int l = 0; l < n_leaves; ++l) {
     leaf_boxes.push_back(BoxOfPieces(m.pieces, l * kLeaf, std::min(n_pieces, (l + 1) * kLeaf)));
   }
-  for (const Bound& b : m.leaf_bounds) {
-    const Eigen::Vector3d d = b.b - b.a;
-    const double e = d.squaredNorm();
-    m.leaf_caps.push_back({static_cast<float>(b.a.x()), static_cast<float>(b.a.y()),
-                           static_cast<float>(b.a.z()), static_cast<float>(d.x()),
-                           static_cast<float>(d.y()), static_cast<float>(d.z()),
-                           static_cast<float>(e), e > 0 ? static_cast<float>(1.0 / e) : 0.f,
-                           static_cast<float>(b.radius + kCoarseSlackM)});
-  }
+  for (const Bound& b : m.leaf_bounds) m.leaf_caps.push_back(LeafCap(b));
   for (const Box& box : leaf_boxes) {
     for (int k = 0; k < 3; ++k) {
       m.leaf_lo.push_back(static_cast<float>(box.min()[k]));
@@ -430,12 +502,79 @@ PrimitiveChecker::PrimitiveChecker(const RobotModel& robot, const CollisionScene
 
   m.SelectLanes(/*allow_avx2=*/true);
   m.SelectFree(/*allow_avx2=*/true);
-  // The base never moves: decide once whether it touches anything.
-  for (const ArmCapsule& c : m.fixed) {
-    if (m.SegClearance(c.a, c.b, c.radius, std::numeric_limits<double>::infinity()) < 0) {
-      m.base_blocked = true;
-    }
+  m.UpdateBaseBlocked();
+}
+
+void PrimitiveChecker::Impl::UpdateBaseBlocked() {
+  // The base never moves: decide once (per set of obstacles) whether it touches anything.
+  base_blocked = false;
+  base_clearance = std::numeric_limits<double>::infinity();
+  for (const ArmCapsule& c : fixed) {
+    const double gap = SegClearance(c.a, c.b, c.radius, std::numeric_limits<double>::infinity());
+    base_clearance = std::min(base_clearance, gap);
+    if (gap < 0) base_blocked = true;
   }
+}
+
+void PrimitiveChecker::Exclude(std::span<const int> obstacles) {
+  Impl& m = *impl_;
+  auto set = [&](int obstacle, bool excluded) {
+    for (int k : m.obstacle_pieces[obstacle]) {
+      m.piece_excluded[k] = excluded;
+      const Piece& p = m.pieces[k];
+      // An excluded lane is a padding lane: far away, radius 0 (it never touches).
+      SetCapsule(m.leaves[k / kLeaf], k % kLeaf, !excluded, p.a, p.b, p.rad);
+    }
+  };
+  std::vector<int> touched;  // leaves whose pieces changed
+  for (int o : m.excluded) {
+    set(o, false);
+    for (int k : m.obstacle_pieces[o]) touched.push_back(k / kLeaf);
+  }
+  m.excluded.clear();
+  for (int o : obstacles) {
+    if (o < 0 || o >= static_cast<int>(m.obstacle_pieces.size())) continue;
+    set(o, true);
+    m.excluded.push_back(o);
+    for (int k : m.obstacle_pieces[o]) touched.push_back(k / kLeaf);
+  }
+  std::sort(touched.begin(), touched.end());
+  touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
+  // Refit the bounds of those leaves, their nodes and groups to the pieces left in, as a build
+  // on the scene without the excluded obstacles would bound them (a bound that still held the
+  // excluded pieces would only cull less, but they lie where the tool works).
+  const int n_pieces = static_cast<int>(m.pieces.size());
+  const int n_leaves = static_cast<int>(m.leaves.size());
+  const int n_nodes = static_cast<int>(m.node_children.size());
+  for (int l : touched) {
+    std::vector<Piece> in;
+    for (int k = l * kLeaf; k < std::min(n_pieces, (l + 1) * kLeaf); ++k)
+      if (!m.piece_excluded[k]) in.push_back(m.pieces[k]);
+    const Box box = BoxOfPieces(in, 0, static_cast<int>(in.size()));
+    m.leaf_boxes[l] = box;
+    m.leaf_bounds[l] = in.empty() ? Bound{Eigen::Vector3d::Constant(kFarAway),
+                                          Eigen::Vector3d::Constant(kFarAway), 0.0}
+                                  : BoundPieces(in, 0, static_cast<int>(in.size()));
+    const Bound& b = m.leaf_bounds[l];
+    m.leaf_balls[l] = {0.5 * (b.a + b.b), 0.5 * (b.b - b.a).norm() + b.radius};
+    m.leaf_caps[l] = LeafCap(b);
+    for (int k = 0; k < 3; ++k) {
+      m.leaf_lo[3 * l + k] = static_cast<float>(box.min()[k]);
+      m.leaf_hi[3 * l + k] = static_cast<float>(box.max()[k]);
+    }
+    SetBoxLane(m.node_children[l / kLeaf], l % kLeaf, box);
+  }
+  for (size_t i = 0; i < touched.size(); ++i) {
+    const int node = touched[i] / kLeaf;
+    if (i > 0 && touched[i - 1] / kLeaf == node) continue;
+    Box box;
+    for (int l = node * kLeaf; l < std::min(n_leaves, (node + 1) * kLeaf); ++l)
+      box.extend(m.leaf_boxes[l]);
+    SetBoxLane(m.top[node / kLeaf], node % kLeaf, box);
+  }
+  (void)n_nodes;
+  if (m.last_piece >= 0 && m.piece_excluded[m.last_piece]) m.last_capsule = m.last_piece = -1;
+  m.UpdateBaseBlocked();
 }
 
 PrimitiveChecker::~PrimitiveChecker() = default;

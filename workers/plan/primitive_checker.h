@@ -23,6 +23,7 @@
 #pragma once
 
 #include <memory>
+#include <span>
 
 #include "workers/plan/collision_checker.h"
 
@@ -45,6 +46,10 @@ class PrimitiveChecker : public CollisionChecker {
   // obstacle hierarchy (with the union of their boxes); the first collision ends the check. Same
   // samples as CollisionChecker::IsMotionFree (MotionSteps with lever_m()).
   bool IsMotionFree(const Joints& a, const Joints& b, double max_step_m) override;
+  // IsMotionFree without its two ends: the same interior samples, checked the same way. For
+  // callers that already checked the ends with AreFree, whose lanes decide each configuration
+  // exactly as IsMotionFree's batch of the two ends does (the same code, lane by lane).
+  bool IsMotionInteriorFree(const Joints& a, const Joints& b, double max_step_m);
   double Clearance(const Joints& q) override;
   // Branch-and-bound from `cap`, and stops once the clearance is at or below `floor`.
   double ClearanceAbove(const Joints& q, double floor, double cap) override;
@@ -55,6 +60,14 @@ class PrimitiveChecker : public CollisionChecker {
   void UseBaselineSimd();
   bool uses_avx2() const;
 
+  // Leaves out the obstacles of the scene it was built on whose indices (into
+  // scene.obstacles) are listed, replacing any earlier exclusion (none: the whole scene again).
+  // Every check then answers as a checker built on the scene without them would: the hierarchy's
+  // bounds still hold their pieces, which only culls less, and each piece is tested on its own,
+  // so which pieces share a leaf changes no result. Rebuilding costs far more (cut motions leave
+  // out the cut cane near each cut point, cut_motion.cc). Out-of-range indices are ignored.
+  void Exclude(std::span<const int> obstacles);
+
   // Number of obstacle pieces, leaves and nodes (for benchmarks and tests).
   int pieces() const;
   int leaves() const;
@@ -63,6 +76,7 @@ class PrimitiveChecker : public CollisionChecker {
   struct Impl;
 
  private:
+  bool InteriorFree(const Joints& a, const Joints& b, int n);  // n: MotionSteps
   std::unique_ptr<Impl> impl_;
 };
 

@@ -332,7 +332,6 @@ void PrimitiveChecker::AreFree(std::span<const Joints> qs, std::span<bool> out) 
 bool PrimitiveChecker::IsMotionFree(const Joints& a, const Joints& b, double max_step_m) {
   if (!SaneJoints(a) || !SaneJoints(b)) return false;
   const int n = MotionSteps(a, b, max_step_m, lever_m_);
-  const int width = impl_->lane_width;
   // The ends first (one batch), then the n - 1 interior samples in blocks of `width`
   // consecutive ones (nearby configurations share one walk of the obstacle hierarchy), the
   // blocks in van der Corput order (coarse to fine) so that a colliding motion usually fails
@@ -342,6 +341,16 @@ bool PrimitiveChecker::IsMotionFree(const Joints& a, const Joints& b, double max
   if (impl_->colliding_lanes(*impl_, ends, 2, /*coherent=*/false, /*stop_at_first=*/true)) {
     return false;
   }
+  return InteriorFree(a, b, n);
+}
+
+bool PrimitiveChecker::IsMotionInteriorFree(const Joints& a, const Joints& b, double max_step_m) {
+  if (!SaneJoints(a) || !SaneJoints(b)) return false;
+  return InteriorFree(a, b, MotionSteps(a, b, max_step_m, lever_m_));
+}
+
+bool PrimitiveChecker::InteriorFree(const Joints& a, const Joints& b, int n) {
+  const int width = impl_->lane_width;
   const int interior = n - 1;
   const int blocks = (interior + width - 1) / width;
   int bits = 0;

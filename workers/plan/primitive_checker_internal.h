@@ -9,6 +9,8 @@
 #include <utility>
 #include <vector>
 
+#include "Eigen/Geometry"
+
 #include "workers/plan/primitive_checker.h"
 
 namespace vb::plan::prim {
@@ -255,8 +257,16 @@ struct PrimitiveChecker::Impl {
   // culling, Botterill et al. 2017 section 3.4: the others are never tested for it).
   std::vector<std::vector<HalfSpace>> planes_of;
   bool base_blocked = false;
+  double base_clearance = 0;  // the base's (frame 0) gap to the obstacles and planes
 
   std::vector<prim::Piece> pieces;        // in leaf order
+  // Exclude(): the pieces of each obstacle of the scene, which pieces are left out, and which
+  // obstacles (their lanes in `leaves` are padding lanes while they are).
+  std::vector<std::vector<int>> obstacle_pieces;
+  std::vector<char> piece_excluded;
+  std::vector<int> excluded;
+  std::vector<Eigen::AlignedBox3d> leaf_boxes;  // the leaves' boxes (double), for refitting
+  void UpdateBaseBlocked();  // base_blocked for the obstacles not excluded
   std::vector<prim::Bound> leaf_bounds;   // one per leaf
   std::vector<prim::Ball> piece_balls, leaf_balls;  // about pieces and leaf_bounds (Clearance)
   std::vector<prim::CapsuleSet> leaves;
@@ -278,10 +288,15 @@ struct PrimitiveChecker::Impl {
                      double r) const;
   template <bool kWide>
   bool Free(const Joints& q);
+  // *nearest (if given) receives the piece that lowered `best` last (unchanged if none did).
   double SegClearance(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double r,
-                      double best) const;
+                      double best, int* nearest = nullptr) const;
   // min(cap, clearance at q) if above `floor`, else some value <= floor (returns early).
   double Clearance(const Joints& q, double floor, double cap);
+  // The arm capsule and piece that gave the last Clearance its value (-1: none yet; a plane or
+  // self pair). Consecutive queries are mostly nearby configurations with the same nearest pair:
+  // its gap, computed first, starts the branch-and-bound low.
+  int last_capsule = -1, last_piece = -1;
 
   // Batched checks (primitive_checker_batch.cc; VAMP's idea: configurations in SIMD lanes).
   std::vector<float> leaf_lo, leaf_hi;  // leaf boxes, 3 floats per leaf
