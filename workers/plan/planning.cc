@@ -28,7 +28,8 @@ void Planning::UsePassScenes(const CollisionScene& plain, const CollisionScene& 
 
 std::optional<Planning::Reached> Planning::Path(std::vector<Joints> goals, CutId to) {
   if (!plain_checker) plain_checker = MakeChecker(options.checker, robot, *plain_scene);
-  ProvenPath path{planner->PlanToAny(At(), goals, deadline)};
+  const bool home = to.value == 0;  // the only way home: no smaller bound for elbow flips
+  ProvenPath path{planner->PlanToAny(At(), goals, deadline, home)};
   Prove(path, /*sampled=*/true);
   Record(path, to, goals, false);
   std::shared_ptr<CollisionChecker> used = checker;
@@ -40,7 +41,7 @@ std::optional<Planning::Reached> Planning::Path(std::vector<Joints> goals, CutId
       options.margins.max_margin_m > 0 && !deadline.Expired()) {
     if (!plain_planner)
       plain_planner = std::make_unique<PathPlanner>(*plain_checker, robot.limits, options.path);
-    path = ProvenPath{plain_planner->PlanToAny(At(), goals, deadline)};
+    path = ProvenPath{plain_planner->PlanToAny(At(), goals, deadline, home)};
     Prove(path);
     Record(path, to, goals, true);
     used = plain_checker;
@@ -52,7 +53,7 @@ std::optional<Planning::Reached> Planning::Path(std::vector<Joints> goals, CutId
       fine.tree_max_step_m = std::min(fine.tree_max_step_m, 3 * kFineStepM);
       fine_planner = std::make_unique<PathPlanner>(*plain_checker, robot.limits, fine);
     }
-    path = ProvenPath{fine_planner->PlanToAny(At(), goals, deadline)};
+    path = ProvenPath{fine_planner->PlanToAny(At(), goals, deadline, home)};
     Prove(path);
     Record(path, to, goals, true);
     used = plain_checker;
@@ -82,6 +83,7 @@ void Planning::Record(const ProvenPath& path, CutId to, const std::vector<Joints
   record.unproven = path.unproven;
   record.walled_in = path.walled_in;
   record.repeated_failure = path.repeated_failure;
+  record.flip_bound = path.flip_bound;
   result.stats.paths.push_back(std::move(record));
 }
 
