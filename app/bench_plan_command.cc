@@ -45,7 +45,7 @@ struct CheckerRecord {
   std::vector<double> vine_cpu_s;
   // Vine times on the vines the baselines also plan whole (for the speed-up).
   std::vector<double> baseline_vines_vine_s;
-  int direct = 0, without_margins = 0, walled_in = 0, repeated_failures = 0;
+  int direct = 0, without_margins = 0, walled_in = 0, repeated_failures = 0, flip_bound = 0;
   // Wall time summed over all vines' path queries, those that found a path and those that did not.
   double solved_paths_total_s = 0, failed_paths_total_s = 0;
   std::vector<double> median_margin_m;  // per vine, first pass (MarginSummary)
@@ -115,6 +115,7 @@ nlohmann::json Summary(const CheckerRecord& r) {
           // Failed queries given up as walled in, and refused as repeats (path_planner.h).
           {"failed_paths_walled_in", r.walled_in},
           {"failed_paths_repeated", r.repeated_failures},
+          {"failed_paths_flip_bound", r.flip_bound},
           {"solved_paths_total_s", r.solved_paths_total_s},
           {"failed_paths", r.path_s.size() - r.solved_path_s.size()},
           {"failed_paths_total_s", r.failed_paths_total_s},
@@ -244,6 +245,7 @@ absl::Status RunBenchPlan(Flags& flags) {
         if (p.without_margins) ++r.without_margins;
         if (p.walled_in) ++r.walled_in;
         if (p.repeated_failure) ++r.repeated_failures;
+        if (p.flip_bound) ++r.flip_bound;
         r.checks_per_path.push_back(static_cast<double>(p.checks));
       }
       r.reachable += s.cuts - s.unreachable;

@@ -30,6 +30,8 @@ absl::StatusOr<PlanSetup> ParsePlanSetup(Flags& flags) {
   VB_ASSIGN_OR_RETURN(const int64_t rounds, flags.Int("shortcut-rounds", o.path.shortcut_rounds));
   VB_ASSIGN_OR_RETURN(const int64_t max_states,
                       flags.Int("path-max-tree-states", o.path.max_tree_states));
+  VB_ASSIGN_OR_RETURN(const int64_t flip_states,
+                      flags.Int("path-flip-max-tree-states", o.path.flip_max_tree_states));
   VB_ASSIGN_OR_RETURN(o.path.tree_max_step_m,
                       flags.Double("path-tree-max-step-m", o.path.tree_max_step_m));
   VB_ASSIGN_OR_RETURN(o.path.remember_failures,
@@ -61,6 +63,9 @@ absl::StatusOr<PlanSetup> ParsePlanSetup(Flags& flags) {
   if (max_states < 0 || max_states > 100000000)
     return absl::InvalidArgumentError("--path-max-tree-states must be in [0, 1e8]");
   o.path.max_tree_states = static_cast<int>(max_states);
+  if (flip_states < 0 || flip_states > 100000000)
+    return absl::InvalidArgumentError("--path-flip-max-tree-states must be in [0, 1e8]");
+  o.path.flip_max_tree_states = static_cast<int>(flip_states);
   o.max_passes = static_cast<int>(passes);
   cut.max_tilt_rad = tilt_deg * M_PI / 180;
   cut.tilt_steps = static_cast<int>(tilt_steps);

@@ -97,5 +97,98 @@ TEST(MotionProver, NonFiniteIsNotFree) {
   EXPECT_FALSE(prover.IsMotionFree(s.a, bad));
 }
 
+
+// The sweep's scene with the ball's margin raised by `extra_m`: what a planner with safety
+// margins samples in.
+CollisionScene WithMargin(const CollisionScene& scene, double extra_m) {
+  CollisionScene sampled = scene;
+  for (Obstacle& o : sampled.obstacles) o.margin_m += extra_m;
+  return sampled;
+}
+
+TEST(MotionProverSampled, LeavesToTheSamplingOnlyObstaclesItsMarginsCover) {
+  const RobotModel robot = DefaultUr5(SimpleMillEnd());
+  Sweep s = BaseSweep(0.005);
+  s.scene.planes.push_back({Eigen::Vector3d::UnitZ(), 2.0, 0.0});
+  MotionProver prover = Prover(robot, s.scene);
+  EXPECT_EQ(prover.unsampled_obstacles(), 1);
+  EXPECT_EQ(prover.unsampled_planes(), 1);
+  // Not enough margin (below kCoarseStepM / 2 + the slack): the ball is still proven.
+  prover.SetSampledScene(WithMargin(s.scene, 0.5 * MotionProver::kCoarseStepM));
+  EXPECT_EQ(prover.unsampled_obstacles(), 1);
+  EXPECT_FALSE(prover.IsSampledPathFree(std::vector<Joints>{s.a, s.b}));
+  // Enough: the ball is the sampling's to prove. The motion hits it, so the caller's check in
+  // the sampled scene fails, and IsSampledPathFree, which trusts that check, no longer sees it.
+  CollisionScene sampled = WithMargin(s.scene, 0.006);
+  prover.SetSampledScene(sampled);
+  EXPECT_EQ(prover.unsampled_obstacles(), 0);
+  EXPECT_EQ(prover.unsampled_planes(), 1);  // the plane's margin was not raised
+  EXPECT_FALSE(MakePrimitiveChecker(robot, sampled)->IsMotionFree(s.a, s.b, 0.01));
+  EXPECT_TRUE(prover.IsSampledPathFree(std::vector<Joints>{s.a, s.b}));
+  EXPECT_FALSE(prover.IsPathFree(std::vector<Joints>{s.a, s.b}));  // the full proof is unchanged
+  // Another obstacle (moved) or another count of obstacles: nothing is covered.
+  CollisionScene moved = sampled;
+  moved.obstacles[0].capsule.a.x() += 1e-9;
+  prover.SetSampledScene(moved);
+  EXPECT_EQ(prover.unsampled_obstacles(), 1);
+  CollisionScene more = sampled;
+  more.obstacles.push_back(more.obstacles[0]);
+  prover.SetSampledScene(more);
+  EXPECT_EQ(prover.unsampled_obstacles(), 1);
+  EXPECT_FALSE(prover.IsSampledPathFree(std::vector<Joints>{s.a, s.b}));
+}
+
+TEST(MotionProverSampled, StillProvesTheObstaclesTheMarginsLeaveClose) {
+  // The ball the motion hits keeps its own margin in the sampled scene; another, 0.1 m above
+  // the flange's way, is covered. The hit ball is still found (the sampled check finds it too).
+  const RobotModel robot = DefaultUr5(SimpleMillEnd());
+  Sweep s = BaseSweep(0.005);
+  const Eigen::Vector3d above = s.scene.obstacles[0].capsule.a + Eigen::Vector3d(0, 0, 0.1);
+  s.scene.obstacles.push_back({ObstacleKind::kPlatform, 0, Capsule{above, above, 0.002}, 0.0});
+  CollisionScene sampled = s.scene;
+  sampled.obstacles[1].margin_m = 0.03;
+  MotionProver prover = Prover(robot, s.scene);
+  prover.SetSampledScene(sampled);
+  EXPECT_EQ(prover.unsampled_obstacles(), 1);
+  EXPECT_FALSE(prover.IsSampledPathFree(std::vector<Joints>{s.a, s.b}));
+  EXPECT_FALSE(prover.IsSampledPathFree(std::vector<Joints>{s.a, s.b, s.a}));
+  EXPECT_TRUE(prover.IsSampledPathFree(std::vector<Joints>{s.a}));
+  Joints bad = s.b;
+  bad[2] = std::nan("");
+  EXPECT_FALSE(prover.IsSampledPathFree(std::vector<Joints>{s.a, bad}));
+}
+
+TEST(MotionProverSampled, AgreesWithAVeryDenseCheckWhereTheSamplingPassed) {
+  // Random motions past a ball 0.1 m above the flange's way, covered by a margin of just over
+  // kCoarseStepM / 2 in the sampled scene: wherever the caller's check at 10 mm in the sampled
+  // scene passes, the motion is free at 10 micrometres, as IsSampledPathFree (which no longer
+  // samples the ball) says. (Without the margin, one of these motions grazes the ball between
+  // two samples at 10 mm.)
+  const RobotModel robot = DefaultUr5(SimpleMillEnd());
+  const Sweep s = BaseSweep(0.002, 0.1);
+  CollisionScene sampled = s.scene;
+  sampled.obstacles[0].margin_m = 0.5 * MotionProver::kCoarseStepM + 2e-6;
+  auto sampler = MakePrimitiveChecker(robot, sampled);
+  auto reference = MakePrimitiveChecker(robot, s.scene);
+  MotionProver prover = Prover(robot, s.scene);
+  prover.SetSampledScene(sampled);
+  ASSERT_EQ(prover.unsampled_obstacles(), 0);
+  std::mt19937 rng(1102);
+  std::uniform_real_distribution<double> t(0.0, 0.4), dq(-0.1, 0.1);
+  int sampled_free = 0;
+  for (int i = 0; i < 600; ++i) {
+    Joints shift = Joints::Zero();
+    for (int j = 1; j < 6; ++j) shift[j] = dq(rng);
+    const Joints a = s.a + (s.b - s.a) * t(rng) + shift;
+    const Joints b = s.a + (s.b - s.a) * (1.0 - t(rng)) + shift;
+    if (!sampler->IsMotionFree(a, b, MotionProver::kCoarseStepM)) continue;
+    ++sampled_free;
+    EXPECT_EQ(prover.IsSampledPathFree(std::vector<Joints>{a, b}),
+              reference->IsMotionFree(a, b, 1e-5))
+        << "motion " << i;
+  }
+  EXPECT_GT(sampled_free, 50);
+}
+
 }  // namespace
 }  // namespace vb::plan

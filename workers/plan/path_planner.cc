@@ -245,6 +245,9 @@ absl::Status PathOptions::Validate() const {
   if (max_tree_states < 0) {
     return absl::InvalidArgumentError("path options: max_tree_states: must be >= 0");
   }
+  if (flip_max_tree_states < 0) {
+    return absl::InvalidArgumentError("path options: flip_max_tree_states: must be >= 0");
+  }
   if (walled_in_after_states < 0) {
     return absl::InvalidArgumentError("path options: walled_in_after_states: must be >= 0");
   }
@@ -351,7 +354,7 @@ PathResult PathPlanner::Plan(const Joints& start, const Joints& goal, const Dead
 }
 
 PathResult PathPlanner::PlanToAny(const Joints& start, std::span<const Joints> goals,
-                                  const Deadline& deadline) {
+                                  const Deadline& deadline, bool only_way) {
   const Clock::time_point t0 = Clock::now();
   const int64_t checks0 = checker_.checks();
   PathResult result;
@@ -455,8 +458,14 @@ PathResult PathPlanner::PlanToAny(const Joints& start, std::span<const Joints> g
       goal_region->setThreshold(1e-9);
       o.pdef->setGoal(goal_region);
       o.seed = OmplSeed(options_.seed);
-      const size_t max_states =
-          options_.max_tree_states > 0 ? static_cast<size_t>(options_.max_tree_states) : SIZE_MAX;
+      // Elbow flips give up sooner (PathOptions::flip_max_tree_states) unless they are the only
+      // way.
+      bool flip = !only_way && options_.flip_max_tree_states > 0 &&
+                  (options_.max_tree_states == 0 ||
+                   options_.flip_max_tree_states < options_.max_tree_states);
+      for (int g : usable) flip = flip && (goals[g][2] > 0.0) != (start[2] > 0.0);
+      const int bound = flip ? options_.flip_max_tree_states : options_.max_tree_states;
+      const size_t max_states = bound > 0 ? static_cast<size_t>(bound) : SIZE_MAX;
       const TreeSizeRRTConnect& rrt = *o.planner;
       // Goals walled in (PathOptions::walled_in_after_states). OMPL's start tree is rooted at our
       // goals.
@@ -485,6 +494,7 @@ PathResult PathPlanner::PlanToAny(const Joints& start, std::span<const Joints> g
             (walled_in || rrt.StartTreeSize() + rrt.GoalTreeSize() >= max_states)) {
           failures_.push_back({rrt.TreeStates(false), rrt.TreeStates(true)});
         }
+        result.flip_bound = flip && !walled_in && rrt.StartTreeSize() + rrt.GoalTreeSize() >= max_states;
         if (walled_in) {
           result.walled_in = true;
           return finish(PathOutcome::kNoPathWithinDeadline,

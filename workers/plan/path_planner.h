@@ -67,10 +67,16 @@ struct PathOptions {
   // max_tree_states (when that bound is set) it never fires: the bound ends the query first.
   int walled_in_after_states = 0;
   double walled_in_goal_fraction = 0.1;
+  // Elbow flips: a query whose start and every usable goal lie on opposite sides of the elbow's
+  // straight configuration (q3 = 0) gives up at this many states instead of max_tree_states
+  // (0 = no other bound; used only below max_tree_states), unless the caller says the query is
+  // its only way to its goals (PlanToAny's only_way: the way home). PathResult::flip_bound.
+  int flip_max_tree_states = 0;
 
   // INVALID_ARGUMENT naming the field: max_step_m <= 0 or non-finite, tree_max_step_m < 0 or
   // non-finite, range_rad < 0, time_limit_s <= 0 or NaN, max_tree_states < 0,
-  // walled_in_after_states < 0, walled_in_goal_fraction outside [0, 1), shortcut_rounds < 0.
+  // walled_in_after_states < 0, walled_in_goal_fraction outside [0, 1), shortcut_rounds < 0,
+  // flip_max_tree_states < 0.
   absl::Status Validate() const;
 };
 
@@ -100,6 +106,8 @@ struct PathResult {
   // kNoPathWithinDeadline without running RRT-Connect: the start and goals join the trees of an
   // earlier failed query (PathOptions::remember_failures).
   bool repeated_failure = false;
+  // kNoPathWithinDeadline at PathOptions::flip_max_tree_states (an elbow flip given up early).
+  bool flip_bound = false;
   // States in RRT-Connect's two trees when it stopped (0 when it did not run): the tree rooted at
   // the start and the one rooted at the goals (of its last run, after a coarse rejection).
   int start_tree_states = 0, goal_tree_states = 0;
@@ -135,9 +143,11 @@ class PathPlanner {
   // the path is reversed). So a set of goals that cannot be reached costs one time limit, not one
   // per goal. result.goal_index names the goal reached. Empty `goals` or a non-finite one:
   // kInvalidInput; when every goal is skipped, the first goal's outcome (kOutsideLimits or
-  // kGoalInCollision). Plan(start, goal) is PlanToAny(start, {goal}).
+  // kGoalInCollision). Plan(start, goal) is PlanToAny(start, {goal}). `only_way`: the caller has
+  // no other start for these goals (the way home), so PathOptions::flip_max_tree_states does not
+  // apply.
   PathResult PlanToAny(const Joints& start, std::span<const Joints> goals,
-                       const Deadline& deadline);
+                       const Deadline& deadline, bool only_way = false);
 
   const PathOptions& options() const { return options_; }
 

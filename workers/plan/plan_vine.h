@@ -106,6 +106,8 @@ struct PlanOptions {
     // failed queries).
     o.walled_in_after_states = 100;
     o.walled_in_goal_fraction = 0.1;
+    // Elbow flips to a cut give up at 300 states (the way home keeps 500; docs/plan.md "Paths").
+    o.flip_max_tree_states = 300;
     return o;
   }();
   // A transit that finds no path in the scene inflated by the margins is planned again in the
@@ -175,6 +177,8 @@ struct PathRecord {
   // No path: RRT-Connect gave up with the goals walled in, or refused a repeat of a failed query
   // (PathResult::walled_in, repeated_failure).
   bool walled_in = false, repeated_failure = false;
+  // No path: an elbow flip given up at PathOptions::flip_max_tree_states (PathResult::flip_bound).
+  bool flip_bound = false;
 };
 
 struct PlanStats {

@@ -17,19 +17,20 @@ void Planning::UsePassScenes(const CollisionScene& plain, const CollisionScene& 
   fine_planner.reset();
   plain_planner.reset();
   plain_checker.reset();
-  prover.reset();
+  prover = std::make_shared<MotionProver>(plain, [this](const CollisionScene& s) {
+    return MakeChecker(options.checker, robot, s);
+  });
+  // The planner samples its paths in the inflated scene: their proof samples only what the
+  // margins leave close (MotionProver::SetSampledScene).
+  if (options.path.max_step_m <= MotionProver::kCoarseStepM) prover->SetSampledScene(inflated);
   plain_scene = plain;
 }
 
 std::optional<Planning::Reached> Planning::Path(std::vector<Joints> goals, CutId to) {
   if (!plain_checker) plain_checker = MakeChecker(options.checker, robot, *plain_scene);
-  if (!prover) {
-    prover = std::make_shared<MotionProver>(*plain_scene, [this](const CollisionScene& s) {
-      return MakeChecker(options.checker, robot, s);
-    });
-  }
-  ProvenPath path{planner->PlanToAny(At(), goals, deadline)};
-  Prove(path);
+  const bool home = to.value == 0;  // the only way home: no smaller bound for elbow flips
+  ProvenPath path{planner->PlanToAny(At(), goals, deadline, home)};
+  Prove(path, /*sampled=*/true);
   Record(path, to, goals, false);
   std::shared_ptr<CollisionChecker> used = checker;
   // Start in collision: a cut of an earlier pass, whose stroke this pass's margins did not
@@ -40,7 +41,7 @@ std::optional<Planning::Reached> Planning::Path(std::vector<Joints> goals, CutId
       options.margins.max_margin_m > 0 && !deadline.Expired()) {
     if (!plain_planner)
       plain_planner = std::make_unique<PathPlanner>(*plain_checker, robot.limits, options.path);
-    path = ProvenPath{plain_planner->PlanToAny(At(), goals, deadline)};
+    path = ProvenPath{plain_planner->PlanToAny(At(), goals, deadline, home)};
     Prove(path);
     Record(path, to, goals, true);
     used = plain_checker;
@@ -52,7 +53,7 @@ std::optional<Planning::Reached> Planning::Path(std::vector<Joints> goals, CutId
       fine.tree_max_step_m = std::min(fine.tree_max_step_m, 3 * kFineStepM);
       fine_planner = std::make_unique<PathPlanner>(*plain_checker, robot.limits, fine);
     }
-    path = ProvenPath{fine_planner->PlanToAny(At(), goals, deadline)};
+    path = ProvenPath{fine_planner->PlanToAny(At(), goals, deadline, home)};
     Prove(path);
     Record(path, to, goals, true);
     used = plain_checker;
@@ -61,11 +62,12 @@ std::optional<Planning::Reached> Planning::Path(std::vector<Joints> goals, CutId
   return Reached{std::move(path.waypoints), path.goal_index, std::move(used), prover};
 }
 
-void Planning::Prove(ProvenPath& path) {
+void Planning::Prove(ProvenPath& path, bool sampled) {
   if (path.outcome != PathOutcome::kSolved) return;
   const auto start = std::chrono::steady_clock::now();
   const int64_t checks = prover->checks();
-  const bool proven = prover->IsPathFree(path.waypoints);
+  const bool proven = sampled ? prover->IsSampledPathFree(path.waypoints)
+                              : prover->IsPathFree(path.waypoints);
   path.planning_s += Seconds(start);
   path.checks += prover->checks() - checks;
   if (proven) return;
@@ -81,6 +83,7 @@ void Planning::Record(const ProvenPath& path, CutId to, const std::vector<Joints
   record.unproven = path.unproven;
   record.walled_in = path.walled_in;
   record.repeated_failure = path.repeated_failure;
+  record.flip_bound = path.flip_bound;
   result.stats.paths.push_back(std::move(record));
 }
 

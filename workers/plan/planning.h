@@ -88,11 +88,12 @@ struct Planning {
   std::optional<Reached> Path(std::vector<Joints> goals, CutId to);
 
   // A solved path whose waypoint segments are not proven free becomes kNoPathWithinDeadline
-  // (unproven); the proof's time and checks count as the query's.
+  // (unproven); the proof's time and checks count as the query's. `sampled`: found by `planner`
+  // (its segments sampled in the inflated scene, MotionProver::IsSampledPathFree).
   struct ProvenPath : PathResult {
     bool unproven = false;
   };
-  void Prove(ProvenPath& path);
+  void Prove(ProvenPath& path, bool sampled = false);
 
   void Record(const ProvenPath& path, CutId to, const std::vector<Joints>& goals, bool plain);
 
