@@ -2,7 +2,6 @@
 #include "workers/plan/cut_motion.h"
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <limits>
 #include <memory>
