@@ -2,7 +2,6 @@
 #include "workers/plan/cut_motion.h"
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -14,6 +13,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "workers/plan/flange_bodies.h"
+#include "workers/plan/cut_stroke.h"
 #include "workers/plan/motion_choice.h"
 #include "workers/plan/primitive_checker.h"
 
@@ -148,204 +148,14 @@ std::vector<Eigen::Isometry3d> SampleCutPoses(const Eigen::Vector3d& p, const Ei
 
 namespace {
 
-// One reachable, collision-free configuration at the cut pose: where a stroke may start.
-struct Candidate {
-  Joints q;
-  double clearance_m = 0;  // Clearance(q), computed once its stroke is known to be free
-  Eigen::Isometry3d base_from_tcp;
-  int pose = 0;    // index of the sampled cut pose
-  int branch = 0;  // IK branch of q (IkSolutions::branch)
-};
-
-// Half-turn twins. With approach_sides = 2, the pose sampled on the other side of the cane is a
-// sampled pose rolled by pi about the TCP z axis (y -> -y, x -> -x, z kept; the other side at
-// tilt +t is the first side at tilt -t, same orientation and roll, bit for bit: SampleCutPoses).
-// When the bodies the flange carries are symmetric under that roll and the TCP is on the flange
-// axis (motion_choice.h RollSymmetric), the other side's IK solutions are the first side's with
-// joint 6 turned by pi, and every configuration, motion and clearance of the twin is the same
-// geometry as the original's: the arm below the flange does not move, and the flange bodies map
-// onto each other. So only the first side is sampled, and each of its strokes stands for its
-// twin too (found, checked and ranked once).
-struct TwinMap {
-  bool on = false;
-  std::vector<int> waypoint;  // waypoint[i]: the twin's index of the TCP at waypoints[i]
-};
-
-TwinMap MakeTwinMap(const RobotModel& robot, const CutMotionOptions& options,
-                    const std::vector<Eigen::Vector3d>& waypoints) {
-  TwinMap map;
-  if (!options.share_rolled_twins || options.approach_sides != 2 || !RollSymmetric(robot))
-    return map;
-  // Joint 6 takes q6 + pi or q6 - pi, whichever is within [-pi, pi] like the IK's nearest-0
-  // choice at the cut; the limits must hold that whole range (a stroke drifting past them is
-  // checked per configuration).
-  if (robot.limits.lower[5] > -M_PI || robot.limits.upper[5] < M_PI) return map;
-  // The twin's waypoint i is at the original's rolled TCP offset (-x, -y, z): the same index for
-  // the secateur's stroke along z, the reversed one for the mill end's sweep along x.
-  // A waypoint that the roll leaves in place keeps its index (the secateur's retract repeats its
-  // approach: the first match would be the approach's); the map must be one to one.
-  const int n = static_cast<int>(waypoints.size());
-  map.waypoint.assign(n, -1);
-  std::vector<char> used(n, 0);
-  for (int i = 0; i < n; ++i) {
-    const Eigen::Vector3d rolled(-waypoints[i].x(), -waypoints[i].y(), waypoints[i].z());
-    if (waypoints[i] == rolled) map.waypoint[i] = i;
-    for (int j = 0; j < n && map.waypoint[i] < 0; ++j) {
-      if (waypoints[j] == rolled && !used[j]) map.waypoint[i] = j;
-    }
-    if (map.waypoint[i] < 0 || used[map.waypoint[i]]) return TwinMap{};
-    used[map.waypoint[i]] = 1;
-  }
-  map.on = true;
-  return map;
-}
-
-// The twin of a free stroke `path` (see TwinMap): joint 6 turned by pi toward 0 at the cut, the
-// same turn along the stroke (the IK's nearest solution keeps it: steps are far below pi), in the
-// twin's waypoint order. False where a configuration leaves the joint limits (the IK then has no
-// continuous solution either).
-bool TwinPath(const TwinMap& map, const std::vector<Joints>& path, int cut_index,
-              const JointLimits& limits, std::vector<Joints>* twin) {
-  const double turn = path[cut_index][5] > 0 ? -M_PI : M_PI;
-  twin->resize(path.size());
-  for (size_t i = 0; i < path.size(); ++i) {
-    Joints q = path[i];
-    q[5] += turn;
-    if (q[5] < limits.lower[5] || q[5] > limits.upper[5]) return false;
-    (*twin)[map.waypoint[i]] = q;
-  }
-  return true;
-}
-
-double MaxJointChange(const Joints& a, const Joints& b) { return (a - b).cwiseAbs().maxCoeff(); }
-
-// The IK solution for the TCP at `waypoint` (TCP frame of the cut) nearest `previous`, if it is
-// within `max_jump` of it in every joint; *branch: previous's IK branch in, the solution's out.
-// The solution on previous's branch is tried first: when it is within c <= max_jump of previous
-// and every other branch is more than 2c from it (InverseKinematicsBranch's bound), every other
-// solution is more than c from previous, so it is the one the search over all solutions picks,
-// bit for bit; otherwise all branches are solved and searched.
-std::optional<Joints> NearestSolution(const Candidate& start, const Eigen::Vector3d& waypoint,
-                                      const Eigen::Isometry3d& tcp_from_flange,
-                                      const JointLimits& limits, const Joints& previous,
-                                      double max_jump, int* branch) {
-  Eigen::Isometry3d base_from_tcp = start.base_from_tcp;
-  base_from_tcp.translation() += start.base_from_tcp.linear() * waypoint;
-  const Eigen::Isometry3d base_from_flange = base_from_tcp * tcp_from_flange;
-  Joints same_branch;
-  double apart = 0;
-  if (InverseKinematicsBranch(base_from_flange, limits, &previous, *branch, &same_branch,
-                              &apart)) {
-    const double change = MaxJointChange(same_branch, previous);
-    if (change <= max_jump && apart > 2 * change + 1e-9) return same_branch;
-  }
-  const IkSolutions ik = InverseKinematics(base_from_flange, limits, &previous);
-  int best = -1;
-  double best_change = max_jump;
-  for (int k = 0; k < ik.count; ++k) {
-    const double change = MaxJointChange(ik.q[k], previous);
-    if (change <= best_change) {
-      best_change = change;
-      best = k;
-    }
-  }
-  if (best < 0) return std::nullopt;
-  *branch = ik.branch[best];
-  return ik.q[best];
-}
-
-enum class StrokeResult { kFree, kNoIk, kCollides };
-
-// Follows the stroke from the cut configuration outward in both directions, each step on the IK
-// solution nearest the previous configuration, checking each configuration as it goes (IK costs
-// more than a check, so a collision stops the walk early). kNoIk on a missing solution or a jump.
-// With a `mirrored` stroke (retract = approach reversed, IsMirrored) the walk out of the cut
-// toward the end retraces the walk toward the start step for step (same waypoints, same nearest
-// solutions), so only the first half is walked and copied.
-StrokeResult FollowStroke(const Candidate& start, const std::vector<Eigen::Vector3d>& waypoints,
-                          int cut_index, bool mirrored, const Eigen::Isometry3d& tcp_from_flange,
-                          const JointLimits& limits, double max_jump, CollisionChecker& checker,
-                          std::vector<Joints>* path) {
-  // Cheap rejection first: the stroke's two ends, reached directly from the cut configuration
-  // (the nearest solution there is the one the walk would reach on a regular branch; a miss here
-  // only drops a candidate, it never admits a colliding one).
-  const int last = static_cast<int>(waypoints.size()) - 1;
-  for (int end : {0, last}) {
-    if (end == cut_index || (mirrored && end == last)) continue;
-    const double allowed = max_jump * std::abs(end - cut_index);
-    int branch = start.branch;
-    const auto q = NearestSolution(start, waypoints[end], tcp_from_flange, limits, start.q,
-                                   allowed, &branch);
-    if (q.has_value() && !checker.IsFree(*q)) return StrokeResult::kCollides;
-  }
-  path->assign(waypoints.size(), start.q);
-  for (int direction : {1, -1}) {
-    if (mirrored && direction == 1) continue;
-    Joints previous = start.q;
-    int branch = start.branch;
-    for (int i = cut_index + direction; i >= 0 && i <= last; i += direction) {
-      const auto q = NearestSolution(start, waypoints[i], tcp_from_flange, limits, previous,
-                                     max_jump, &branch);
-      if (!q.has_value()) return StrokeResult::kNoIk;
-      if (!checker.IsFree(*q)) return StrokeResult::kCollides;
-      previous = *q;
-      (*path)[i] = previous;
-    }
-  }
-  if (mirrored) {
-    for (int j = 1; cut_index + j <= last; ++j) (*path)[cut_index + j] = (*path)[cut_index - j];
-  }
-  return StrokeResult::kFree;
-}
-
-// Min clearance over `path` (whose configurations are free; path[cut_index]'s clearance is
-// `cut_clearance`) if it stays above `must_beat` and every motion between consecutive
-// configurations is free; nullopt otherwise (it cannot win). A mirrored path's second half
-// repeats its first (the same configurations, the same motions reversed): only the first half and
-// the cut are evaluated.
-std::optional<double> EvaluatePath(CollisionChecker& checker, PrimitiveChecker* primitive,
-                                   const std::vector<Joints>& path, int cut_index, bool mirrored,
-                                   double cut_clearance, double must_beat, double max_step_m) {
-  const size_t end = mirrored ? static_cast<size_t>(cut_index) + 1 : path.size();
-  double clearance = cut_clearance;
-  if (!(clearance > must_beat)) return std::nullopt;
-  for (size_t i = 0; i < end; ++i) {
-    if (static_cast<int>(i) == cut_index) continue;
-    // Only whether it stays above must_beat, and then the min, matter: the checker may stop early.
-    clearance = checker.ClearanceAbove(path[i], must_beat, clearance);
-    if (!(clearance > must_beat)) return std::nullopt;
-  }
-  if (primitive != nullptr) {
-    // Each configuration is an end of two motions: its lanes' verdict once for all (AreFree
-    // decides it exactly as IsMotionFree's batch of ends does), then the motions' interiors.
-    std::array<bool, 64> free{};
-    for (size_t i = 0; i < end; i += free.size()) {
-      const size_t count = std::min(free.size(), end - i);
-      primitive->AreFree(std::span<const Joints>(&path[i], count), std::span<bool>(free.data(), count));
-      for (size_t k = 0; k < count; ++k)
-        if (!free[k]) return std::nullopt;
-    }
-    for (size_t i = 1; i < end; ++i) {
-      if (!primitive->IsMotionInteriorFree(path[i - 1], path[i], max_step_m)) return std::nullopt;
-    }
-    return clearance;
-  }
-  for (size_t i = 1; i < end; ++i) {
-    if (!checker.IsMotionFree(path[i - 1], path[i], max_step_m)) return std::nullopt;
-  }
-  return clearance;
-}
-
-// True if the stroke returns the way it came: waypoints[cut_index + j] == waypoints[cut_index - j]
-// for every j, and it ends where it started (the secateur's approach and retract).
-bool IsMirrored(const std::vector<Eigen::Vector3d>& waypoints, int cut_index) {
-  const int last = static_cast<int>(waypoints.size()) - 1;
-  if (cut_index <= 0 || last != 2 * cut_index) return false;
-  for (int j = 1; j <= cut_index; ++j) {
-    if (waypoints[cut_index + j] != waypoints[cut_index - j]) return false;
-  }
-  return true;
-}
+using stroke::Candidate;
+using stroke::EvaluatePath;
+using stroke::FollowStroke;
+using stroke::IsMirrored;
+using stroke::MakeTwinMap;
+using stroke::StrokeResult;
+using stroke::TwinMap;
+using stroke::TwinPath;
 
 // Same obstacles in the same order (so a checker built on one serves the other).
 bool SameObstacles(const CollisionScene& a, const CollisionScene& b) {
