@@ -33,7 +33,8 @@ namespace {
 
 // One arm body capsule at one configuration, in the base frame, with its axis-aligned box
 // (surface included). A non-finite capsule (its distances are NaN, which never lower a minimum)
-// is kept in place, marked invalid, so that capsule k of configuration c is placed[c * n + k].
+// is kept in place, marked invalid, so that capsule k of configuration c is placed[k][c]: each
+// body capsule's configurations are contiguous, as the chunks below read them.
 struct PlacedCapsule {
   Eigen::Vector3d a, b;
   double radius = 0.0;
@@ -41,12 +42,44 @@ struct PlacedCapsule {
   bool valid = false;
 };
 
-void Place(const std::vector<LinkBody>& bodies, const Joints& q,
-           std::vector<PlacedCapsule>* placed) {
-  const auto frames = LinkFrames(q);
+// LinkFrames (ur5_kinematics.cc) with the sines and cosines of the DH twists computed once: the
+// same matrices and products in the same order, so the same frames bit for bit
+// (SafetyMargins.PlacementMatchesLinkFrames), without two of the four trigonometric calls per joint.
+class ArmFrames {
+ public:
+  explicit ArmFrames(const DhParameters& dh) : dh_(dh) {
+    for (int i = 0; i < 6; ++i) ca_[i] = std::cos(dh.alpha[i]), sa_[i] = std::sin(dh.alpha[i]);
+  }
+  std::array<Eigen::Isometry3d, 7> operator()(const Joints& q) const {
+    std::array<Eigen::Isometry3d, 7> frames;
+    frames[0] = Eigen::Isometry3d::Identity();
+    for (int i = 0; i < 6; ++i) {
+      const double ct = std::cos(q[i]), st = std::sin(q[i]);
+      const double ca = ca_[i], sa = sa_[i], a = dh_.a[i], d = dh_.d[i];
+      Eigen::Matrix4d m;
+      m << ct, -st * ca, st * sa, a * ct,
+           st, ct * ca, -ct * sa, a * st,
+           0, sa, ca, d,
+           0, 0, 0, 1;
+      Eigen::Isometry3d t;
+      t.matrix() = m;
+      frames[i + 1] = frames[i] * t;
+    }
+    return frames;
+  }
+
+ private:
+  DhParameters dh_;
+  std::array<double, 6> ca_, sa_;
+};
+
+void Place(const std::vector<LinkBody>& bodies, const ArmFrames& arm, const Joints& q,
+           std::vector<std::vector<PlacedCapsule>>* placed) {
+  const auto frames = arm(q);
+  size_t k = 0;
   for (const LinkBody& body : bodies) {
     for (const Capsule& c : body.capsules) {
-      PlacedCapsule& p = placed->emplace_back();
+      PlacedCapsule& p = (*placed)[k++].emplace_back();
       p.a = frames[body.frame] * c.a;
       p.b = frames[body.frame] * c.b;
       p.radius = c.radius;
@@ -63,7 +96,8 @@ void Place(const std::vector<LinkBody>& bodies, const Joints& q,
 struct Chunk {
   Eigen::Vector3d lo, hi;
   int motion = 0;  // the group of motions that hold its configurations (InflateMargins)
-  int first = 0;   // placed[first + j * stride] for j < count
+  int capsule = 0;  // placed[capsule][first + j] for j < count
+  int first = 0;
   int count = 0;
   int first_block = 0;  // blocks[first_block ..]: the boxes of its runs of kBlockConfigurations
 };
@@ -189,22 +223,27 @@ constexpr double kCellM = 0.12;
 MarginSummary InflateMargins(const RobotModel& robot, std::span<const ProtectedMotion> motions,
                              const MarginOptions& options, CollisionScene* scene) {
   const std::vector<LinkBody> bodies = robot.BodiesWithTool();
+  const ArmFrames arm(Ur5Dh());
   // The checkers' own interpolation (CollisionChecker::IsMotionFree), so the poses are theirs.
   const JointLevers lever_m = JointLeverArms(robot);
   size_t capsules = 0;
   for (const LinkBody& body : bodies) capsules += body.capsules.size();
   size_t expected = 0;
+  std::vector<int> segment_steps;  // MotionSteps of every segment, motion after motion
   for (const ProtectedMotion& motion : motions) {
     expected += motion.path.size();
-    for (size_t i = 0; i + 1 < motion.path.size(); ++i)
-      expected += MotionSteps(motion.path[i], motion.path[i + 1], options.max_step_m, lever_m) - 1;
+    for (size_t i = 0; i + 1 < motion.path.size(); ++i) {
+      segment_steps.push_back(
+          MotionSteps(motion.path[i], motion.path[i + 1], options.max_step_m, lever_m));
+      expected += segment_steps.back() - 1;
+    }
   }
   // Each distinct configuration (bitwise: the same joints place the same capsules, hence the same
   // distances) is placed once; a configuration several motions share is ignored by an obstacle
   // only if every one of them ignores it. Alternatives share most of their configurations, and
   // every stroke's ends are also protected alone.
-  std::vector<PlacedCapsule> placed;
-  placed.reserve(expected * capsules);
+  std::vector<std::vector<PlacedCapsule>> placed(capsules);
+  for (std::vector<PlacedCapsule>& run : placed) run.reserve(expected);
   const int stride = static_cast<int>(capsules);
   std::unordered_map<std::array<uint64_t, 6>, int, ConfigurationHash> index;
   index.reserve(expected);
@@ -218,7 +257,7 @@ MarginSummary InflateMargins(const RobotModel& robot, std::span<const ProtectedM
     std::memcpy(key.data(), q.data(), sizeof(key));
     const auto [it, inserted] = index.try_emplace(key, static_cast<int>(first_motion.size()));
     if (inserted) {
-      Place(bodies, q, &placed);
+      Place(bodies, arm, q, &placed);
       first_motion.push_back(motion);
       more_of.push_back(-1);
       return;
@@ -231,6 +270,7 @@ MarginSummary InflateMargins(const RobotModel& robot, std::span<const ProtectedM
     }
     more_motions[more_of[u]].push_back(motion);
   };
+  size_t segment = 0;
   for (size_t m = 0; m < motions.size(); ++m) {
     const ProtectedMotion& motion = motions[m];
     const int id = static_cast<int>(m);
@@ -239,7 +279,7 @@ MarginSummary InflateMargins(const RobotModel& robot, std::span<const ProtectedM
       if (i + 1 == motion.path.size()) break;
       const Joints& a = motion.path[i];
       const Joints& b = motion.path[i + 1];
-      const int steps = MotionSteps(a, b, options.max_step_m, lever_m);
+      const int steps = segment_steps[segment++];
       for (int s = 1; s < steps; ++s) add(a + (b - a) * (double(s) / steps), id);
     }
   }
@@ -281,7 +321,8 @@ MarginSummary InflateMargins(const RobotModel& robot, std::span<const ProtectedM
     for (int k = 0; k < stride; ++k) {
       Chunk chunk;
       chunk.motion = group[u0];
-      chunk.first = u0 * stride + k;
+      chunk.capsule = k;
+      chunk.first = u0;
       chunk.count = n;
       chunk.first_block = static_cast<int>(blocks.size());
       chunk.lo.setConstant(std::numeric_limits<double>::infinity());
@@ -291,7 +332,7 @@ MarginSummary InflateMargins(const RobotModel& robot, std::span<const ProtectedM
         block.lo.setConstant(std::numeric_limits<double>::infinity());
         block.hi.setConstant(-std::numeric_limits<double>::infinity());
         for (int j = j0; j < n && j < j0 + kBlockConfigurations; ++j) {
-          const PlacedCapsule& p = placed[chunk.first + j * stride];
+          const PlacedCapsule& p = placed[k][chunk.first + j];
           if (!p.valid) continue;
           block.lo = block.lo.cwiseMin(p.lo);
           block.hi = block.hi.cwiseMax(p.hi);
@@ -318,22 +359,43 @@ MarginSummary InflateMargins(const RobotModel& robot, std::span<const ProtectedM
   std::vector<char> group_ignored(groups.size(), 0);
   std::vector<std::pair<double, int>> near;         // (box distance, chunk) of one obstacle
   std::vector<double> vine_margins;
+  // The motions that ignore each cane, and the groups that hold each motion: an obstacle visits
+  // only those (the same flags as testing every motion and group).
+  std::unordered_map<int64_t, std::vector<int>> motions_ignoring;
+  for (size_t m = 0; m < motions.size(); ++m)
+    if (motions[m].ignored_cane.value != 0)
+      motions_ignoring[motions[m].ignored_cane.value].push_back(static_cast<int>(m));
+  std::vector<std::vector<int>> groups_of(motions.size());
+  for (size_t g = 1; g < groups.size(); ++g)
+    for (int m : groups[g]) groups_of[m].push_back(static_cast<int>(g));
+  std::vector<int> groups_set;  // groups whose group_ignored is 1
   for (size_t oi = 0; oi < scene->obstacles.size(); ++oi) {
     Obstacle& o = scene->obstacles[oi];
     for (int m : ignored_list) ignored[m] = 0;
     ignored_list.clear();
+    for (int g : groups_set) group_ignored[g] = 0;
+    groups_set.clear();
     if (o.kind == ObstacleKind::kCane) {
-      for (size_t m = 0; m < motions.size(); ++m) {
-        if (Ignored(o, motions[m])) {
-          ignored[m] = 1;
-          ignored_list.push_back(static_cast<int>(m));
+      const auto it = motions_ignoring.find(o.owner_id);
+      if (it != motions_ignoring.end()) {
+        for (int m : it->second) {
+          if (Ignored(o, motions[m])) {
+            ignored[m] = 1;
+            ignored_list.push_back(m);
+          }
         }
       }
     }
-    for (size_t g = 1; g < groups.size(); ++g) {
-      bool all = !ignored_list.empty();
-      for (int m : groups[g]) all = all && ignored[m];
-      group_ignored[g] = all;
+    // A group is ignored when every motion in it is; only groups of an ignoring motion can be.
+    for (int m : ignored_list) {
+      for (int g : groups_of[m]) {
+        if (group_ignored[g]) continue;
+        bool all = true;
+        for (int other : groups[g]) all = all && ignored[other];
+        if (!all) continue;
+        group_ignored[g] = 1;
+        groups_set.push_back(g);
+      }
     }
     const Eigen::Vector3d o_lo = o.capsule.a.cwiseMin(o.capsule.b).array() - o.capsule.radius;
     const Eigen::Vector3d o_hi = o.capsule.a.cwiseMax(o.capsule.b).array() + o.capsule.radius;
@@ -370,7 +432,7 @@ MarginSummary InflateMargins(const RobotModel& robot, std::span<const ProtectedM
             continue;
           }
         }
-        const PlacedCapsule& p = placed[c.first + j * stride];
+        const PlacedCapsule& p = placed[c.capsule][c.first + j];
         if (!p.valid) continue;
         if ((p.lo.array() > hi.array()).any() || (p.hi.array() < lo.array()).any()) continue;
         if (BoxDistance(p.lo, p.hi, o_lo, o_hi) > cap + kBoundSlackM) continue;
@@ -402,7 +464,7 @@ MarginSummary InflateMargins(const RobotModel& robot, std::span<const ProtectedM
       if (plane.offset - support > std::min(clearance, reach + kReachSlackM) + kBoundSlackM)
         continue;
       for (int j = 0; j < c.count; ++j) {
-        const PlacedCapsule& p = placed[c.first + j * stride];
+        const PlacedCapsule& p = placed[c.capsule][c.first + j];
         if (!p.valid) continue;
         const double d =
             plane.offset - std::max(n.dot(p.a), n.dot(p.b)) - p.radius;
