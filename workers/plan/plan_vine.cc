@@ -265,8 +265,13 @@ absl::StatusOr<std::vector<int>> PlanPass(const VineModel& model, const std::vec
   PlanStats& stats = p.result.stats;
   const PlanOptions& options = p.options;
   auto t = std::chrono::steady_clock::now();
-  VB_ASSIGN_OR_RETURN(CollisionScene scene,
-                      CollisionScene::Build(model, p.platform, p.robot, options.scene));
+  CollisionScene scene;
+  if (p.uncut_scene) {  // the first pass: the vine PlanVine built the scene of
+    scene = std::move(*p.uncut_scene);
+    p.uncut_scene.reset();
+  } else {
+    VB_ASSIGN_OR_RETURN(scene, CollisionScene::Build(model, p.platform, p.robot, options.scene));
+  }
   stats.scene_s += Seconds(t);
 
   // Cut motions.
@@ -599,20 +604,21 @@ absl::StatusOr<PlanResult> PlanVine(const VineModel& model, const CutPlan& plan,
   PlanStats& stats = result.stats;
   stats.setup_s = Seconds(start);  // validation
   stats.cuts = static_cast<int>(plan.cuts.size());
+  auto t = std::chrono::steady_clock::now();
+  VB_ASSIGN_OR_RETURN(CollisionScene uncut_scene,
+                      CollisionScene::Build(model, platform, robot, options.scene));
   {
-    auto t = std::chrono::steady_clock::now();
-    VB_ASSIGN_OR_RETURN(const CollisionScene scene,
-                        CollisionScene::Build(model, platform, robot, options.scene));
-    auto checker = MakeChecker(options.checker, robot, scene);
+    auto checker = MakeChecker(options.checker, robot, uncut_scene);
     if (!checker->IsFree(options.home))
       return absl::FailedPreconditionError("options.home: the home configuration is in collision");
     stats.checks += checker->checks();
-    stats.scene_s += Seconds(t);
   }
+  stats.scene_s += Seconds(t);
   VB_RETURN_IF_ERROR(deadline.Check("plan"));
 
-  auto t = std::chrono::steady_clock::now();
+  t = std::chrono::steady_clock::now();
   Planning p{model, plan, robot, platform, options, deadline, result};
+  p.uncut_scene = std::move(uncut_scene);
   p.self_checker = MakeChecker(options.checker, robot, CollisionScene{});
   stats.setup_s += Seconds(t);
   std::vector<int> pending(plan.cuts.size());

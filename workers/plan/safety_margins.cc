@@ -29,6 +29,29 @@ absl::Status MarginOptions::Validate() const {
   return absl::OkStatus();
 }
 
+TwistCachedFrames::TwistCachedFrames(const DhParameters& dh) : dh_(dh) {
+  for (int i = 0; i < 6; ++i) ca_[i] = std::cos(dh.alpha[i]), sa_[i] = std::sin(dh.alpha[i]);
+}
+
+// The matrices and products of LinkFrames (ur5_kinematics.cc), written the same way.
+std::array<Eigen::Isometry3d, 7> TwistCachedFrames::operator()(const Joints& q) const {
+  std::array<Eigen::Isometry3d, 7> frames;
+  frames[0] = Eigen::Isometry3d::Identity();
+  for (int i = 0; i < 6; ++i) {
+    const double ct = std::cos(q[i]), st = std::sin(q[i]);
+    const double ca = ca_[i], sa = sa_[i], a = dh_.a[i], d = dh_.d[i];
+    Eigen::Matrix4d m;
+    m << ct, -st * ca, st * sa, a * ct,
+         st, ct * ca, -ct * sa, a * st,
+         0, sa, ca, d,
+         0, 0, 0, 1;
+    Eigen::Isometry3d t;
+    t.matrix() = m;
+    frames[i + 1] = frames[i] * t;
+  }
+  return frames;
+}
+
 namespace {
 
 // One arm body capsule at one configuration, in the base frame, with its axis-aligned box
@@ -42,38 +65,7 @@ struct PlacedCapsule {
   bool valid = false;
 };
 
-// LinkFrames (ur5_kinematics.cc) with the sines and cosines of the DH twists computed once: the
-// same matrices and products in the same order, so the same frames bit for bit
-// (SafetyMargins.PlacementMatchesLinkFrames), without two of the four trigonometric calls per joint.
-class ArmFrames {
- public:
-  explicit ArmFrames(const DhParameters& dh) : dh_(dh) {
-    for (int i = 0; i < 6; ++i) ca_[i] = std::cos(dh.alpha[i]), sa_[i] = std::sin(dh.alpha[i]);
-  }
-  std::array<Eigen::Isometry3d, 7> operator()(const Joints& q) const {
-    std::array<Eigen::Isometry3d, 7> frames;
-    frames[0] = Eigen::Isometry3d::Identity();
-    for (int i = 0; i < 6; ++i) {
-      const double ct = std::cos(q[i]), st = std::sin(q[i]);
-      const double ca = ca_[i], sa = sa_[i], a = dh_.a[i], d = dh_.d[i];
-      Eigen::Matrix4d m;
-      m << ct, -st * ca, st * sa, a * ct,
-           st, ct * ca, -ct * sa, a * st,
-           0, sa, ca, d,
-           0, 0, 0, 1;
-      Eigen::Isometry3d t;
-      t.matrix() = m;
-      frames[i + 1] = frames[i] * t;
-    }
-    return frames;
-  }
-
- private:
-  DhParameters dh_;
-  std::array<double, 6> ca_, sa_;
-};
-
-void Place(const std::vector<LinkBody>& bodies, const ArmFrames& arm, const Joints& q,
+void Place(const std::vector<LinkBody>& bodies, const TwistCachedFrames& arm, const Joints& q,
            std::vector<std::vector<PlacedCapsule>>* placed) {
   const auto frames = arm(q);
   size_t k = 0;
@@ -223,7 +215,7 @@ constexpr double kCellM = 0.12;
 MarginSummary InflateMargins(const RobotModel& robot, std::span<const ProtectedMotion> motions,
                              const MarginOptions& options, CollisionScene* scene) {
   const std::vector<LinkBody> bodies = robot.BodiesWithTool();
-  const ArmFrames arm(Ur5Dh());
+  const TwistCachedFrames arm(Ur5Dh());
   // The checkers' own interpolation (CollisionChecker::IsMotionFree), so the poses are theirs.
   const JointLevers lever_m = JointLeverArms(robot);
   size_t capsules = 0;
