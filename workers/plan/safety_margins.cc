@@ -110,14 +110,29 @@ struct ConfigurationHash {
   }
 };
 
-// Euclidean distance between two axis-aligned boxes (0 when they meet): a lower bound of the
-// distance between any shapes inside them.
-double BoxDistance(const Eigen::Vector3d& lo1, const Eigen::Vector3d& hi1,
-                   const Eigen::Vector3d& lo2, const Eigen::Vector3d& hi2) {
+// Squared Euclidean distance between two axis-aligned boxes (0 when they meet): its root is a
+// lower bound of the distance between any shapes inside them. The bounds below are compared
+// squared (Beyond), without a square root per pair.
+double BoxDistanceSquared(const Eigen::Vector3d& lo1, const Eigen::Vector3d& hi1,
+                          const Eigen::Vector3d& lo2, const Eigen::Vector3d& hi2) {
   const Eigen::Vector3d gap =
       (lo2 - hi1).cwiseMax(lo1 - hi2).cwiseMax(Eigen::Vector3d::Zero());
-  return gap.norm();
+  return gap.squaredNorm();
 }
+
+// Squared distance from p to the segment [a, b].
+double PointSegmentDistanceSquared(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
+                                   const Eigen::Vector3d& b) {
+  const Eigen::Vector3d ab = b - a;
+  const double len2 = ab.squaredNorm();
+  const double t = len2 > 0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
+  return (a + t * ab - p).squaredNorm();
+}
+
+// Whether a distance whose square is d2 exceeds `limit` (always when limit < 0). A bound is
+// compared with a limit kBoundSlackM above the minimum so far, far above the rounding of either
+// side, so deciding on squares skips only pairs that could never lower the minimum.
+bool Beyond(double d2, double limit) { return limit < 0 || d2 > limit * limit; }
 
 // Pairs are skipped when their lower bound exceeds the minimum so far by more than this: far
 // above the rounding of the bounds, so a skipped pair could never have lowered the minimum.
@@ -349,7 +364,7 @@ MarginSummary InflateMargins(const RobotModel& robot, std::span<const ProtectedM
   std::vector<char> ignored(motions.size(), 0);
   std::vector<int> ignored_list;
   std::vector<char> group_ignored(groups.size(), 0);
-  std::vector<std::pair<double, int>> near;         // (box distance, chunk) of one obstacle
+  std::vector<std::pair<double, int>> near;  // (squared box distance, chunk) of one obstacle
   std::vector<double> vine_margins;
   // The motions that ignore each cane, and the groups that hold each motion: an obstacle visits
   // only those (the same flags as testing every motion and group).
@@ -403,7 +418,7 @@ MarginSummary InflateMargins(const RobotModel& robot, std::span<const ProtectedM
       const Chunk& c = chunks[i];
       if (group_ignored[c.motion]) return;
       if ((c.lo.array() > hi.array()).any() || (c.hi.array() < lo.array()).any()) return;
-      near.emplace_back(BoxDistance(c.lo, c.hi, o_lo, o_hi), i);
+      near.emplace_back(BoxDistanceSquared(c.lo, c.hi, o_lo, o_hi), i);
     });
     std::sort(near.begin(), near.end());
     double clearance = std::numeric_limits<double>::infinity();
@@ -411,7 +426,7 @@ MarginSummary InflateMargins(const RobotModel& robot, std::span<const ProtectedM
     // (a micrometre beyond, so that the rounding of clearance - slack_m cannot matter).
     double cap = reach + kReachSlackM;
     for (const auto& [bound, i] : near) {
-      if (bound > cap + kBoundSlackM) break;
+      if (Beyond(bound, cap + kBoundSlackM)) break;
       const Chunk& c = chunks[i];
       for (int j = 0; j < c.count; ++j) {
         if (j % kBlockConfigurations == 0) {
@@ -419,7 +434,7 @@ MarginSummary InflateMargins(const RobotModel& robot, std::span<const ProtectedM
           // its box empty, so it is skipped).
           const Block& b = blocks[c.first_block + j / kBlockConfigurations];
           if ((b.lo.array() > hi.array()).any() || (b.hi.array() < lo.array()).any() ||
-              BoxDistance(b.lo, b.hi, o_lo, o_hi) > cap + kBoundSlackM) {
+              Beyond(BoxDistanceSquared(b.lo, b.hi, o_lo, o_hi), cap + kBoundSlackM)) {
             j += kBlockConfigurations - 1;
             continue;
           }
@@ -427,12 +442,12 @@ MarginSummary InflateMargins(const RobotModel& robot, std::span<const ProtectedM
         const PlacedCapsule& p = placed[c.capsule][c.first + j];
         if (!p.valid) continue;
         if ((p.lo.array() > hi.array()).any() || (p.hi.array() < lo.array()).any()) continue;
-        if (BoxDistance(p.lo, p.hi, o_lo, o_hi) > cap + kBoundSlackM) continue;
+        if (Beyond(BoxDistanceSquared(p.lo, p.hi, o_lo, o_hi), cap + kBoundSlackM)) continue;
         // Distance is 1-Lipschitz: no point of the obstacle's axis is nearer the capsule's
         // than its midpoint's distance less half its length (tight for the short chords of
         // canes, which are most obstacles).
-        if (PointSegmentDistance(o_mid, p.a, p.b) - o_half - p.radius - o.capsule.radius >
-            cap + kBoundSlackM)
+        if (Beyond(PointSegmentDistanceSquared(o_mid, p.a, p.b),
+                   cap + kBoundSlackM + o_half + p.radius + o.capsule.radius))
           continue;
         const double d = SegmentSegmentDistance(p.a, p.b, o.capsule.a, o.capsule.b) - p.radius -
                          o.capsule.radius;
