@@ -56,8 +56,10 @@ namespace {
 
 // One arm body capsule at one configuration, in the base frame, with its axis-aligned box
 // (surface included). A non-finite capsule (its distances are NaN, which never lower a minimum)
-// is kept in place, marked invalid, so that capsule k of configuration c is placed[k][c]: each
-// body capsule's configurations are contiguous, as the chunks below read them.
+// is kept in place, marked invalid, so that capsule k of configuration c is placed[k * n + c] for
+// n distinct configurations: each body capsule's configurations are contiguous, as the chunks
+// below read them (one allocation: per-capsule vectors made the allocator return and fault in
+// megabytes at every call).
 struct PlacedCapsule {
   Eigen::Vector3d a, b;
   double radius = 0.0;
@@ -66,12 +68,12 @@ struct PlacedCapsule {
 };
 
 void Place(const std::vector<LinkBody>& bodies, const TwistCachedFrames& arm, const Joints& q,
-           std::vector<std::vector<PlacedCapsule>>* placed) {
+           PlacedCapsule* first, size_t stride) {
   const auto frames = arm(q);
   size_t k = 0;
   for (const LinkBody& body : bodies) {
     for (const Capsule& c : body.capsules) {
-      PlacedCapsule& p = (*placed)[k++].emplace_back();
+      PlacedCapsule& p = first[stride * k++];
       p.a = frames[body.frame] * c.a;
       p.b = frames[body.frame] * c.b;
       p.radius = c.radius;
@@ -88,7 +90,7 @@ void Place(const std::vector<LinkBody>& bodies, const TwistCachedFrames& arm, co
 struct Chunk {
   Eigen::Vector3d lo, hi;
   int motion = 0;  // the group of motions that hold its configurations (InflateMargins)
-  int capsule = 0;  // placed[capsule][first + j] for j < count
+  int capsule = 0;  // placed[capsule * distinct + first + j] for j < count
   int first = 0;
   int count = 0;
   int first_block = 0;  // blocks[first_block ..]: the boxes of its runs of kBlockConfigurations
@@ -249,8 +251,8 @@ MarginSummary InflateMargins(const RobotModel& robot, std::span<const ProtectedM
   // distances) is placed once; a configuration several motions share is ignored by an obstacle
   // only if every one of them ignores it. Alternatives share most of their configurations, and
   // every stroke's ends are also protected alone.
-  std::vector<std::vector<PlacedCapsule>> placed(capsules);
-  for (std::vector<PlacedCapsule>& run : placed) run.reserve(expected);
+  std::vector<Joints> distinct_q;  // placed once all are known
+  distinct_q.reserve(expected);
   const int stride = static_cast<int>(capsules);
   std::unordered_map<std::array<uint64_t, 6>, int, ConfigurationHash> index;
   index.reserve(expected);
@@ -264,7 +266,7 @@ MarginSummary InflateMargins(const RobotModel& robot, std::span<const ProtectedM
     std::memcpy(key.data(), q.data(), sizeof(key));
     const auto [it, inserted] = index.try_emplace(key, static_cast<int>(first_motion.size()));
     if (inserted) {
-      Place(bodies, arm, q, &placed);
+      distinct_q.push_back(q);
       first_motion.push_back(motion);
       more_of.push_back(-1);
       return;
@@ -296,6 +298,8 @@ MarginSummary InflateMargins(const RobotModel& robot, std::span<const ProtectedM
   std::vector<std::vector<int>> groups = {{}};
   group_of[{}] = 0;
   const int distinct = static_cast<int>(first_motion.size());
+  std::vector<PlacedCapsule> placed(static_cast<size_t>(distinct) * capsules);
+  for (int u = 0; u < distinct; ++u) Place(bodies, arm, distinct_q[u], &placed[u], distinct);
   std::vector<int> group(distinct, 0);
   // Most configurations belong to one motion: its group is looked up once (the same ids, in
   // the same order of first appearance, as the lookup below gives).
@@ -339,7 +343,7 @@ MarginSummary InflateMargins(const RobotModel& robot, std::span<const ProtectedM
         block.lo.setConstant(std::numeric_limits<double>::infinity());
         block.hi.setConstant(-std::numeric_limits<double>::infinity());
         for (int j = j0; j < n && j < j0 + kBlockConfigurations; ++j) {
-          const PlacedCapsule& p = placed[k][chunk.first + j];
+          const PlacedCapsule& p = placed[static_cast<size_t>(k) * distinct + chunk.first + j];
           if (!p.valid) continue;
           block.lo = block.lo.cwiseMin(p.lo);
           block.hi = block.hi.cwiseMax(p.hi);
@@ -439,7 +443,7 @@ MarginSummary InflateMargins(const RobotModel& robot, std::span<const ProtectedM
             continue;
           }
         }
-        const PlacedCapsule& p = placed[c.capsule][c.first + j];
+        const PlacedCapsule& p = placed[static_cast<size_t>(c.capsule) * distinct + c.first + j];
         if (!p.valid) continue;
         if ((p.lo.array() > hi.array()).any() || (p.hi.array() < lo.array()).any()) continue;
         if (Beyond(BoxDistanceSquared(p.lo, p.hi, o_lo, o_hi), cap + kBoundSlackM)) continue;
@@ -471,7 +475,7 @@ MarginSummary InflateMargins(const RobotModel& robot, std::span<const ProtectedM
       if (plane.offset - support > std::min(clearance, reach + kReachSlackM) + kBoundSlackM)
         continue;
       for (int j = 0; j < c.count; ++j) {
-        const PlacedCapsule& p = placed[c.capsule][c.first + j];
+        const PlacedCapsule& p = placed[static_cast<size_t>(c.capsule) * distinct + c.first + j];
         if (!p.valid) continue;
         const double d =
             plane.offset - std::max(n.dot(p.a), n.dot(p.b)) - p.radius;
