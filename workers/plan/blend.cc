@@ -2,6 +2,10 @@
 #include "workers/plan/blend.h"
 
 #include <algorithm>
+#include <array>
+#include <cstdint>
+#include <cstring>
+#include <map>
 #include <cmath>
 #include <limits>
 
@@ -171,6 +175,15 @@ std::vector<Run> Layout(std::span<const Joints> w, const JointLimits& limits,
   return runs;
 }
 
+// The exact bits of a chord's two ends.
+using ChordKey = std::array<uint64_t, 12>;
+ChordKey KeyOf(const Joints& a, const Joints& b) {
+  ChordKey key;
+  std::memcpy(key.data(), a.data(), 6 * sizeof(double));
+  std::memcpy(key.data() + 6, b.data(), 6 * sizeof(double));
+  return key;
+}
+
 // Waypoints with repeated ones merged.
 std::vector<Joints> Distinct(std::span<const Joints> waypoints) {
   std::vector<Joints> w = {waypoints.front()};
@@ -231,6 +244,9 @@ absl::StatusOr<BlendedPath> TimeParameterizeBlended(std::span<const Joints> wayp
   std::vector<double> ok(points, 0.0), bad(points, kInf);
   std::vector<bool> last_try(points, false);
   const int64_t checks_before = checker != nullptr ? checker->checks() : 0;
+  // Chords already checked in an earlier round (a run whose stops and blend bounds did not
+  // change is laid out again bit for bit): the checker's answer, which is deterministic.
+  std::map<ChordKey, bool> chord_free;
   // Every round takes a bisection step, settles a blend or stops at a via, so this ends.
   for (;;) {
     const std::vector<Run> runs = Layout(w, limits, stop, max_dev);
@@ -268,9 +284,15 @@ absl::StatusOr<BlendedPath> TimeParameterizeBlended(std::span<const Joints> wayp
           if (out.samples[i + 1].t <= lo || out.samples[i].t >= hi) continue;
           if (out.blend_chords.empty() || out.blend_chords.back() < static_cast<int>(i))
             out.blend_chords.push_back(static_cast<int>(i));
-          if (checker != nullptr && free)
-            free = checker->IsMotionFree(out.samples[i].q, out.samples[i + 1].q,
-                                         options.max_step_m);
+          if (checker != nullptr && free) {
+            const ChordKey key = KeyOf(out.samples[i].q, out.samples[i + 1].q);
+            const auto [it, inserted] = chord_free.try_emplace(key, false);
+            if (inserted) {
+              it->second = checker->IsMotionFree(out.samples[i].q, out.samples[i + 1].q,
+                                                 options.max_step_m);
+            }
+            free = it->second;
+          }
         }
         if (!free) colliding.push_back(via_base + k);
       }

@@ -24,7 +24,9 @@
 // deviation from the via point bounded, which slows the neighbouring segments) by bisection
 // between the largest size found free and the smallest found colliding, starting with half its
 // size, for max_shrinks steps; if no smaller size was free the arm stops at that via point (the
-// already-checked path). A run whose blended timing would be slower than stopping at each of its
+// already-checked path). A chord checked in an earlier round (the same two samples bit for bit: a
+// run whose stops and blend bounds did not change is laid out again identically) is not checked
+// again. A run whose blended timing would be slower than stopping at each of its
 // waypoints is stopped at each of them. Thread-safe (pure functions; the checker is used by
 // the calling thread only).
 #pragma once

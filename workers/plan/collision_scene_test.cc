@@ -86,6 +86,40 @@ TEST(CollisionScene, CanesBecomeShortCapsulesInTheBaseFrame) {
   EXPECT_EQ(platform, 3);
 }
 
+TEST(CollisionScene, CaneChordEndsAreThePolylinesOwnPointsBitForBit) {
+  // The chords are located on arc lengths computed once per cane; they must be the points and
+  // radii Polyline3::PointAt and RadiusAt give, to the last bit (plans are compared bit for bit
+  // between builds).
+  const RobotModel robot = Robot();
+  const Eigen::Isometry3d base_from_platform = robot.platform_from_arm_base.inverse();
+  for (uint64_t seed : {1100u, 1101u}) {
+    const VineModel vine = SimVine(seed);
+    for (double step : {0.03, 0.011}) {
+      SceneOptions options;
+      options.cane_segment_m = step;
+      auto scene = CollisionScene::Build(vine, DefaultPlatform(), robot, options);
+      ASSERT_TRUE(scene.ok()) << scene.status();
+      for (const Cane& cane : vine.canes) {
+        std::vector<const Obstacle*> chords;
+        for (const Obstacle& o : scene->obstacles)
+          if (o.kind == ObstacleKind::kCane && o.owner_id == cane.id.value) chords.push_back(&o);
+        ASSERT_FALSE(chords.empty());
+        const double length = cane.polyline.Length();
+        for (size_t k = 0; k < chords.size(); ++k) {
+          const double s0 = k * step;
+          const double s1 = k + 1 == chords.size() ? length : (k + 1) * step;
+          const Eigen::Vector3d a = base_from_platform * cane.polyline.PointAt(s0);
+          const Eigen::Vector3d b = base_from_platform * cane.polyline.PointAt(s1);
+          EXPECT_TRUE(chords[k]->capsule.a == a && chords[k]->capsule.b == b)
+              << "seed " << seed << " cane " << cane.id.value << " chord " << k;
+          EXPECT_GE(chords[k]->capsule.radius,
+                    std::max(cane.polyline.RadiusAt(s0), cane.polyline.RadiusAt(s1)));
+        }
+      }
+    }
+  }
+}
+
 TEST(CollisionScene, ACaneCutShortKeepsItsCapsules) {
   // Chords start from the base on a fixed grid: after a cut, the stub has the capsules it had up
   // to the cut; only the one the cut falls in differs, and it stays within a fraction of a

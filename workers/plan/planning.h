@@ -52,6 +52,8 @@ struct Planning {
   const Deadline& deadline;
   PlanResult& result;
   std::vector<Leg> legs;
+  // The scene of the uncut vine, built once for the home check and taken by the first pass.
+  std::optional<CollisionScene> uncut_scene;
   // The last pass's inflated scene, its checker and its path planner (for the way home).
   std::shared_ptr<CollisionChecker> checker;
   std::unique_ptr<PathPlanner> planner;

@@ -29,11 +29,37 @@ absl::Status MarginOptions::Validate() const {
   return absl::OkStatus();
 }
 
+TwistCachedFrames::TwistCachedFrames(const DhParameters& dh) : dh_(dh) {
+  for (int i = 0; i < 6; ++i) ca_[i] = std::cos(dh.alpha[i]), sa_[i] = std::sin(dh.alpha[i]);
+}
+
+// The matrices and products of LinkFrames (ur5_kinematics.cc), written the same way.
+std::array<Eigen::Isometry3d, 7> TwistCachedFrames::operator()(const Joints& q) const {
+  std::array<Eigen::Isometry3d, 7> frames;
+  frames[0] = Eigen::Isometry3d::Identity();
+  for (int i = 0; i < 6; ++i) {
+    const double ct = std::cos(q[i]), st = std::sin(q[i]);
+    const double ca = ca_[i], sa = sa_[i], a = dh_.a[i], d = dh_.d[i];
+    Eigen::Matrix4d m;
+    m << ct, -st * ca, st * sa, a * ct,
+         st, ct * ca, -ct * sa, a * st,
+         0, sa, ca, d,
+         0, 0, 0, 1;
+    Eigen::Isometry3d t;
+    t.matrix() = m;
+    frames[i + 1] = frames[i] * t;
+  }
+  return frames;
+}
+
 namespace {
 
 // One arm body capsule at one configuration, in the base frame, with its axis-aligned box
 // (surface included). A non-finite capsule (its distances are NaN, which never lower a minimum)
-// is kept in place, marked invalid, so that capsule k of configuration c is placed[c * n + k].
+// is kept in place, marked invalid, so that capsule k of configuration c is placed[k * n + c] for
+// n distinct configurations: each body capsule's configurations are contiguous, as the chunks
+// below read them (one allocation: per-capsule vectors made the allocator return and fault in
+// megabytes at every call).
 struct PlacedCapsule {
   Eigen::Vector3d a, b;
   double radius = 0.0;
@@ -41,12 +67,13 @@ struct PlacedCapsule {
   bool valid = false;
 };
 
-void Place(const std::vector<LinkBody>& bodies, const Joints& q,
-           std::vector<PlacedCapsule>* placed) {
-  const auto frames = LinkFrames(q);
+void Place(const std::vector<LinkBody>& bodies, const TwistCachedFrames& arm, const Joints& q,
+           PlacedCapsule* first, size_t stride) {
+  const auto frames = arm(q);
+  size_t k = 0;
   for (const LinkBody& body : bodies) {
     for (const Capsule& c : body.capsules) {
-      PlacedCapsule& p = placed->emplace_back();
+      PlacedCapsule& p = first[stride * k++];
       p.a = frames[body.frame] * c.a;
       p.b = frames[body.frame] * c.b;
       p.radius = c.radius;
@@ -63,7 +90,8 @@ void Place(const std::vector<LinkBody>& bodies, const Joints& q,
 struct Chunk {
   Eigen::Vector3d lo, hi;
   int motion = 0;  // the group of motions that hold its configurations (InflateMargins)
-  int first = 0;   // placed[first + j * stride] for j < count
+  int capsule = 0;  // placed[capsule * distinct + first + j] for j < count
+  int first = 0;
   int count = 0;
   int first_block = 0;  // blocks[first_block ..]: the boxes of its runs of kBlockConfigurations
 };
@@ -84,14 +112,29 @@ struct ConfigurationHash {
   }
 };
 
-// Euclidean distance between two axis-aligned boxes (0 when they meet): a lower bound of the
-// distance between any shapes inside them.
-double BoxDistance(const Eigen::Vector3d& lo1, const Eigen::Vector3d& hi1,
-                   const Eigen::Vector3d& lo2, const Eigen::Vector3d& hi2) {
+// Squared Euclidean distance between two axis-aligned boxes (0 when they meet): its root is a
+// lower bound of the distance between any shapes inside them. The bounds below are compared
+// squared (Beyond), without a square root per pair.
+double BoxDistanceSquared(const Eigen::Vector3d& lo1, const Eigen::Vector3d& hi1,
+                          const Eigen::Vector3d& lo2, const Eigen::Vector3d& hi2) {
   const Eigen::Vector3d gap =
       (lo2 - hi1).cwiseMax(lo1 - hi2).cwiseMax(Eigen::Vector3d::Zero());
-  return gap.norm();
+  return gap.squaredNorm();
 }
+
+// Squared distance from p to the segment [a, b].
+double PointSegmentDistanceSquared(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
+                                   const Eigen::Vector3d& b) {
+  const Eigen::Vector3d ab = b - a;
+  const double len2 = ab.squaredNorm();
+  const double t = len2 > 0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
+  return (a + t * ab - p).squaredNorm();
+}
+
+// Whether a distance whose square is d2 exceeds `limit` (always when limit < 0). A bound is
+// compared with a limit kBoundSlackM above the minimum so far, far above the rounding of either
+// side, so deciding on squares skips only pairs that could never lower the minimum.
+bool Beyond(double d2, double limit) { return limit < 0 || d2 > limit * limit; }
 
 // Pairs are skipped when their lower bound exceeds the minimum so far by more than this: far
 // above the rounding of the bounds, so a skipped pair could never have lowered the minimum.
@@ -189,22 +232,27 @@ constexpr double kCellM = 0.12;
 MarginSummary InflateMargins(const RobotModel& robot, std::span<const ProtectedMotion> motions,
                              const MarginOptions& options, CollisionScene* scene) {
   const std::vector<LinkBody> bodies = robot.BodiesWithTool();
+  const TwistCachedFrames arm(Ur5Dh());
   // The checkers' own interpolation (CollisionChecker::IsMotionFree), so the poses are theirs.
   const JointLevers lever_m = JointLeverArms(robot);
   size_t capsules = 0;
   for (const LinkBody& body : bodies) capsules += body.capsules.size();
   size_t expected = 0;
+  std::vector<int> segment_steps;  // MotionSteps of every segment, motion after motion
   for (const ProtectedMotion& motion : motions) {
     expected += motion.path.size();
-    for (size_t i = 0; i + 1 < motion.path.size(); ++i)
-      expected += MotionSteps(motion.path[i], motion.path[i + 1], options.max_step_m, lever_m) - 1;
+    for (size_t i = 0; i + 1 < motion.path.size(); ++i) {
+      segment_steps.push_back(
+          MotionSteps(motion.path[i], motion.path[i + 1], options.max_step_m, lever_m));
+      expected += segment_steps.back() - 1;
+    }
   }
   // Each distinct configuration (bitwise: the same joints place the same capsules, hence the same
   // distances) is placed once; a configuration several motions share is ignored by an obstacle
   // only if every one of them ignores it. Alternatives share most of their configurations, and
   // every stroke's ends are also protected alone.
-  std::vector<PlacedCapsule> placed;
-  placed.reserve(expected * capsules);
+  std::vector<Joints> distinct_q;  // placed once all are known
+  distinct_q.reserve(expected);
   const int stride = static_cast<int>(capsules);
   std::unordered_map<std::array<uint64_t, 6>, int, ConfigurationHash> index;
   index.reserve(expected);
@@ -218,7 +266,7 @@ MarginSummary InflateMargins(const RobotModel& robot, std::span<const ProtectedM
     std::memcpy(key.data(), q.data(), sizeof(key));
     const auto [it, inserted] = index.try_emplace(key, static_cast<int>(first_motion.size()));
     if (inserted) {
-      Place(bodies, q, &placed);
+      distinct_q.push_back(q);
       first_motion.push_back(motion);
       more_of.push_back(-1);
       return;
@@ -231,6 +279,7 @@ MarginSummary InflateMargins(const RobotModel& robot, std::span<const ProtectedM
     }
     more_motions[more_of[u]].push_back(motion);
   };
+  size_t segment = 0;
   for (size_t m = 0; m < motions.size(); ++m) {
     const ProtectedMotion& motion = motions[m];
     const int id = static_cast<int>(m);
@@ -239,7 +288,7 @@ MarginSummary InflateMargins(const RobotModel& robot, std::span<const ProtectedM
       if (i + 1 == motion.path.size()) break;
       const Joints& a = motion.path[i];
       const Joints& b = motion.path[i + 1];
-      const int steps = MotionSteps(a, b, options.max_step_m, lever_m);
+      const int steps = segment_steps[segment++];
       for (int s = 1; s < steps; ++s) add(a + (b - a) * (double(s) / steps), id);
     }
   }
@@ -249,6 +298,8 @@ MarginSummary InflateMargins(const RobotModel& robot, std::span<const ProtectedM
   std::vector<std::vector<int>> groups = {{}};
   group_of[{}] = 0;
   const int distinct = static_cast<int>(first_motion.size());
+  std::vector<PlacedCapsule> placed(static_cast<size_t>(distinct) * capsules);
+  for (int u = 0; u < distinct; ++u) Place(bodies, arm, distinct_q[u], &placed[u], distinct);
   std::vector<int> group(distinct, 0);
   // Most configurations belong to one motion: its group is looked up once (the same ids, in
   // the same order of first appearance, as the lookup below gives).
@@ -281,7 +332,8 @@ MarginSummary InflateMargins(const RobotModel& robot, std::span<const ProtectedM
     for (int k = 0; k < stride; ++k) {
       Chunk chunk;
       chunk.motion = group[u0];
-      chunk.first = u0 * stride + k;
+      chunk.capsule = k;
+      chunk.first = u0;
       chunk.count = n;
       chunk.first_block = static_cast<int>(blocks.size());
       chunk.lo.setConstant(std::numeric_limits<double>::infinity());
@@ -291,7 +343,7 @@ MarginSummary InflateMargins(const RobotModel& robot, std::span<const ProtectedM
         block.lo.setConstant(std::numeric_limits<double>::infinity());
         block.hi.setConstant(-std::numeric_limits<double>::infinity());
         for (int j = j0; j < n && j < j0 + kBlockConfigurations; ++j) {
-          const PlacedCapsule& p = placed[chunk.first + j * stride];
+          const PlacedCapsule& p = placed[static_cast<size_t>(k) * distinct + chunk.first + j];
           if (!p.valid) continue;
           block.lo = block.lo.cwiseMin(p.lo);
           block.hi = block.hi.cwiseMax(p.hi);
@@ -316,24 +368,45 @@ MarginSummary InflateMargins(const RobotModel& robot, std::span<const ProtectedM
   std::vector<char> ignored(motions.size(), 0);
   std::vector<int> ignored_list;
   std::vector<char> group_ignored(groups.size(), 0);
-  std::vector<std::pair<double, int>> near;         // (box distance, chunk) of one obstacle
+  std::vector<std::pair<double, int>> near;  // (squared box distance, chunk) of one obstacle
   std::vector<double> vine_margins;
+  // The motions that ignore each cane, and the groups that hold each motion: an obstacle visits
+  // only those (the same flags as testing every motion and group).
+  std::unordered_map<int64_t, std::vector<int>> motions_ignoring;
+  for (size_t m = 0; m < motions.size(); ++m)
+    if (motions[m].ignored_cane.value != 0)
+      motions_ignoring[motions[m].ignored_cane.value].push_back(static_cast<int>(m));
+  std::vector<std::vector<int>> groups_of(motions.size());
+  for (size_t g = 1; g < groups.size(); ++g)
+    for (int m : groups[g]) groups_of[m].push_back(static_cast<int>(g));
+  std::vector<int> groups_set;  // groups whose group_ignored is 1
   for (size_t oi = 0; oi < scene->obstacles.size(); ++oi) {
     Obstacle& o = scene->obstacles[oi];
     for (int m : ignored_list) ignored[m] = 0;
     ignored_list.clear();
+    for (int g : groups_set) group_ignored[g] = 0;
+    groups_set.clear();
     if (o.kind == ObstacleKind::kCane) {
-      for (size_t m = 0; m < motions.size(); ++m) {
-        if (Ignored(o, motions[m])) {
-          ignored[m] = 1;
-          ignored_list.push_back(static_cast<int>(m));
+      const auto it = motions_ignoring.find(o.owner_id);
+      if (it != motions_ignoring.end()) {
+        for (int m : it->second) {
+          if (Ignored(o, motions[m])) {
+            ignored[m] = 1;
+            ignored_list.push_back(m);
+          }
         }
       }
     }
-    for (size_t g = 1; g < groups.size(); ++g) {
-      bool all = !ignored_list.empty();
-      for (int m : groups[g]) all = all && ignored[m];
-      group_ignored[g] = all;
+    // A group is ignored when every motion in it is; only groups of an ignoring motion can be.
+    for (int m : ignored_list) {
+      for (int g : groups_of[m]) {
+        if (group_ignored[g]) continue;
+        bool all = true;
+        for (int other : groups[g]) all = all && ignored[other];
+        if (!all) continue;
+        group_ignored[g] = 1;
+        groups_set.push_back(g);
+      }
     }
     const Eigen::Vector3d o_lo = o.capsule.a.cwiseMin(o.capsule.b).array() - o.capsule.radius;
     const Eigen::Vector3d o_hi = o.capsule.a.cwiseMax(o.capsule.b).array() + o.capsule.radius;
@@ -349,7 +422,7 @@ MarginSummary InflateMargins(const RobotModel& robot, std::span<const ProtectedM
       const Chunk& c = chunks[i];
       if (group_ignored[c.motion]) return;
       if ((c.lo.array() > hi.array()).any() || (c.hi.array() < lo.array()).any()) return;
-      near.emplace_back(BoxDistance(c.lo, c.hi, o_lo, o_hi), i);
+      near.emplace_back(BoxDistanceSquared(c.lo, c.hi, o_lo, o_hi), i);
     });
     std::sort(near.begin(), near.end());
     double clearance = std::numeric_limits<double>::infinity();
@@ -357,7 +430,7 @@ MarginSummary InflateMargins(const RobotModel& robot, std::span<const ProtectedM
     // (a micrometre beyond, so that the rounding of clearance - slack_m cannot matter).
     double cap = reach + kReachSlackM;
     for (const auto& [bound, i] : near) {
-      if (bound > cap + kBoundSlackM) break;
+      if (Beyond(bound, cap + kBoundSlackM)) break;
       const Chunk& c = chunks[i];
       for (int j = 0; j < c.count; ++j) {
         if (j % kBlockConfigurations == 0) {
@@ -365,20 +438,20 @@ MarginSummary InflateMargins(const RobotModel& robot, std::span<const ProtectedM
           // its box empty, so it is skipped).
           const Block& b = blocks[c.first_block + j / kBlockConfigurations];
           if ((b.lo.array() > hi.array()).any() || (b.hi.array() < lo.array()).any() ||
-              BoxDistance(b.lo, b.hi, o_lo, o_hi) > cap + kBoundSlackM) {
+              Beyond(BoxDistanceSquared(b.lo, b.hi, o_lo, o_hi), cap + kBoundSlackM)) {
             j += kBlockConfigurations - 1;
             continue;
           }
         }
-        const PlacedCapsule& p = placed[c.first + j * stride];
+        const PlacedCapsule& p = placed[static_cast<size_t>(c.capsule) * distinct + c.first + j];
         if (!p.valid) continue;
         if ((p.lo.array() > hi.array()).any() || (p.hi.array() < lo.array()).any()) continue;
-        if (BoxDistance(p.lo, p.hi, o_lo, o_hi) > cap + kBoundSlackM) continue;
+        if (Beyond(BoxDistanceSquared(p.lo, p.hi, o_lo, o_hi), cap + kBoundSlackM)) continue;
         // Distance is 1-Lipschitz: no point of the obstacle's axis is nearer the capsule's
         // than its midpoint's distance less half its length (tight for the short chords of
         // canes, which are most obstacles).
-        if (PointSegmentDistance(o_mid, p.a, p.b) - o_half - p.radius - o.capsule.radius >
-            cap + kBoundSlackM)
+        if (Beyond(PointSegmentDistanceSquared(o_mid, p.a, p.b),
+                   cap + kBoundSlackM + o_half + p.radius + o.capsule.radius))
           continue;
         const double d = SegmentSegmentDistance(p.a, p.b, o.capsule.a, o.capsule.b) - p.radius -
                          o.capsule.radius;
@@ -402,7 +475,7 @@ MarginSummary InflateMargins(const RobotModel& robot, std::span<const ProtectedM
       if (plane.offset - support > std::min(clearance, reach + kReachSlackM) + kBoundSlackM)
         continue;
       for (int j = 0; j < c.count; ++j) {
-        const PlacedCapsule& p = placed[c.first + j * stride];
+        const PlacedCapsule& p = placed[static_cast<size_t>(c.capsule) * distinct + c.first + j];
         if (!p.valid) continue;
         const double d =
             plane.offset - std::max(n.dot(p.a), n.dot(p.b)) - p.radius;

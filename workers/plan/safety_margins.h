@@ -6,12 +6,14 @@
 // Thread-safe (pure functions).
 #pragma once
 
+#include <array>
 #include <span>
 #include <vector>
 
 #include "absl/status/status.h"
 #include "core/ids.h"
 #include "Eigen/Core"
+#include "Eigen/Geometry"
 #include "workers/plan/collision_scene.h"
 #include "workers/plan/robot_model.h"
 #include "workers/plan/ur5_kinematics.h"
@@ -40,6 +42,19 @@ struct MarginSummary {
   double min_margin_m = 0.0;       // smallest margin given to any vine obstacle
   double median_margin_m = 0.0;    // median over vine obstacles (canes, head, wires, posts)
   int configurations = 0;          // protected configurations examined
+};
+
+// LinkFrames (ur5_kinematics.h) with the sines and cosines of the DH twists computed once instead
+// of at every call: the same frames bit for bit (the same matrices and products), with half the
+// trigonometric calls. InflateMargins places every protected configuration with it. Thread-safe.
+class TwistCachedFrames {
+ public:
+  explicit TwistCachedFrames(const DhParameters& dh = Ur5Dh());
+  std::array<Eigen::Isometry3d, 7> operator()(const Joints& q) const;
+
+ private:
+  DhParameters dh_;
+  std::array<double, 6> ca_{}, sa_{};
 };
 
 // Sets every obstacle's and plane's margin_m to min(max_margin_m, clearance to the protected

@@ -321,6 +321,34 @@ TEST(SafetyMargins, PartialPlaneMarginsMatchTheReference) {
   }
 }
 
+TEST(TwistCachedFrames, GivesLinkFramesBitForBit) {
+  // The margins are compared bit for bit between builds (vb_margins_bench's fingerprint), so the
+  // placement must not differ from LinkFrames in the last bit, anywhere in the joint range.
+  const TwistCachedFrames frames;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> angle(-2 * M_PI, 2 * M_PI);
+  int differing = 0;
+  for (int n = 0; n < 20000; ++n) {
+    Joints q;
+    for (int j = 0; j < 6; ++j) q[j] = angle(rng);
+    if (n % 4 == 0) q[n % 6] = 0.0;  // exact zeros, as home and some IK solutions have
+    const auto expected = LinkFrames(q);
+    const auto got = frames(q);
+    for (int f = 0; f < 7; ++f)
+      differing += !(expected[f].matrix().array() == got[f].matrix().array()).all();
+  }
+  EXPECT_EQ(differing, 0);
+  // Other DH parameters are honoured too.
+  DhParameters dh = Ur5Dh();
+  dh.alpha[1] = 0.3;
+  dh.a[2] = -0.5;
+  const Joints q = (Joints() << 0.1, -0.7, 1.2, 0.4, -0.9, 2.0).finished();
+  EXPECT_TRUE((TwistCachedFrames(dh)(q)[6].matrix().array() ==
+               LinkFrames(q, dh)[6].matrix().array()).all());
+  EXPECT_FALSE((TwistCachedFrames(dh)(q)[6].matrix().array() ==
+                LinkFrames(q)[6].matrix().array()).all());
+}
+
 TEST(SafetyMargins, OptionsRejectBadValues) {
   MarginOptions options;
   options.max_step_m = 0.0;
