@@ -74,7 +74,7 @@ struct ConnectOptions {
                                      // hangs on its likeliest join to the tree; 0 turns this off
   double keep_min_length_m = 0.12;   // ... if it is at least this long (shorter ones are mostly
                                      // ghosts)
-  double keep_taper_ratio = 1.1;     // a cane left without a parent that reaches beyond
+  double keep_taper_ratio = 1.2;     // a cane left without a parent that reaches beyond
                                      // keep_within_m is kept as well when it is this much thicker
                                      // at its end nearer the vine's centre (TaperTowardCentre):
                                      // canes taper from base to tip, a neighbour's the other way;

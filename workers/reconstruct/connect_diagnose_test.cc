@@ -142,6 +142,16 @@ TEST(ConnectLoss, DISABLED_Report) {
         if (SameLine(*assembled[a], prepared->canes[i])) p = static_cast<int>(i);
       if (p < 0) {
         reason[a] = kInside;
+        if (verbose) {
+          const Polyline3& c = *assembled[a];
+          double r = 0;
+          for (double x : c.radii) r += x / c.radii.size();
+          const double trunk_r = *std::max_element(prepared->trunk->radii.begin(),
+                                                   prepared->trunk->radii.end());
+          std::printf("  inside seed %llu: %.3f m, true %d, mean radius %.4f (trunk %.4f), z %.2f..%.2f\n",
+                      static_cast<unsigned long long>(seed), c.Length(), MajorityCane(c, truth), r,
+                      trunk_r, c.points.front().z(), c.points.back().z());
+        }
         continue;
       }
       bool in_model = false;
