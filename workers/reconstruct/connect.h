@@ -27,9 +27,9 @@
 //     likeliest candidate join to a cane in the tree, the trunk or the head (joins to canes kept
 //     so come after), however unlikely. Left out, its length would be lost to recall. A cane
 //     with no candidate join at all (nothing within `max_attach_m`) stays out. A cane reaching
-//     farther along the row is kept so too when it tapers away from the vine's centre (its end
-//     nearer the centre at least `keep_taper_ratio` times as thick as the other,
-//     TaperTowardCentre): canes thin from base to tip, so the far piece of this vine's cane thins
+//     farther along the row is kept so too when it tapers away from the vine's centre (its third
+//     nearer the centre on average at least `keep_taper_ratio` times as thick as the other end's
+//     third, TaperTowardCentre): canes thin from base to tip, so the far piece of this vine's cane thins
 //     outward and a neighbour's cane, entering the view tip first, thins inward. Such a cane
 //     hangs by its thicker end only.
 // Thread-safe (pure).
@@ -78,7 +78,7 @@ struct ConnectOptions {
                                      // keep_within_m is kept as well when it is this much thicker
                                      // at its end nearer the vine's centre (TaperTowardCentre):
                                      // canes taper from base to tip, a neighbour's the other way;
-                                     // 0 turns this off
+                                     // 0 (or keep_within_m 0) turns this off
 
   absl::Status Validate() const;
 };
