@@ -123,7 +123,28 @@ Eigen::Vector3d EndOutward(const Polyline3& line, bool last) {
   return n > 1e-12 ? Eigen::Vector3d(d / n) : Eigen::Vector3d::UnitZ();
 }
 
+// Mean radius over arc lengths [from, to] of the polyline, at evenly spaced samples about
+// 5 mm apart (the same samples read from either end).
+double MeanRadius(const Polyline3& line, double from, double to) {
+  const int n = std::max(2, static_cast<int>(std::ceil((to - from) / 0.005)) + 1);
+  double sum = 0.0;
+  for (int k = 0; k < n; ++k) sum += line.RadiusAt(from + (to - from) * k / (n - 1));
+  return sum / n;
+}
+
 }  // namespace
+
+double TaperTowardCentre(const Polyline3& cane, double centre_x) {
+  const double length = cane.Length();
+  if (!(length >= 0.03)) return 1.0;
+  const double third = length / 3.0;
+  const double front = MeanRadius(cane, 0.0, third);
+  const double back = MeanRadius(cane, length - third, length);
+  const bool front_inner = std::abs(cane.points.front().x() - centre_x) <
+                           std::abs(cane.points.back().x() - centre_x);
+  const double inner = front_inner ? front : back, outer = front_inner ? back : front;
+  return outer > 0.0 ? inner / outer : 1.0;
+}
 
 absl::Status ConnectOptions::Validate() const {
   for (auto [v, name] : {std::pair{max_attach_m, "max_attach_m"}, {sample_step_m, "sample_step_m"},
@@ -139,6 +160,9 @@ absl::Status ConnectOptions::Validate() const {
   }
   if (!std::isfinite(keep_min_length_m) || keep_min_length_m < 0) {
     return absl::InvalidArgumentError("connect options: keep_min_length_m must be >= 0");
+  }
+  if (!std::isfinite(keep_taper_ratio) || keep_taper_ratio < 0) {
+    return absl::InvalidArgumentError("connect options: keep_taper_ratio must be >= 0");
   }
   if (!(min_gap_support >= 0.0 && min_gap_support <= 1.0)) {
     return absl::InvalidArgumentError("connect options: min_gap_support must be in [0, 1]");
@@ -377,19 +401,30 @@ absl::StatusOr<VineModel> BuildTree(const PreparedCanes& prepared_in,
   // the tree, the likeliest of all first, so that a cane kept so can take others after it.
   if (options.keep_within_m > 0.0) {
     const double centre_x = prepared->trunk->points.back().x();
-    std::vector<char> near(n, 0);
+    // near: 1 wholly near the centre; 2 farther, but thinning away from the centre (this
+    // vine's), to hang by its thicker end, the one nearer the centre (`inner_is_last`).
+    std::vector<char> near(n, 0), inner_is_last(n, 0);
     for (int i = 0; i < n; ++i) {
       if (kept[i] != 0 || canes[i].Length() < options.keep_min_length_m) continue;
       near[i] = std::all_of(canes[i].points.begin(), canes[i].points.end(),
                             [&](const Eigen::Vector3d& p) {
                               return std::abs(p.x() - centre_x) <= options.keep_within_m;
                             });
+      if (!near[i] && options.keep_taper_ratio > 0.0 &&
+          TaperTowardCentre(canes[i], centre_x) >= options.keep_taper_ratio) {
+        near[i] = 2;
+        inner_is_last[i] = std::abs(canes[i].points.back().x() - centre_x) <
+                           std::abs(canes[i].points.front().x() - centre_x);
+      }
     }
     while (true) {
       int best = -1;
       for (size_t k = 0; k < joins.size(); ++k) {
         const JoinCandidate& c = joins[k];
         if (kept[c.child] != 0 || !near[c.child] || (c.parent >= 0 && kept[c.parent] != 1)) {
+          continue;
+        }
+        if (near[c.child] == 2 && c.base_is_last != static_cast<bool>(inner_is_last[c.child])) {
           continue;
         }
         if (best < 0 || c.probability > joins[best].probability) best = static_cast<int>(k);

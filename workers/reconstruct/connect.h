@@ -26,7 +26,12 @@
 //     reach into the view from the sides; short ones are mostly ghosts): it hangs on its
 //     likeliest candidate join to a cane in the tree, the trunk or the head (joins to canes kept
 //     so come after), however unlikely. Left out, its length would be lost to recall. A cane
-//     with no candidate join at all (nothing within `max_attach_m`) stays out.
+//     with no candidate join at all (nothing within `max_attach_m`) stays out. A cane reaching
+//     farther along the row is kept so too when it tapers away from the vine's centre (its third
+//     nearer the centre on average at least `keep_taper_ratio` times as thick as the other end's
+//     third, TaperTowardCentre): canes thin from base to tip, so the far piece of this vine's cane thins
+//     outward and a neighbour's cane, entering the view tip first, thins inward. Such a cane
+//     hangs by its thicker end only.
 // Thread-safe (pure).
 #pragma once
 
@@ -69,6 +74,11 @@ struct ConnectOptions {
                                      // hangs on its likeliest join to the tree; 0 turns this off
   double keep_min_length_m = 0.12;   // ... if it is at least this long (shorter ones are mostly
                                      // ghosts)
+  double keep_taper_ratio = 1.2;     // a cane left without a parent that reaches beyond
+                                     // keep_within_m is kept as well when it is this much thicker
+                                     // at its end nearer the vine's centre (TaperTowardCentre):
+                                     // canes taper from base to tip, a neighbour's the other way;
+                                     // 0 (or keep_within_m 0) turns this off
 
   absl::Status Validate() const;
 };
@@ -89,6 +99,11 @@ absl::StatusOr<VineModel> ConnectCanes(const std::vector<Polyline3>& canes,
                                        const HeadModel& head, const ConnectOptions& options,
                                        ConnectSummary* summary = nullptr,
                                        const GapSupportFn& gap_support = {});
+
+// The mean radius of the third of `cane` (by arc length) whose end is nearer `centre_x` along
+// the row, divided by that of the third at the other end: > 1 when the cane thins away from
+// the vine's centre. 1 for a cane shorter than 3 cm.
+double TaperTowardCentre(const Polyline3& cane, double centre_x);
 
 // Steps 1-2 alone (PrepareCanes, FindJoins), for training the join classifier and diagnosis.
 struct PreparedCanes {

@@ -215,6 +215,80 @@ TEST(ConnectCanes, ACaneNearTheVineWithOnlyUnlikelyJoinsIsKept) {
   EXPECT_NE(std::string(rejected.status().message()).find("keep_within_m"), std::string::npos);
 }
 
+// A cane whose radius runs from r_a at a to r_b at b.
+Polyline3 TaperedLine(Eigen::Vector3d a, Eigen::Vector3d b, double r_a, double r_b) {
+  Polyline3 line = Line(a, b);
+  for (size_t i = 0; i < line.radii.size(); ++i)
+    line.radii[i] = r_a + (r_b - r_a) * static_cast<double>(i) / (line.radii.size() - 1);
+  return line;
+}
+
+TEST(TaperTowardCentre, IsInnerOverOuterRadiusWhicheverWayTheCaneRuns) {
+  const Polyline3 outward = TaperedLine({0.4, 0.8, 1.3}, {0.9, 0.8, 1.3}, 0.005, 0.003);
+  EXPECT_GT(TaperTowardCentre(outward, 0.0), 1.3);
+  Polyline3 reversed = outward;
+  std::reverse(reversed.points.begin(), reversed.points.end());
+  std::reverse(reversed.radii.begin(), reversed.radii.end());
+  EXPECT_NEAR(TaperTowardCentre(reversed, 0.0), TaperTowardCentre(outward, 0.0), 1e-9);
+  // Seen from a centre beyond its far end, the same cane thickens toward the centre.
+  EXPECT_LT(TaperTowardCentre(outward, 1.5), 1.0);
+  EXPECT_NEAR(TaperTowardCentre(Line({0.4, 0.8, 1.3}, {0.9, 0.8, 1.3}), 0.0), 1.0, 1e-12);
+  EXPECT_EQ(TaperTowardCentre(Line({0.4, 0.8, 1.3}, {0.41, 0.8, 1.3}), 0.0), 1.0);  // too short
+}
+
+// Step 6 beyond keep_within_m: of two canes reaching 0.9 m along the row with only unlikely
+// joins, the one thinning outward (this vine's) is kept, hung by its thicker inner end even
+// when the join by its outer end is likelier; the one thinning inward (a neighbour's, entering
+// tip first) stays out, as does either with keep_taper_ratio 0.
+TEST(ConnectCanes, AFarCaneThinningAwayFromTheVineIsKeptByItsThickerEnd) {
+  const Polyline3 trunk = Line({0, 0.8, 0}, {0, 0.8, 0.95}, 0.025);
+  PreparedCanes prepared;
+  prepared.trunk = trunk;
+  prepared.canes = {Line({0.05, 0.8, 1.1}, {0.45, 0.8, 1.3}, 0.006),               // A, near
+                    TaperedLine({0.9, 0.8, 1.32}, {0.5, 0.8, 1.3}, 0.003, 0.005),  // B, ours
+                    TaperedLine({0.5, 0.8, 1.2}, {0.9, 0.8, 1.2}, 0.003, 0.005)};  // C, theirs
+  auto join = [](int child, bool base_is_last, int parent, double p) {
+    JoinCandidate c;
+    c.child = child;
+    c.base_is_last = base_is_last;
+    c.parent = parent;
+    c.target = parent < 0 ? JoinTarget::kHead : JoinTarget::kCane;
+    // On A's side, not its tip: B does not continue A and is not appended to it.
+    c.point = parent < 0 ? Eigen::Vector3d(0.05, 0.8, 1.05) : Eigen::Vector3d(0.25, 0.8, 1.2);
+    c.probability = p;
+    return c;
+  };
+  const std::vector<JoinCandidate> joins = {join(0, false, -1, 0.9),
+                                            join(1, false, 0, 0.08),  // B by its outer end
+                                            join(1, true, 0, 0.04),   // B by its inner end
+                                            join(2, false, 0, 0.05)};
+  ConnectOptions off;
+  off.keep_taper_ratio = 0.0;
+  ConnectSummary summary;
+  auto model = BuildTree(prepared, joins, Head(), off, &summary);
+  ASSERT_TRUE(model.ok()) << model.status();
+  EXPECT_EQ(summary.attached, 1);
+  EXPECT_EQ(summary.unattached, 2);
+
+  model = BuildTree(prepared, joins, Head(), ConnectOptions(), &summary);
+  ASSERT_TRUE(model.ok()) << model.status();
+  ASSERT_TRUE(model->Validate().ok()) << model->Validate();
+  EXPECT_EQ(summary.attached, 2);
+  EXPECT_EQ(summary.kept_near, 1);
+  EXPECT_EQ(summary.unattached, 1);
+  ASSERT_EQ(model->canes.size(), 3u);
+  const Cane& b = model->canes[2];
+  EXPECT_EQ(b.parent_id, model->canes[1].id);
+  EXPECT_NEAR(b.polyline.points.back().x(), 0.9, 1e-9);  // base first: the thick inner end
+  EXPECT_GT(b.polyline.radii.front(), b.polyline.radii.back());
+
+  ConnectOptions bad;
+  bad.keep_taper_ratio = -1.0;
+  const auto rejected = BuildTree(prepared, joins, Head(), bad);
+  EXPECT_EQ(rejected.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(std::string(rejected.status().message()).find("keep_taper_ratio"), std::string::npos);
+}
+
 TEST(ConnectCanes, TheStereoTrunkReplacesTheSilhouetteAxis) {
   const Polyline3 silhouette = Line({0.01, 0.8, 0}, {0.01, 0.8, 0.95}, 0.03);
   const std::vector<Polyline3> canes = {Line({0.0, 0.8, 0.9}, {0.0, 0.8, 0.35}, 0.02)};
