@@ -147,6 +147,16 @@ TEST(MatchSegments, BadInputRejects) {
   EXPECT_NE(std::string(gap.status().message()).find("max_ill_conditioned_gap_samples"),
             std::string::npos)
       << gap.status();
+  for (int k = 0; k < 3; ++k) {
+    bad_options = {};
+    if (k == 0) bad_options.other_views.gate_px = 0.0;
+    if (k == 1) bad_options.other_views.min_cos = 1.5;
+    if (k == 2) bad_options.other_views.max_residual_growth_px = NAN;
+    const auto other = MatchSegments(views, rig, bad_options, inf);
+    EXPECT_EQ(code(other), absl::StatusCode::kInvalidArgument) << k;
+    EXPECT_NE(std::string(other.status().message()).find("other_views"), std::string::npos)
+        << other.status();
+  }
 }
 
 // A cane that runs along the horizontal pair's epipolar lines for 4 cm between two oblique
@@ -299,6 +309,29 @@ TEST(MatchSegments, SyntheticVineIsCoveredAndPrecise) {
               pieces->size(), m.coverage, m.truth_m, m.precision, m.pieces_m, 1e3 * seconds);
   EXPECT_GE(m.coverage, 0.8);
   EXPECT_GE(m.precision, 0.9);
+}
+
+// The same vine with the selected pieces refined in the other views (the default) and without:
+// more of the pieces' length lies on the true canes, and coverage holds.
+TEST(MatchSegments, RefiningInTheOtherViewsRaisesPrecision) {
+  const uint64_t seed = 1234;
+  const sim::Scene scene = sim::GenerateScene(seed, 0).value();
+  const RigCalibration truth_rig = Rig(3);
+  const RigCalibration rig = sim::PerturbCalibration(truth_rig, 1.0, seed);
+  const std::vector<View2D> views = SyntheticViews(scene.vine, truth_rig);
+  CorrespondenceOptions off;
+  off.other_views.rounds = 0;
+  const auto refined = MatchSegments(views, rig, {}, Deadline::Infinite());
+  const auto two_view = MatchSegments(views, rig, off, Deadline::Infinite());
+  ASSERT_TRUE(refined.ok()) << refined.status();
+  ASSERT_TRUE(two_view.ok()) << two_view.status();
+  ASSERT_EQ(refined->size(), two_view->size());  // the same pieces, placed differently
+  const Metrics on_m = Evaluate(*refined, scene.vine, scene.vine, truth_rig);
+  const Metrics off_m = Evaluate(*two_view, scene.vine, scene.vine, truth_rig);
+  std::printf("[ other views ] precision %.3f -> %.3f, coverage %.3f -> %.3f\n", off_m.precision,
+              on_m.precision, off_m.coverage, on_m.coverage);
+  EXPECT_GT(on_m.precision, off_m.precision + 0.02);
+  EXPECT_GE(on_m.coverage, off_m.coverage - 0.01);
 }
 
 // Harder: neighbours' canes intrude, segments are broken and wobble (correspondence_test_util.h).

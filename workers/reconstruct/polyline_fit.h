@@ -68,7 +68,8 @@ struct OtherViewFitOptions {
 // 1-2 cm at 0.8 m with the default rig), and a third view fixes it. Updates control_points and
 // points only: the attributes (residuals, length, radii, ...) stay those of the two-view fit,
 // from which the candidate was scored. Returns the associations of the last round (0: the fit
-// is unchanged: no other view, too few associations, or a non-finite result).
+// is unchanged: no other view, too few associations, a non-finite result, or residuals beyond
+// max_residual_growth_px). Options are not validated here (CorrespondenceOptions::Validate).
 int RefineInOtherViews(const MatchCandidate& candidate, const CameraCalibration& camera_a,
                        const CameraCalibration& camera_b, const std::vector<OtherView>& others,
                        const PolylineFitOptions& options, const OtherViewFitOptions& other_options,
