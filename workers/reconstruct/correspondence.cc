@@ -136,6 +136,13 @@ absl::Status CorrespondenceOptions::Validate() const {
                           "smoothness_weight >= 0 (all finite)");
   }
   if (!(max_rms_px > 0.0)) return Invalid("max_rms_px", "must be > 0");
+  if (!(other_views.gate_px > 0.0) || !std::isfinite(other_views.gate_px) ||
+      !(other_views.min_cos >= 0.0 && other_views.min_cos <= 1.0) || other_views.rounds < 0 ||
+      other_views.min_associations < 1 || !(other_views.max_residual_growth_px >= 0.0) ||
+      !std::isfinite(other_views.max_residual_growth_px)) {
+    return Invalid("other_views", "gate_px > 0 and finite, min_cos in [0, 1], rounds >= 0, "
+                                  "min_associations >= 1, max_residual_growth_px >= 0 and finite");
+  }
   for (int i = 0; i < kMatchFeatureCount; ++i) {
     if (!std::isfinite(classifier.multi_view[i]) || !std::isfinite(classifier.two_view[i])) {
       return Invalid("classifier", absl::StrCat("weight ", i, " not finite"));
@@ -157,10 +164,19 @@ absl::Status CorrespondenceOptions::Validate() const {
 absl::StatusOr<std::vector<ScoredCandidate>> ScoreCandidates(
     const std::vector<View2D>& views, const RigCalibration& rig,
     const CorrespondenceOptions& options, const Deadline& deadline) {
+  std::vector<ViewSamples> samples;
+  return ScoreCandidates(views, rig, options, deadline, &samples);
+}
+
+absl::StatusOr<std::vector<ScoredCandidate>> ScoreCandidates(
+    const std::vector<View2D>& views, const RigCalibration& rig,
+    const CorrespondenceOptions& options, const Deadline& deadline,
+    std::vector<ViewSamples>* samples_out) {
   VB_RETURN_IF_ERROR(options.Validate());
   VB_RETURN_IF_ERROR(ValidateInput(views, rig));
   VB_RETURN_IF_ERROR(deadline.Check("correspondence"));
-  std::vector<ViewSamples> samples;
+  std::vector<ViewSamples>& samples = *samples_out;
+  samples.clear();
   samples.reserve(views.size());
   for (size_t v = 0; v < views.size(); ++v) {
     samples.emplace_back(views[v], rig.cameras[v], options.sample_step_px);
@@ -249,8 +265,9 @@ absl::StatusOr<std::vector<Piece3D>> MatchSegments(const std::vector<View2D>& vi
                                                    const RigCalibration& rig,
                                                    const CorrespondenceOptions& options,
                                                    const Deadline& deadline) {
+  std::vector<ViewSamples> samples;
   VB_ASSIGN_OR_RETURN(std::vector<ScoredCandidate> all,
-                      ScoreCandidates(views, rig, options, deadline));
+                      ScoreCandidates(views, rig, options, deadline, &samples));
   std::vector<ScoredCandidate> candidates;
   for (ScoredCandidate& c : all) {
     if (c.probability >= options.min_probability) candidates.push_back(std::move(c));
@@ -268,7 +285,17 @@ absl::StatusOr<std::vector<Piece3D>> MatchSegments(const std::vector<View2D>& vi
   std::vector<Piece3D> pieces;
   pieces.reserve(kept.size());
   for (int i : kept) {
-    const ScoredCandidate& c = candidates[i];
+    ScoredCandidate& c = candidates[i];
+    if (options.other_views.rounds > 0) {
+      std::vector<OtherView> others;
+      for (int v = 0; v < static_cast<int>(views.size()); ++v) {
+        if (v == c.candidate.view_a || v == c.candidate.view_b || IsEmptyView(views[v])) continue;
+        others.push_back({&samples[v], &rig.cameras[v]});
+      }
+      RefineInOtherViews(c.candidate, rig.cameras[c.candidate.view_a],
+                         rig.cameras[c.candidate.view_b], others, options.fit,
+                         options.other_views, &c.fit);
+    }
     Piece3D piece;
     piece.polyline.points = c.fit.control_points;
     piece.polyline.radii = c.fit.radii;

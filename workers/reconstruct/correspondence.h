@@ -45,6 +45,9 @@ struct CorrespondenceOptions {
   // synthetic views (docs/reconstruction.md, section 3).
   int max_ill_conditioned_gap_samples = 0;
   PolylineFitOptions fit;               // the 3D polyline fit
+  // The selected candidates' geometry refined with the views outside each match
+  // (RefineInOtherViews; rounds 0: off). Their scores come from the two-view fit.
+  OtherViewFitOptions other_views;
   double max_rms_px = 8.0;              // candidates fitting worse are dropped before scoring
   MatchClassifier classifier = DefaultMatchClassifier();  // candidate probabilities
   double min_probability = 0.02;        // candidates below are dropped before Gibbs sampling
@@ -54,12 +57,14 @@ struct CorrespondenceOptions {
   // chosen with the whole pipeline (MatchSegments.DISABLED_PipelineLoss) on rendered stops,
   // held-out seeds 1110-1117: cane recall 0.63 / precision 0.86 from label images, 0.63 / 0.86
   // from segmented images (2 gave 0.59 / 0.87 and 0.56 / 0.85; 16 gave 0.66 / 0.84): cane
-  // assembly still drops most ghosts, but cannot recover missed canes.
-  double alpha = 5.0;
+  // assembly still drops most ghosts, but cannot recover missed canes. 4 since the selected
+  // pieces are refined in the other views (other_views): with 5 that gained recall and
+  // connectivity but lost a little precision (docs/reconstruction.md, section 3).
+  double alpha = 4.0;
 
   // INVALID_ARGUMENT naming the field for non-finite or out-of-range values (sample_step_px
   // outside [0.5, 50], min_epipolar_sin outside [0, 1), min_hits < 2, max_gap_samples < 0,
-  // max_ill_conditioned_gap_samples < 0,
+  // max_ill_conditioned_gap_samples < 0, other_views out of range,
   // empty volume, alpha <= 0 or NaN, non-finite classifier weights, invalid gibbs options...).
   absl::Status Validate() const;
 };
@@ -80,6 +85,12 @@ struct ScoredCandidate {
 absl::StatusOr<std::vector<ScoredCandidate>> ScoreCandidates(
     const std::vector<View2D>& views, const RigCalibration& rig,
     const CorrespondenceOptions& options, const Deadline& deadline);
+
+// The same, leaving each view's resampled segments in *samples (replaced).
+absl::StatusOr<std::vector<ScoredCandidate>> ScoreCandidates(
+    const std::vector<View2D>& views, const RigCalibration& rig,
+    const CorrespondenceOptions& options, const Deadline& deadline,
+    std::vector<ViewSamples>* samples);
 
 // Conflict lists of the one-to-one constraint over `candidates` (symmetric).
 std::vector<std::vector<int>> CandidateConflicts(const std::vector<ScoredCandidate>& candidates,

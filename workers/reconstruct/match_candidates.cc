@@ -174,7 +174,7 @@ void ViewSamples::PiecesNearSegment(const Eigen::Vector2d& p0, const Eigen::Vect
 }
 
 bool ViewSamples::NearestPiece(const Eigen::Vector2d& p, double radius, double* distance,
-                               Eigen::Vector2d* direction) const {
+                               Eigen::Vector2d* direction, Eigen::Vector2d* closest) const {
   if (cells_.empty() || !p.allFinite()) return false;
   int x0, y0, x1, y1;
   CellOf(p - Eigen::Vector2d::Constant(radius), &x0, &y0);
@@ -194,6 +194,7 @@ bool ViewSamples::NearestPiece(const Eigen::Vector2d& p, double radius, double* 
           best = dist;
           found = true;
           *direction = len2 > 0.0 ? Eigen::Vector2d(e / std::sqrt(len2)) : Eigen::Vector2d::UnitX();
+          if (closest) *closest = q0 + t * e;
         }
       }
     }

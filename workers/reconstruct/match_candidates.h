@@ -37,9 +37,9 @@ class ViewSamples {
   void PiecesNearSegment(const Eigen::Vector2d& p0, const Eigen::Vector2d& p1,
                          std::vector<std::pair<int, int>>* out) const;
   // Nearest piece within `radius` (normalised units) of p: returns false if none; otherwise its
-  // distance and the piece's unit direction.
+  // distance, the piece's unit direction and, if `closest` is given, its point nearest p.
   bool NearestPiece(const Eigen::Vector2d& p, double radius, double* distance,
-                    Eigen::Vector2d* direction) const;
+                    Eigen::Vector2d* direction, Eigen::Vector2d* closest = nullptr) const;
 
  private:
   void CellOf(const Eigen::Vector2d& p, int* cx, int* cy) const;

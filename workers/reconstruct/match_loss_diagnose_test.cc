@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <map>
 #include <string>
 #include <set>
 #include <tuple>
@@ -302,6 +303,199 @@ TEST(MatchLoss, DISABLED_LowScores) {
                 sum[1][i] / n[1], sum[2][i] / n[2], contribution[0][i] / n[0],
                 contribution[1][i] / n[1], contribution[2][i] / n[2]);
   }
+}
+
+}  // namespace
+}  // namespace vb::reconstruct
+
+namespace vb::reconstruct {
+namespace {
+
+// Why no run of epipolar crossings triangulates near a true sample (the "no raw candidate" row
+// of the report above): for each such sample, over the view pairs whose skeleton segments lie
+// on it, the nearest crossing of those two segments (FindCandidates with min_hits 1, so every
+// run is kept) is classed as
+//   no crossing of the pair's segments near it (within 10 mm of the sample, by 3D distance),
+//   a crossing within 10 mm, but only in runs shorter than min_hits: the two segments' lengths
+//   (in samples) then tell apart "a segment is too short" from "the run broke",
+//   a crossing of the pair within 10 mm, in a run of min_hits or more whose other hits are far
+//   (cannot happen: that run is a raw candidate; counted as a check).
+// Also: the same with the depth tolerance doubled, and with the 1 px calibration error absent
+// (the true rig), to size the share due to the remaining calibration error.
+// Run as the report above with --gtest_filter='MatchLoss.DISABLED_RawCandidates'.
+TEST(MatchLoss, DISABLED_RawCandidates) {
+  const auto [first, count, images, fiducials] = ReportStopsFromEnv(1300, 4);
+  const ReconstructOptions options;
+  enum Cause { kNoCrossing, kShortSegment, kShortRun, kCheck, kCauses };
+  const char* names[kCauses] = {"no crossing of the pair within 10 mm",
+                                "only short runs; a segment under min_hits samples",
+                                "only short runs; both segments long enough (run broke)",
+                                "check: long run near (should be 0)"};
+  double cause[kCauses] = {}, total = 0, lost_raw = 0, with_true_rig = 0, with_double_tol = 0,
+         with_sin = 0;
+  double no_crossing[8] = {};
+  for (int k = 0; k < count; ++k) {
+    const SimulatedStop stop = MakeRenderedStop(first + k, images, fiducials);
+    ASSERT_FALSE(stop.views.empty());
+    const auto matched =
+        MatchWithRigRefinement(stop.views, stop.rig, options, Deadline::Infinite());
+    ASSERT_TRUE(matched.ok()) << matched.status();
+    const int n = static_cast<int>(stop.views.size());
+    const std::vector<View2D>& views =
+        matched->refined_views.empty() ? stop.views : matched->refined_views;
+    CandidateOptions co;
+    co.volume = options.correspondence.volume;
+    co.min_epipolar_sin = options.correspondence.min_epipolar_sin;
+    co.min_hits = options.correspondence.min_hits;
+    co.max_gap_samples = options.correspondence.max_gap_samples;
+    co.max_ill_conditioned_gap_samples = options.correspondence.max_ill_conditioned_gap_samples;
+    // Raw candidates of a rig and options, as a grid; with `runs`, every run's hits keyed by
+    // (a, segment_a, b, segment_b) with the run's length.
+    using PairKey = std::tuple<int, int, int, int>;
+    auto raw = [&](const RigCalibration& rig, const CandidateOptions& o, PointGrid* grid,
+                   std::map<PairKey, std::vector<std::pair<Eigen::Vector3d, int>>>* runs) {
+      std::vector<ViewSamples> samples;
+      for (int v = 0; v < n; ++v)
+        samples.emplace_back(views[v], rig.cameras[v], options.correspondence.sample_step_px);
+      for (int a = 0; a < n; ++a)
+        for (int b = a + 1; b < n; ++b)
+          for (const MatchCandidate& c :
+               FindCandidates(a, samples[a], rig.cameras[a], b, samples[b], rig.cameras[b], o)) {
+            const int size = static_cast<int>(c.hits.size());
+            if (size >= co.min_hits) {
+              std::vector<Eigen::Vector3d> pts;
+              for (const EpipolarHit& h : c.hits) pts.push_back(h.point);
+              grid->AddLine(pts, 1.0);
+            }
+            if (runs) {
+              auto& list = (*runs)[{a, c.segment_a, b, c.segment_b}];
+              for (const EpipolarHit& h : c.hits) list.push_back({h.point, size});
+            }
+          }
+    };
+    PointGrid grid, grid_true, grid_tol, grid_sin;
+    std::map<PairKey, std::vector<std::pair<Eigen::Vector3d, int>>> runs;
+    CandidateOptions all_runs = co;
+    all_runs.min_hits = 1;
+    raw(matched->rig, all_runs, &grid_sin /*unused*/, &runs);
+    grid_sin = PointGrid();
+    raw(matched->rig, co, &grid, nullptr);
+    raw(stop.true_rig, co, &grid_true, nullptr);
+    CandidateOptions tol = co;
+    tol.depth_tolerance_m *= 2.0;
+    tol.max_depth_slope *= 2.0;
+    raw(matched->rig, tol, &grid_tol, nullptr);
+    CandidateOptions sin = co;
+    sin.min_epipolar_sin = 0.1;
+    raw(matched->rig, sin, &grid_sin, nullptr);
+    PointGrid fitted;
+    const auto scored =
+        ScoreCandidates(views, matched->rig, options.correspondence, Deadline::Infinite());
+    ASSERT_TRUE(scored.ok());
+    for (const ScoredCandidate& c : *scored) fitted.AddLine(c.fit.control_points, 1.0);
+    // Per view: the segment near each pixel (skeleton dilated by 3 px), as the report.
+    std::vector<std::vector<int>> seg_at(n);
+    for (int v = 0; v < n; ++v) {
+      const View2D& view = views[v];
+      seg_at[v].assign(static_cast<size_t>(view.width) * view.height, -1);
+      for (size_t s = 0; s < view.segments.size(); ++s)
+        for (const Eigen::Vector2d& q : view.segments[s].points)
+          for (int dy = -3; dy <= 3; ++dy)
+            for (int dx = -3; dx <= 3; ++dx) {
+              const int x = static_cast<int>(std::lround(q.x())) + dx;
+              const int y = static_cast<int>(std::lround(q.y())) + dy;
+              if (x < 0 || y < 0 || x >= view.width || y >= view.height) continue;
+              seg_at[v][static_cast<size_t>(y) * view.width + x] = static_cast<int>(s);
+            }
+    }
+    std::vector<ViewSamples> samples;
+    for (int v = 0; v < n; ++v)
+      samples.emplace_back(views[v], matched->rig.cameras[v], options.correspondence.sample_step_px);
+    for (const Cane& cane : stop.scene.vine.canes) {
+      if (cane.kind == CaneKind::kSpur) continue;
+      for (const Eigen::Vector3d& p : cane.polyline.Sample(0.005)) {
+        std::vector<int> seg(n, -1);
+        int skel = 0;
+        for (int v = 0; v < n; ++v) {
+          const auto uv = stop.true_rig.cameras[v].Project(p);
+          if (!uv || !stop.true_rig.cameras[v].InImage(*uv)) continue;
+          const int x = static_cast<int>(std::lround(uv->x()));
+          const int y = static_cast<int>(std::lround(uv->y()));
+          if (x < 0 || y < 0 || x >= views[v].width || y >= views[v].height) continue;
+          seg[v] = seg_at[v][static_cast<size_t>(y) * views[v].width + x];
+          skel += seg[v] >= 0;
+        }
+        total += 1;
+        if (skel < 2 || grid.MaxNear(p) >= 0) continue;
+        lost_raw += 1;
+        if (grid_true.MaxNear(p) >= 0) with_true_rig += 1;
+        if (grid_tol.MaxNear(p) >= 0) with_double_tol += 1;
+        if (grid_sin.MaxNear(p) >= 0) with_sin += 1;
+        Cause best = kNoCrossing;
+        for (int a = 0; a < n; ++a)
+          for (int b = a + 1; b < n; ++b) {
+            if (seg[a] < 0 || seg[b] < 0) continue;
+            const auto it = runs.find({a, seg[a], b, seg[b]});
+            if (it == runs.end()) continue;
+            for (const auto& [q, size] : it->second) {
+              if ((q - p).norm() > 0.01) continue;
+              Cause c = kCheck;
+              if (size < co.min_hits) {
+                const int na = static_cast<int>(samples[a].segments()[seg[a]].normalised.size());
+                const int nb = static_cast<int>(samples[b].segments()[seg[b]].normalised.size());
+                c = std::min(na, nb) < co.min_hits ? kShortSegment : kShortRun;
+              }
+              if (c > best) best = c;
+            }
+          }
+        cause[best] += 1;
+        if (best != kNoCrossing) continue;
+        // Why no crossing: nearest hit of the pair's runs; any run's hit (another pair) near;
+        // the sample near an end of one of its segments (a junction or a gap) in some view.
+        double nearest = INFINITY;
+        bool other_pair = false, near_end = false, nearest_long = false;
+        for (const auto& [key, list] : runs)
+          for (const auto& [q, size] : list) {
+            const double d = (q - p).norm();
+            const auto [a, sa, b, sb] = key;
+            if (seg[a] == sa && seg[b] == sb && d < nearest) {
+              nearest = d;
+              nearest_long = size >= co.min_hits;
+            }
+            else if (d <= 0.01) other_pair = true;
+          }
+        for (int v = 0; v < n; ++v) {
+          if (seg[v] < 0) continue;
+          const auto uv = stop.true_rig.cameras[v].Project(p);
+          const auto& pts = views[v].segments[seg[v]].points;
+          if (uv && ((pts.front() - *uv).norm() < 12.0 || (pts.back() - *uv).norm() < 12.0))
+            near_end = true;
+        }
+        if (fitted.MaxNear(p) >= 0) no_crossing[6] += 1;
+        if (other_pair) no_crossing[0] += 1;
+        else if (nearest <= 0.02) no_crossing[1] += 1, no_crossing[7] += nearest_long;
+        else if (nearest <= 0.05) no_crossing[2] += 1;
+        else if (std::isfinite(nearest)) no_crossing[3] += 1;
+        else no_crossing[4] += 1;
+        if (near_end) no_crossing[5] += 1;
+      }
+    }
+    std::printf("seed %llu: lost at raw %.3f\n", static_cast<unsigned long long>(first + k),
+                lost_raw / total);
+  }
+  std::printf("samples with skeleton in >= 2 views but no raw candidate: %.3f of true length "
+              "(%d stops)\n", lost_raw / total, count);
+  for (int c = 0; c < kCauses; ++c) std::printf("  %-58s %.3f\n", names[c], cause[c] / total);
+  std::printf("  of no crossing: another pair's run within 10 mm %.3f; the pair's nearest hit "
+              "10-20 mm %.3f, 20-50 mm %.3f, farther %.3f, none %.3f; within 12 px of an end of "
+              "its segment in some view %.3f\n", no_crossing[0] / total, no_crossing[1] / total,
+              no_crossing[2] / total, no_crossing[3] / total, no_crossing[4] / total,
+              no_crossing[5] / total);
+  std::printf("  of no crossing: a fitted candidate within 10 mm anyway %.3f; nearest hit "
+              "10-20 mm and in a run of min_hits or more %.3f\n",
+              no_crossing[6] / total, no_crossing[7] / total);
+  std::printf("  recovered with the true rig %.3f, doubled depth tolerance %.3f, min_epipolar_sin "
+              "0.1 %.3f\n", with_true_rig / total, with_double_tol / total, with_sin / total);
 }
 
 }  // namespace

@@ -17,6 +17,15 @@ void Basis(double t, int k_count, int* k, double* w) {
   *w = u - *k;
 }
 
+// A 1D residual in a view outside the match: the point of hit j, projected into `camera`, should
+// lie on the line through `x` (normalised) with unit normal `normal`.
+struct OtherViewResidual {
+  int j = 0;
+  const CameraCalibration* camera = nullptr;
+  Eigen::Vector2d x = Eigen::Vector2d::Zero();
+  Eigen::Vector2d normal = Eigen::Vector2d::Zero();
+};
+
 struct Problem {
   const MatchCandidate& candidate;
   const CameraCalibration& a;
@@ -25,6 +34,7 @@ struct Problem {
   std::vector<int> used;  // hits in the fit: all, or an even subset of long candidates
   int k_count = 2;
   double smooth_scale = 0.0;  // smoothness weight in pixels per metre
+  std::vector<OtherViewResidual> others;  // RefineInOtherViews only
 
   // Cost (sum of squares); if h/g are given also the Gauss-Newton normal equations.
   double Evaluate(const Eigen::MatrixXd& p, Eigen::MatrixXd* h, Eigen::VectorXd* g) const {
@@ -73,6 +83,22 @@ struct Problem {
         }
       }
     }
+    for (const OtherViewResidual& o : others) {
+      int k;
+      double w;
+      Basis(t[o.j], k_count, &k, &w);
+      const Eigen::Vector3d x = (1.0 - w) * p.row(k).transpose() + w * p.row(k + 1).transpose();
+      const Eigen::Matrix3d& r = o.camera->rotation_camera_from_platform;
+      const Eigen::Vector3d y = r * x + o.camera->translation_camera_from_platform;
+      if (y.z() <= 1e-6) return std::numeric_limits<double>::infinity();
+      const double f = o.camera->camera_matrix(0, 0);
+      Eigen::Matrix<double, 2, 3> dpi;
+      dpi << 1.0 / y.z(), 0.0, -y.x() / (y.z() * y.z()), 0.0, 1.0 / y.z(),
+          -y.y() / (y.z() * y.z());
+      const Eigen::Matrix<double, 1, 1> res(f * o.normal.dot(y.head<2>() / y.z() - o.x));
+      const Eigen::Matrix<double, 1, 3> jn = o.normal.transpose() * (f * dpi * r);
+      add(jn, res, k, w);
+    }
     for (int k = 1; k + 1 < k_count; ++k) {
       const Eigen::Vector3d second = p.row(k - 1) - 2.0 * p.row(k) + p.row(k + 1);
       cost += smooth_scale * smooth_scale * second.squaredNorm();
@@ -90,6 +116,70 @@ struct Problem {
   }
 };
 
+// Levenberg-Marquardt from *p; returns the final cost (infinite if the start is not finite).
+double Minimise(const Problem& problem, int max_iterations, Eigen::MatrixXd* p_io) {
+  Eigen::MatrixXd& p = *p_io;
+  const int k_count = problem.k_count;
+  Eigen::MatrixXd h;
+  Eigen::VectorXd g;
+  double cost = problem.Evaluate(p, &h, &g);
+  if (!std::isfinite(cost)) return cost;
+  double mu = 1e-4 * std::max(1e-12, h.diagonal().maxCoeff());
+  for (int it = 0; it < max_iterations; ++it) {
+    Eigen::MatrixXd damped = h;
+    damped.diagonal() += mu * (Eigen::VectorXd::Ones(h.rows()) + h.diagonal());
+    const Eigen::VectorXd step = damped.ldlt().solve(-g);
+    if (!step.allFinite()) break;
+    Eigen::MatrixXd trial = p;
+    for (int k = 0; k < k_count; ++k) trial.row(k) += step.segment<3>(3 * k).transpose();
+    const double trial_cost = problem.Evaluate(trial, nullptr, nullptr);
+    if (trial_cost < cost) {
+      const double gain = cost - trial_cost;
+      p = trial;
+      cost = problem.Evaluate(p, &h, &g);
+      mu = std::max(mu / 3.0, 1e-12);
+      if (gain < 1e-6 * cost + 1e-10) break;
+    } else {
+      mu *= 4.0;
+      if (mu > 1e12) break;
+    }
+  }
+  return cost;
+}
+
+// The curve parameter of each hit (arc length along segment_a), the hits used (an even subset
+// of long candidates: the curve has at most max_control_points points, so ~4 hits per span are
+// plenty; residuals are reported on all) and the smoothness scale. False for a degenerate
+// candidate.
+bool SetUp(const PolylineFitOptions& options, Problem* problem) {
+  const auto& hits = problem->candidate.hits;
+  const int n = static_cast<int>(hits.size());
+  if (n < 2) return false;
+  const double span = hits.back().arc_a_px - hits.front().arc_a_px;
+  if (!(span > 0.0)) return false;
+  for (const EpipolarHit& hit : hits) {
+    if (!hit.point.allFinite()) return false;
+  }
+  problem->t.resize(n);
+  for (int j = 0; j < n; ++j) problem->t[j] = (hits[j].arc_a_px - hits.front().arc_a_px) / span;
+  const int stride = std::max(1, n / (4 * options.max_control_points));
+  for (int j = 0; j < n; j += stride) problem->used.push_back(j);
+  if (problem->used.back() != n - 1) problem->used.push_back(n - 1);
+  double depth_sum = 0.0;
+  for (const EpipolarHit& hit : hits) depth_sum += hit.depth_a;
+  problem->smooth_scale =
+      options.smoothness_weight * problem->a.camera_matrix(0, 0) / std::max(0.05, depth_sum / n);
+  return true;
+}
+
+// The point of the control polygon `p` at curve parameter t.
+Eigen::Vector3d CurvePoint(const Eigen::MatrixXd& p, double t) {
+  int k;
+  double w;
+  Basis(t, static_cast<int>(p.rows()), &k, &w);
+  return (1.0 - w) * p.row(k).transpose() + w * p.row(k + 1).transpose();
+}
+
 }  // namespace
 
 PolylineFit FitPolyline(const MatchCandidate& candidate, const CameraCalibration& camera_a,
@@ -98,19 +188,8 @@ PolylineFit FitPolyline(const MatchCandidate& candidate, const CameraCalibration
   const auto& hits = candidate.hits;
   const int n = static_cast<int>(hits.size());
   if (n < 2) return fit;
-  const double span = hits.back().arc_a_px - hits.front().arc_a_px;
-  if (!(span > 0.0)) return fit;
-  for (const EpipolarHit& hit : hits) {
-    if (!hit.point.allFinite()) return fit;
-  }
-  Problem problem{candidate, camera_a, camera_b, {}, {}, 2, 0.0};
-  problem.t.resize(n);
-  for (int j = 0; j < n; ++j) problem.t[j] = (hits[j].arc_a_px - hits.front().arc_a_px) / span;
-  // Long candidates are fitted through an even subset of their hits (the curve has at most
-  // max_control_points points, so ~4 hits per span are plenty); residuals are reported on all.
-  const int stride = std::max(1, n / (4 * options.max_control_points));
-  for (int j = 0; j < n; j += stride) problem.used.push_back(j);
-  if (problem.used.back() != n - 1) problem.used.push_back(n - 1);
+  Problem problem{candidate, camera_a, camera_b, {}, {}, 2, 0.0, {}};
+  if (!SetUp(options, &problem)) return fit;
 
   // Length through every third triangulated point (less inflated by depth noise).
   double length = 0.0;
@@ -119,10 +198,6 @@ PolylineFit FitPolyline(const MatchCandidate& candidate, const CameraCalibration
   const int k_count = std::clamp(static_cast<int>(std::lround(length / options.control_spacing_m)) + 1,
                                  2, std::max(2, std::min(options.max_control_points, n / 3 + 1)));
   problem.k_count = k_count;
-  double depth_sum = 0.0;
-  for (const EpipolarHit& hit : hits) depth_sum += hit.depth_a;
-  problem.smooth_scale =
-      options.smoothness_weight * camera_a.camera_matrix(0, 0) / std::max(0.05, depth_sum / n);
 
   // Linear least squares initialisation from the triangulated points.
   Eigen::MatrixXd ata = Eigen::MatrixXd::Identity(k_count, k_count) * 1e-9;
@@ -147,31 +222,8 @@ PolylineFit FitPolyline(const MatchCandidate& candidate, const CameraCalibration
   Eigen::MatrixXd p = ata.ldlt().solve(atb);
   if (!p.allFinite()) return fit;
 
-  // Levenberg-Marquardt.
-  Eigen::MatrixXd h;
-  Eigen::VectorXd g;
-  double cost = problem.Evaluate(p, &h, &g);
+  const double cost = Minimise(problem, options.max_iterations, &p);
   if (!std::isfinite(cost)) return fit;
-  double mu = 1e-4 * std::max(1e-12, h.diagonal().maxCoeff());
-  for (int it = 0; it < options.max_iterations; ++it) {
-    Eigen::MatrixXd damped = h;
-    damped.diagonal() += mu * (Eigen::VectorXd::Ones(h.rows()) + h.diagonal());
-    const Eigen::VectorXd step = damped.ldlt().solve(-g);
-    if (!step.allFinite()) break;
-    Eigen::MatrixXd trial = p;
-    for (int k = 0; k < k_count; ++k) trial.row(k) += step.segment<3>(3 * k).transpose();
-    const double trial_cost = problem.Evaluate(trial, nullptr, nullptr);
-    if (trial_cost < cost) {
-      const double gain = cost - trial_cost;
-      p = trial;
-      cost = problem.Evaluate(p, &h, &g);
-      mu = std::max(mu / 3.0, 1e-12);
-      if (gain < 1e-6 * cost + 1e-10) break;
-    } else {
-      mu *= 4.0;
-      if (mu > 1e12) break;
-    }
-  }
 
   // Attributes of the fit.
   fit.control_points.resize(k_count);
@@ -239,6 +291,105 @@ PolylineFit FitPolyline(const MatchCandidate& candidate, const CameraCalibration
   fit.ok = std::isfinite(cost) && std::isfinite(fit.length_m) && fit.length_m > 0.0;
   for (const Eigen::Vector3d& x : fit.control_points) fit.ok = fit.ok && x.allFinite();
   return fit;
+}
+
+// RMS (pixels) of the two views' residuals over the used hits, and of the other views' ones.
+void ResidualRms(const Problem& problem, const Eigen::MatrixXd& p, double* two_view_px,
+                 double* other_px) {
+  double sum = 0.0, other_sum = 0.0;
+  int count = 0;
+  const auto& hits = problem.candidate.hits;
+  auto project = [&](const CameraCalibration& cam, const Eigen::Vector3d& x) {
+    const Eigen::Vector3d y = cam.camera_from_platform() * x;
+    return Eigen::Vector2d(y.head<2>() / std::max(y.z(), 1e-9));
+  };
+  for (const int j : problem.used) {
+    const Eigen::Vector3d x = CurvePoint(p, problem.t[j]);
+    const double fa = problem.a.camera_matrix(0, 0), fb = problem.b.camera_matrix(0, 0);
+    sum += (fa * (project(problem.a, x) - hits[j].xa)).squaredNorm();
+    const double rb = fb * hits[j].normal_b.dot(project(problem.b, x) - hits[j].xb);
+    sum += rb * rb;
+    ++count;
+  }
+  for (const OtherViewResidual& o : problem.others) {
+    const double r = o.camera->camera_matrix(0, 0) *
+                     o.normal.dot(project(*o.camera, CurvePoint(p, problem.t[o.j])) - o.x);
+    other_sum += r * r;
+  }
+  *two_view_px = count > 0 ? std::sqrt(sum / count) : 0.0;
+  *other_px = problem.others.empty() ? 0.0 : std::sqrt(other_sum / problem.others.size());
+}
+
+int RefineInOtherViews(const MatchCandidate& candidate, const CameraCalibration& camera_a,
+                       const CameraCalibration& camera_b, const std::vector<OtherView>& others,
+                       const PolylineFitOptions& options, const OtherViewFitOptions& other_options,
+                       PolylineFit* fit) {
+  if (!fit->ok || others.empty() || other_options.rounds <= 0 ||
+      fit->control_points.size() < 2) {
+    return 0;
+  }
+  Problem problem{candidate, camera_a, camera_b, {}, {}, 2, 0.0, {}};
+  if (!SetUp(options, &problem)) return 0;
+  problem.k_count = static_cast<int>(fit->control_points.size());
+  Eigen::MatrixXd p(problem.k_count, 3);
+  for (int k = 0; k < problem.k_count; ++k) p.row(k) = fit->control_points[k].transpose();
+  int associated = 0;
+  double before_px = 0.0, unused = 0.0;
+  ResidualRms(problem, p, &before_px, &unused);
+  for (int round = 0; round < other_options.rounds; ++round) {
+    // Associate each used hit's point with the nearest skeleton piece of each other view, if it
+    // is near and runs the same way (a different cane crossing there is not taken).
+    problem.others.clear();
+    for (const int j : problem.used) {
+      int k;
+      double w;
+      Basis(problem.t[j], problem.k_count, &k, &w);
+      const Eigen::Vector3d x = CurvePoint(p, problem.t[j]);
+      const Eigen::Vector3d along = (p.row(k + 1) - p.row(k)).transpose();
+      if (!(along.norm() > 0.0)) continue;
+      for (const OtherView& other : others) {
+        const Eigen::Isometry3d from_platform = other.camera->camera_from_platform();
+        const Eigen::Vector3d y = from_platform * x;
+        const Eigen::Vector3d y1 = from_platform * (x + 1e-3 * along.normalized());
+        if (y.z() <= 1e-6 || y1.z() <= 1e-6) continue;
+        const Eigen::Vector2d direction = y1.hnormalized() - y.hnormalized();
+        if (!(direction.norm() > 0.0)) continue;
+        const double f = other.camera->camera_matrix(0, 0);
+        double distance;
+        Eigen::Vector2d piece, closest;
+        if (!other.samples->NearestPiece(y.hnormalized(), other_options.gate_px / f, &distance,
+                                         &piece, &closest)) {
+          continue;
+        }
+        if (std::abs(piece.dot(direction.normalized())) < other_options.min_cos) continue;
+        problem.others.push_back({j, other.camera, closest, Eigen::Vector2d(-piece.y(), piece.x())});
+      }
+    }
+    associated = static_cast<int>(problem.others.size());
+    if (associated < other_options.min_associations) {
+      if (round == 0) return 0;
+      break;  // keep the previous round's fit
+    }
+    Eigen::MatrixXd trial = p;
+    const double cost = Minimise(problem, options.max_iterations, &trial);
+    if (!std::isfinite(cost) || !trial.allFinite()) return 0;
+    p = trial;
+  }
+  // A third view that disagrees with the two (another cane associated, or a skeleton pulled
+  // aside at a junction) shows as residuals the refined curve cannot bring down: keep the
+  // two-view fit then.
+  double after_px = 0.0, other_px = 0.0;
+  ResidualRms(problem, p, &after_px, &other_px);
+  if (other_options.max_residual_growth_px > 0.0 &&
+      (after_px > before_px + other_options.max_residual_growth_px ||
+       other_px > other_options.max_residual_growth_px + 1.0)) {
+    return 0;
+  }
+  for (int k = 0; k < problem.k_count; ++k) fit->control_points[k] = p.row(k).transpose();
+  for (size_t j = 0; j < fit->points.size() && j < problem.t.size(); ++j) {
+    fit->points[j] = CurvePoint(p, problem.t[j]);
+  }
+  return associated;
 }
 
 ViewSupport CheckInView(const std::vector<Eigen::Vector3d>& points, const View2D& view,

@@ -44,6 +44,37 @@ struct PolylineFit {
 PolylineFit FitPolyline(const MatchCandidate& candidate, const CameraCalibration& camera_a,
                         const CameraCalibration& camera_b, const PolylineFitOptions& options = {});
 
+// A view that took no part in a match: its resampled segments and its camera (not owned).
+struct OtherView {
+  const ViewSamples* samples = nullptr;
+  const CameraCalibration* camera = nullptr;
+};
+
+struct OtherViewFitOptions {
+  double gate_px = 2.5;       // a skeleton piece this near the projected fit is associated
+  double min_cos = 0.95;      // ... if its direction agrees this well (|cos|)
+  int rounds = 2;             // association + Levenberg-Marquardt rounds
+  int min_associations = 3;   // fewer associated hits: the fit is left as it is
+  // The refined fit is kept only if the two views' RMS residual grew by at most this and the
+  // other views' RMS is at most this + 1 px (0: always kept).
+  double max_residual_growth_px = 0.5;
+};
+
+// Refines a fit (FitPolyline of the same candidate and cameras) with the views that took no
+// part in the match: each used hit's point is associated with the nearest skeleton piece of each
+// other view within gate_px whose direction agrees, and 1D residuals across those pieces join
+// the two views' residuals in a Levenberg-Marquardt fit from the current control points. A
+// pair nearly along the cane's epipolar lines fixes depth poorly (a 1 px skeleton error is
+// 1-2 cm at 0.8 m with the default rig), and a third view fixes it. Updates control_points and
+// points only: the attributes (residuals, length, radii, ...) stay those of the two-view fit,
+// from which the candidate was scored. Returns the associations of the last round (0: the fit
+// is unchanged: no other view, too few associations, a non-finite result, or residuals beyond
+// max_residual_growth_px). Options are not validated here (CorrespondenceOptions::Validate).
+int RefineInOtherViews(const MatchCandidate& candidate, const CameraCalibration& camera_a,
+                       const CameraCalibration& camera_b, const std::vector<OtherView>& others,
+                       const PolylineFitOptions& options, const OtherViewFitOptions& other_options,
+                       PolylineFit* fit);
+
 // Evidence for a reconstructed piece in another view.
 struct ViewSupport {
   double in_image = 0.0;        // fraction of points projecting inside the image

@@ -58,6 +58,10 @@ absl::Status CheckRig(const RigCalibration& rig) {
 CorrespondenceOptions FirstPassOptions(const ReconstructOptions& options) {
   CorrespondenceOptions first = options.correspondence;
   first.classifier = options.first_pass_classifier;
+  // The first pass's pieces refine the rig against every view: fitting them to the other views
+  // with the rig as calibrated first hides the very errors the refinement measures (rig error
+  // 0.24 -> 0.30 px on tuning seeds 1100-1129).
+  first.other_views.rounds = 0;
   return first;
 }
 
