@@ -417,16 +417,29 @@ TEST(TrellisLoss, DISABLED_RigCeiling) {
     const char* name;
     sim::RigOptions options;
   };
-  std::vector<Variant> variants(3);
-  variants[0].name = "default (toe-in at rig height)";
-  variants[1].name = "no toe-in (axes parallel)";
+  // The default before 2026-11-22: 0.8 m from the vine plane, side 0.22 m, aimed at rig height.
+  sim::RigOptions old;
+  old.rig_y_m = 0.0;
+  old.distance_to_vine_plane_m = 0.8;
+  old.baseline_m = 0.22;
+  old.aim_below_rig_m = 0.0;
+  std::vector<Variant> variants(6, Variant{"", old});
+  variants[0].name = "old default (toe-in at rig height)";
+  variants[1].name = "old, no toe-in (axes parallel)";
   variants[1].options.toe_in = false;
-  variants[2].name = "apex below (upper pair)";
+  variants[2].name = "old, apex below (upper pair)";
   variants[2].options.apex_up = false;
+  variants[3].name = "old, apex camera aimed 0.3 m up";
+  variants[3].options.apex_aim_up_m = 0.3;
+  variants[4].name = "default (0.12 m back, aimed up)";
+  variants[4].options = sim::RigOptions();
+  variants[5].name = "default, apex below";
+  variants[5].options = sim::RigOptions();
+  variants[5].options.apex_up = false;
   const std::vector<sim::Scene> scenes = ReportScenes(first, count);
   for (const Variant& variant : variants) {
     const RigFigures f = EvaluateRig(sim::MakeRig(variant.options).value(), scenes);
-    std::printf("%-32s wire ceiling %.3f, cane length in two views %.3f, arm base in view %s "
+    std::printf("%-36s wire ceiling %.3f, cane length in two views %.3f, arm base in view %s "
                 "(stops %d from %llu)\n",
                 variant.name, f.wire_ceiling, f.cane_two_views, f.arm_base_in_view ? "YES" : "no",
                 count, static_cast<unsigned long long>(first));
