@@ -50,23 +50,23 @@ struct RigOptions {
   // INVALID_ARGUMENT naming the field: camera_count outside [1, 3], image size outside
   // [16, 16384], horizontal_fov_deg outside (10, 170), baseline_m outside (0, 2],
   // rig_height_m or distance_to_vine_plane_m not finite or <= 0.05, rig_y_m not finite or
-  // outside [-1, 1], non-finite distortion, aim_below_rig_m not finite or beyond rig_height_m, apex_aim_up_m or
-  // pair_aim_up_m not finite or beyond +-rig_height_m.
+  // outside [-1, 1], non-finite distortion, aim_below_rig_m, apex_aim_up_m or pair_aim_up_m not
+  // finite or beyond +-rig_height_m.
   absl::Status Validate() const;
 };
 
 // The true calibration of the simulated rig. Cameras are named cam0, cam1, ...
 // Layout (platform frame): for 3 cameras an equilateral triangle of side baseline_m whose centroid
-// is (0, rig_y_m, rig_height_m) (by default (0, -0.12, 1.05), side 0.29 m): cam0 lower left (-x), cam1 lower right (+x), cam2 above the middle
-// (apex_up; otherwise cam0 upper left, cam1 upper right, cam2 below the middle); for 2 cameras a
-// horizontal pair; for 1 a camera at the centre. Cameras look along +y with the image x axis
-// along +x and image down = world down; with toe_in each camera is rotated to look at
-// (0, rig_y_m + distance_to_vine_plane_m, rig_height_m - aim_below_rig_m) (by default
-// (0, 0.8, 1.15)), raised by apex_aim_up_m / pair_aim_up_m. fx = fy is chosen so
-// that the half-width of the image sees horizontal_fov_deg / 2 through the distortion model; if
-// that would put the image corners beyond (or within 3% of) the fold of the radial distortion
-// polynomial, where the lens model stops being invertible, fx is increased until they are not
-// (with the default options the horizontal field of view becomes ~96 deg). The principal point is
+// is (0, rig_y_m, rig_height_m) (by default (0, -0.12, 1.05), side 0.29 m): cam0 lower left (-x),
+// cam1 lower right (+x), cam2 above the middle (apex_up; otherwise cam0 upper left, cam1 upper
+// right, cam2 below the middle); for 2 cameras a horizontal pair; for 1 a camera at the centre.
+// Cameras look along +y with the image x axis along +x and image down = world down; with toe_in
+// each camera is rotated to look at (0, rig_y_m + distance_to_vine_plane_m, rig_height_m -
+// aim_below_rig_m) (by default (0, 0.8, 1.15)), raised by apex_aim_up_m / pair_aim_up_m. fx = fy
+// is chosen so that the half-width of the image sees horizontal_fov_deg / 2 through the
+// distortion model; if that would put the image corners beyond (or within 3% of) the fold of the
+// radial distortion polynomial, where the lens model stops being invertible, fx is increased until
+// they are not (with the default options the horizontal field of view becomes ~96 deg). The principal point is
 // the image centre plus a few pixels of offset, different per camera. INVALID_ARGUMENT for
 // invalid options (see Validate) and for distortion that has no invertible region wide enough for
 // the image.
