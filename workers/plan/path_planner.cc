@@ -417,8 +417,15 @@ PathResult PathPlanner::PlanToAny(const Joints& start, std::span<const Joints> g
   if (deadline.Expired()) {
     return finish(PathOutcome::kNoPathWithinDeadline, "deadline expired before RRT-Connect");
   }
+  // Elbow flips give up sooner (PathOptions::flip_max_tree_states) unless they are the only way.
+  bool flip = !only_way && options_.flip_max_tree_states > 0 &&
+              (options_.max_tree_states == 0 ||
+               options_.flip_max_tree_states < options_.max_tree_states);
+  for (int g : usable) flip = flip && (goals[g][2] > 0.0) != (start[2] > 0.0);
+  const int bound = flip ? options_.flip_max_tree_states : options_.max_tree_states;
+  const size_t max_states = bound > 0 ? static_cast<size_t>(bound) : SIZE_MAX;
   if (options_.remember_failures) {
-    if (const int f = RepeatsFailure(start, goals, usable); f >= 0) {
+    if (const int f = RepeatsFailure(start, goals, usable, max_states); f >= 0) {
       result.repeated_failure = true;
       return finish(PathOutcome::kNoPathWithinDeadline,
                     absl::StrCat("like failed query ", f, " of this planner: the start joins its "
@@ -458,14 +465,6 @@ PathResult PathPlanner::PlanToAny(const Joints& start, std::span<const Joints> g
       goal_region->setThreshold(1e-9);
       o.pdef->setGoal(goal_region);
       o.seed = OmplSeed(options_.seed);
-      // Elbow flips give up sooner (PathOptions::flip_max_tree_states) unless they are the only
-      // way.
-      bool flip = !only_way && options_.flip_max_tree_states > 0 &&
-                  (options_.max_tree_states == 0 ||
-                   options_.flip_max_tree_states < options_.max_tree_states);
-      for (int g : usable) flip = flip && (goals[g][2] > 0.0) != (start[2] > 0.0);
-      const int bound = flip ? options_.flip_max_tree_states : options_.max_tree_states;
-      const size_t max_states = bound > 0 ? static_cast<size_t>(bound) : SIZE_MAX;
       const TreeSizeRRTConnect& rrt = *o.planner;
       // Goals walled in (PathOptions::walled_in_after_states). OMPL's start tree is rooted at our
       // goals.
@@ -492,7 +491,10 @@ PathResult PathPlanner::PlanToAny(const Joints& start, std::span<const Joints> g
         // nothing reproducible. Roles are reversed: OMPL's start tree is rooted at our goals.
         if (options_.remember_failures && failures_.size() < kMaxRememberedFailures &&
             (walled_in || rrt.StartTreeSize() + rrt.GoalTreeSize() >= max_states)) {
-          failures_.push_back({rrt.TreeStates(false), rrt.TreeStates(true)});
+          // A walled-in query ends whatever its bound; one stopped by the bound refuses only
+          // queries allowed no more states (a flip's failure does not refuse the way home).
+          failures_.push_back(
+              {rrt.TreeStates(false), rrt.TreeStates(true), walled_in ? SIZE_MAX : max_states});
         }
         result.flip_bound = flip && !walled_in && rrt.StartTreeSize() + rrt.GoalTreeSize() >= max_states;
         if (walled_in) {
@@ -582,9 +584,10 @@ bool PathPlanner::Joins(const Joints& q, const std::vector<Joints>& tree) {
 }
 
 int PathPlanner::RepeatsFailure(const Joints& start, std::span<const Joints> goals,
-                                const std::vector<int>& usable) {
+                                const std::vector<int>& usable, size_t max_states) {
   for (size_t f = 0; f < failures_.size(); ++f) {
     const FailedQuery& failed = failures_[f];
+    if (failed.max_states < max_states) continue;  // this query may grow larger trees
     // Goals first: they repeat exactly when a cut is tried again from another start.
     bool all = true;
     for (int g : usable) {

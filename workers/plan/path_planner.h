@@ -56,8 +56,10 @@ struct PathOptions {
   // goals the goal-side tree (PathResult::repeated_failure): it would search the same two
   // regions again. A configuration joins a tree when it is one of its states or the straight
   // segment to one of the tree's eight nearest states (within 3 range_rad) is free at the tree-edge
-  // resolution. Makes results depend on the planner's earlier queries; meant for the queries of
-  // one scene (ForgetFailures() when the checker's scene changes).
+  // resolution. A query stopped by its bound on states refuses only later queries allowed no
+  // more states (an elbow flip's failure at flip_max_tree_states does not refuse the way home).
+  // Makes results depend on the planner's earlier queries; meant for the queries of one scene
+  // (ForgetFailures() when the checker's scene changes).
   bool remember_failures = false;
   // Goals walled in: RRT-Connect gives up once its trees hold walled_in_after_states states or
   // more together (0 = never) while the tree rooted at the goals holds at most
@@ -159,15 +161,18 @@ class PathPlanner {
 
  private:
   struct Ompl;  // OMPL objects, defined in the .cc
-  // The trees of a query RRT-Connect gave up on: rooted at its start and at its goals.
+  // The trees of a query RRT-Connect gave up on: rooted at its start and at its goals, and the
+  // states it was allowed (SIZE_MAX when walled in: that ends a query whatever its bound).
   struct FailedQuery {
     std::vector<Joints> start_side, goal_side;
+    size_t max_states = SIZE_MAX;
   };
   // Whether q joins `tree` (see PathOptions::remember_failures).
   bool Joins(const Joints& q, const std::vector<Joints>& tree);
-  // The index of a remembered failed query whose trees the start and every usable goal join, or -1.
+  // The index of a remembered failed query, allowed at least `max_states` states, whose trees
+  // the start and every usable goal join, or -1.
   int RepeatsFailure(const Joints& start, std::span<const Joints> goals,
-                     const std::vector<int>& usable);
+                     const std::vector<int>& usable, size_t max_states);
   CollisionChecker& checker_;
   JointLimits limits_;
   PathOptions options_;

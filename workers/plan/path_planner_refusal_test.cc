@@ -250,6 +250,26 @@ TEST(FlipBound, AnElbowFlipToAPocketGivesUpAtItsOwnBound) {
   EXPECT_EQ(PathOptions().flip_max_tree_states, 0);  // off by default
 }
 
+TEST(FlipBound, ARememberedFlipFailureRefusesOnlyQueriesWithNoLargerBound) {
+  JointBallChecker checker;
+  checker.AddShell(J(2, 0, 0.3), 0.5, 0.8);
+  const Joints start = J(-2, 0, -1), across = J(2, 0, 0.6);
+  PathOptions options = FlipOptions();
+  options.remember_failures = true;
+  PathPlanner planner(checker, JointLimits(), options);
+  const PathResult flip = planner.Plan(start, across, Deadline::Infinite());
+  ASSERT_TRUE(flip.flip_bound) << flip.message;
+  EXPECT_EQ(planner.remembered_failures(), 1);
+  // The same flip again: refused.
+  const PathResult again = planner.Plan(start, across, Deadline::Infinite());
+  EXPECT_TRUE(again.repeated_failure) << again.message;
+  // The way home may grow larger trees: searched to the usual bound, not refused.
+  const std::vector<Joints> goal = {across};
+  const PathResult home = planner.PlanToAny(start, goal, Deadline::Infinite(), /*only_way=*/true);
+  EXPECT_FALSE(home.repeated_failure) << home.message;
+  EXPECT_GE(home.start_tree_states + home.goal_tree_states, 400);
+}
+
 TEST(FlipBound, AnElbowFlipThatCanBeMadeIsStillPlanned) {
   JointBallChecker checker;
   checker.AddBall(J(0), 1.0);
