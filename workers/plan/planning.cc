@@ -21,8 +21,13 @@ void Planning::UsePassScenes(const CollisionScene& plain, const CollisionScene& 
     return MakeChecker(options.checker, robot, s);
   });
   // The planner samples its paths in the inflated scene: their proof samples only what the
-  // margins leave close (MotionProver::SetSampledScene).
-  if (options.path.max_step_m <= MotionProver::kCoarseStepM) prover->SetSampledScene(inflated);
+  // margins leave close (MotionProver::SetSampledScene). Not with FCL meshes: their facets lie
+  // inside the surface by a tolerance that grows with the inflated radius, so the planner's
+  // samples prove less than the covering margin assumes.
+  if (options.path.max_step_m <= MotionProver::kCoarseStepM &&
+      options.checker != CheckerKind::kFclMesh) {
+    prover->SetSampledScene(inflated);
+  }
   plain_scene = plain;
 }
 
