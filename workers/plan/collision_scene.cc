@@ -167,17 +167,34 @@ absl::StatusOr<CollisionScene> CollisionScene::Build(const VineModel& model,
 CollisionScene CollisionScene::WithoutCaneNear(CaneId cane_id,
                                                const Eigen::Vector3d& point_in_base,
                                                double radius_m) const {
+  const std::vector<int> near = CaneNearIndices(cane_id, point_in_base, radius_m);
   CollisionScene out;
   out.planes = planes;
-  out.obstacles.reserve(obstacles.size());
-  for (const Obstacle& o : obstacles) {
-    const bool near =
-        o.kind == ObstacleKind::kCane && o.owner_id == cane_id.value &&
-        PointSegmentDistance(point_in_base, o.capsule.a, o.capsule.b) - o.capsule.radius <=
-            radius_m;
-    if (!near) out.obstacles.push_back(o);
+  out.obstacles.reserve(obstacles.size() - near.size());
+  size_t next = 0;  // into near
+  for (size_t i = 0; i < obstacles.size(); ++i) {
+    if (next < near.size() && near[next] == static_cast<int>(i)) {
+      ++next;
+      continue;
+    }
+    out.obstacles.push_back(obstacles[i]);
   }
   return out;
+}
+
+std::vector<int> CollisionScene::CaneNearIndices(CaneId cane_id,
+                                                 const Eigen::Vector3d& point_in_base,
+                                                 double radius_m) const {
+  std::vector<int> near;
+  for (size_t i = 0; i < obstacles.size(); ++i) {
+    const Obstacle& o = obstacles[i];
+    if (o.kind == ObstacleKind::kCane && o.owner_id == cane_id.value &&
+        PointSegmentDistance(point_in_base, o.capsule.a, o.capsule.b) - o.capsule.radius <=
+            radius_m) {
+      near.push_back(static_cast<int>(i));
+    }
+  }
+  return near;
 }
 
 absl::StatusOr<std::vector<Obstacle>> StubChords(const VineModel& model, std::span<const Cut> made,

@@ -58,6 +58,9 @@ struct CollisionScene {
   // (the cane the tool is cutting may touch the tool there).
   CollisionScene WithoutCaneNear(CaneId cane_id, const Eigen::Vector3d& point_in_base,
                                  double radius_m) const;
+  // The indices into `obstacles` of the capsules WithoutCaneNear leaves out, ascending.
+  std::vector<int> CaneNearIndices(CaneId cane_id, const Eigen::Vector3d& point_in_base,
+                                   double radius_m) const;
 };
 
 // The chords (kCane obstacles, arm base frame, margin options.default_margin_m) of the stub that

@@ -285,24 +285,13 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
       // cut pose survives the flange bodies' test, and consecutive slides often free the same
       // capsules of the cut cane: an unchanged scene keeps its checker.
       local = scene.WithoutCaneNear(cut.cane_id, point_in_base, options.cut_cane_free_radius_m);
-      // The same obstacles by index (WithoutCaneNear's test), for the shared checker.
-      local_excluded.clear();
-      for (size_t i = 0; i < scene.obstacles.size(); ++i) {
-        const Obstacle& o = scene.obstacles[i];
-        if (o.kind == ObstacleKind::kCane && o.owner_id == cut.cane_id.value &&
-            PointSegmentDistance(point_in_base, o.capsule.a, o.capsule.b) - o.capsule.radius <=
-                options.cut_cane_free_radius_m)
-          local_excluded.push_back(static_cast<int>(i));
-      }
+      // The same obstacles by index, for the shared checker.
+      local_excluded =
+          scene.CaneNearIndices(cut.cane_id, point_in_base, options.cut_cane_free_radius_m);
       flange_bodies.Select(local, point_in_base, stroke_travel_m);
       if (in_throat) {
         CollisionScene cut_cane;  // the capsules of the cut cane that `local` leaves out
-        for (const Obstacle& o : scene.obstacles) {
-          if (o.kind == ObstacleKind::kCane && o.owner_id == cut.cane_id.value &&
-              PointSegmentDistance(point_in_base, o.capsule.a, o.capsule.b) - o.capsule.radius <=
-                  options.cut_cane_free_radius_m)
-            cut_cane.obstacles.push_back(o);
-        }
+        for (const int i : local_excluded) cut_cane.obstacles.push_back(scene.obstacles[i]);
         cut_cane_bodies.Select(cut_cane, point_in_base, stroke_travel_m);
       }
       slide_poses = SampleCutPoses(point_in_base, direction_in_base, options);
