@@ -9,10 +9,11 @@
 namespace vb::plan {
 namespace {
 
-bool TwinConfiguration(const Joints& a, const Joints& b) {
+// b is a with joint 6 turned by `turn` (+pi or -pi).
+bool TwinConfiguration(const Joints& a, const Joints& b, double turn) {
   for (int j = 0; j < 5; ++j)
     if (a[j] != b[j]) return false;
-  return std::abs(std::abs(a[5] - b[5]) - M_PI) <= 1e-9;
+  return std::abs(b[5] - a[5] - turn) <= 1e-9;
 }
 
 // Whether every configuration of `path` is free and every motion between consecutive ones is;
@@ -31,9 +32,13 @@ bool IsHalfTurnTwin(const std::vector<Joints>& a, const std::vector<Joints>& b) 
   if (a.size() != b.size() || a.empty()) return false;
   bool same_order = true, reversed = true;
   const size_t n = a.size();
+  // One turn for the whole path: +pi at one configuration and -pi at the next would be a
+  // different motion (an extra wrist turn between them).
+  const double turn_same = b[0][5] > a[0][5] ? M_PI : -M_PI;
+  const double turn_reversed = b[n - 1][5] > a[0][5] ? M_PI : -M_PI;
   for (size_t i = 0; i < n && (same_order || reversed); ++i) {
-    same_order = same_order && TwinConfiguration(a[i], b[i]);
-    reversed = reversed && TwinConfiguration(a[i], b[n - 1 - i]);
+    same_order = same_order && TwinConfiguration(a[i], b[i], turn_same);
+    reversed = reversed && TwinConfiguration(a[i], b[n - 1 - i], turn_reversed);
   }
   return same_order || reversed;
 }

@@ -66,6 +66,9 @@ TEST(IsHalfTurnTwin, FindsTheTwinInEitherOrderAndNothingElse) {
   off[0][5] += 1e-6;  // joint 6 turned by pi, not nearly pi
   EXPECT_FALSE(IsHalfTurnTwin(path, off));
   EXPECT_FALSE(IsHalfTurnTwin(path, {twin[0]}));
+  off = twin;
+  off[1][5] = path[1][5] + (twin[0][5] > path[0][5] ? -M_PI : M_PI);  // the other turn at one
+  EXPECT_FALSE(IsHalfTurnTwin(path, off));
 }
 
 // The shortcuts (mirrored halves and half-turn twins checked once) never admit a motion that
