@@ -4,8 +4,9 @@
 // (spheres of the arm against capsules, spheres and planes, sorted by distance from the base and
 // culled per link by reach, after Botterill et al. 2017 section 3.4 and VAMP, Thomason et al.
 // ICRA 2024) and the FCL baselines (triangle meshes or FCL primitives of the same geometry).
-// A checker is built for one robot and one scene and never changes. Not thread-safe (it counts
-// checks); use one per thread.
+// A checker is built for one robot and one scene; its scene never changes, except that a
+// PrimitiveChecker can leave some of its obstacles out (PrimitiveChecker::Exclude). Not
+// thread-safe (it counts checks); use one per thread.
 #pragma once
 
 #include <array>

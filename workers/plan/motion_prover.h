@@ -88,7 +88,7 @@ class MotionProver {
   // The obstacles and planes a sampled scene does not cover; empty when none was set or it
   // covers none (then IsSampledPathFree uses full_).
   std::unique_ptr<Levels> unsampled_;
-  mutable int64_t retired_checks_ = 0;  // checks of replaced unsampled_ levels
+  int64_t retired_checks_ = 0;  // checks of replaced unsampled_ levels
 };
 
 }  // namespace vb::plan

@@ -545,7 +545,6 @@ void PrimitiveChecker::Exclude(std::span<const int> obstacles) {
   // excluded pieces would only cull less, but they lie where the tool works).
   const int n_pieces = static_cast<int>(m.pieces.size());
   const int n_leaves = static_cast<int>(m.leaves.size());
-  const int n_nodes = static_cast<int>(m.node_children.size());
   for (int l : touched) {
     std::vector<Piece> in;
     for (int k = l * kLeaf; k < std::min(n_pieces, (l + 1) * kLeaf); ++k)
@@ -572,7 +571,6 @@ void PrimitiveChecker::Exclude(std::span<const int> obstacles) {
       box.extend(m.leaf_boxes[l]);
     SetBoxLane(m.top[node / kLeaf], node % kLeaf, box);
   }
-  (void)n_nodes;
   if (m.last_piece >= 0 && m.piece_excluded[m.last_piece]) m.last_capsule = m.last_piece = -1;
   m.UpdateBaseBlocked();
 }
