@@ -161,8 +161,11 @@ absl::Status ConnectOptions::Validate() const {
   if (!std::isfinite(keep_min_length_m) || keep_min_length_m < 0) {
     return absl::InvalidArgumentError("connect options: keep_min_length_m must be >= 0");
   }
-  if (!std::isfinite(keep_taper_ratio) || keep_taper_ratio < 0) {
-    return absl::InvalidArgumentError("connect options: keep_taper_ratio must be >= 0");
+  if (!std::isfinite(keep_taper_ratio) || keep_taper_ratio < 0 ||
+      (keep_taper_ratio > 0 && keep_taper_ratio <= 1)) {
+    return absl::InvalidArgumentError(
+        "connect options: keep_taper_ratio must be 0 (off) or > 1 (a cane of even thickness "
+        "would pass any ratio <= 1)");
   }
   if (!(min_gap_support >= 0.0 && min_gap_support <= 1.0)) {
     return absl::InvalidArgumentError("connect options: min_gap_support must be in [0, 1]");

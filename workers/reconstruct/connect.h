@@ -78,7 +78,7 @@ struct ConnectOptions {
                                      // keep_within_m is kept as well when it is this much thicker
                                      // at its end nearer the vine's centre (TaperTowardCentre):
                                      // canes taper from base to tip, a neighbour's the other way;
-                                     // 0 (or keep_within_m 0) turns this off
+                                     // 0 (or keep_within_m 0) turns this off; otherwise > 1
 
   absl::Status Validate() const;
 };

@@ -44,7 +44,9 @@ TEST(ConnectCanes, GrowsATreeFromTheTrunkAndHead) {
   const Cane* a = nullptr;
   const Cane* b = nullptr;
   for (const Cane& cane : model->canes) {
-    if (cane.kind == CaneKind::kSpur) EXPECT_EQ(cane.parent_id, CaneId(1));
+    if (cane.kind == CaneKind::kSpur) {
+      EXPECT_EQ(cane.parent_id, CaneId(1));
+    }
     if (cane.polyline.points.back().isApprox(Eigen::Vector3d(0.6, 0.8, 1.1))) a = &cane;
     if (cane.polyline.points.back().isApprox(Eigen::Vector3d(0.3, 0.8, 1.5))) b = &cane;
   }
@@ -282,11 +284,14 @@ TEST(ConnectCanes, AFarCaneThinningAwayFromTheVineIsKeptByItsThickerEnd) {
   EXPECT_NEAR(b.polyline.points.back().x(), 0.9, 1e-9);  // base first: the thick inner end
   EXPECT_GT(b.polyline.radii.front(), b.polyline.radii.back());
 
-  ConnectOptions bad;
-  bad.keep_taper_ratio = -1.0;
-  const auto rejected = BuildTree(prepared, joins, Head(), bad);
-  EXPECT_EQ(rejected.status().code(), absl::StatusCode::kInvalidArgument);
-  EXPECT_NE(std::string(rejected.status().message()).find("keep_taper_ratio"), std::string::npos);
+  for (const double ratio : {-1.0, 0.5, 1.0}) {
+    ConnectOptions bad;
+    bad.keep_taper_ratio = ratio;
+    const auto rejected = BuildTree(prepared, joins, Head(), bad);
+    EXPECT_EQ(rejected.status().code(), absl::StatusCode::kInvalidArgument) << ratio;
+    EXPECT_NE(std::string(rejected.status().message()).find("keep_taper_ratio"),
+              std::string::npos);
+  }
 }
 
 TEST(ConnectCanes, TheStereoTrunkReplacesTheSilhouetteAxis) {

@@ -136,12 +136,19 @@ absl::Status CorrespondenceOptions::Validate() const {
                           "smoothness_weight >= 0 (all finite)");
   }
   if (!(max_rms_px > 0.0)) return Invalid("max_rms_px", "must be > 0");
-  if (!(other_views.gate_px > 0.0) || !std::isfinite(other_views.gate_px) ||
-      !(other_views.min_cos >= 0.0 && other_views.min_cos <= 1.0) || other_views.rounds < 0 ||
-      other_views.min_associations < 1 || !(other_views.max_residual_growth_px >= 0.0) ||
+  if (!(other_views.gate_px > 0.0) || !std::isfinite(other_views.gate_px)) {
+    return Invalid("other_views.gate_px", "must be > 0 and finite");
+  }
+  if (!(other_views.min_cos >= 0.0 && other_views.min_cos <= 1.0)) {
+    return Invalid("other_views.min_cos", "must be in [0, 1]");
+  }
+  if (other_views.rounds < 0) return Invalid("other_views.rounds", "must be >= 0");
+  if (other_views.min_associations < 1) {
+    return Invalid("other_views.min_associations", "must be >= 1");
+  }
+  if (!(other_views.max_residual_growth_px >= 0.0) ||
       !std::isfinite(other_views.max_residual_growth_px)) {
-    return Invalid("other_views", "gate_px > 0 and finite, min_cos in [0, 1], rounds >= 0, "
-                                  "min_associations >= 1, max_residual_growth_px >= 0 and finite");
+    return Invalid("other_views.max_residual_growth_px", "must be >= 0 and finite");
   }
   for (int i = 0; i < kMatchFeatureCount; ++i) {
     if (!std::isfinite(classifier.multi_view[i]) || !std::isfinite(classifier.two_view[i])) {

@@ -339,6 +339,7 @@ int RefineInOtherViews(const MatchCandidate& candidate, const CameraCalibration&
   for (int round = 0; round < other_options.rounds; ++round) {
     // Associate each used hit's point with the nearest skeleton piece of each other view, if it
     // is near and runs the same way (a different cane crossing there is not taken).
+    auto previous_others = std::move(problem.others);
     problem.others.clear();
     for (const int j : problem.used) {
       int k;
@@ -365,11 +366,13 @@ int RefineInOtherViews(const MatchCandidate& candidate, const CameraCalibration&
         problem.others.push_back({j, other.camera, closest, Eigen::Vector2d(-piece.y(), piece.x())});
       }
     }
-    associated = static_cast<int>(problem.others.size());
-    if (associated < other_options.min_associations) {
+    if (static_cast<int>(problem.others.size()) < other_options.min_associations) {
       if (round == 0) return 0;
-      break;  // keep the previous round's fit
+      // Keep the previous round's fit, judged below against the views it was fitted to.
+      problem.others = std::move(previous_others);
+      break;
     }
+    associated = static_cast<int>(problem.others.size());
     Eigen::MatrixXd trial = p;
     const double cost = Minimise(problem, options.max_iterations, &trial);
     if (!std::isfinite(cost) || !trial.allFinite()) return 0;
