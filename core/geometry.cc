@@ -63,21 +63,25 @@ void Locate(const std::vector<double>& arc, double s, size_t* i, double* f) {
 
 }  // namespace
 
-Eigen::Vector3d Polyline3::PointAt(double s) const {
+Eigen::Vector3d Polyline3::PointAt(double s) const { return PointAt(s, ArcLengths()); }
+
+double Polyline3::RadiusAt(double s) const { return RadiusAt(s, ArcLengths()); }
+
+Eigen::Vector3d Polyline3::PointAt(double s, const std::vector<double>& arc) const {
   if (points.empty()) return Eigen::Vector3d::Zero();
   if (points.size() == 1) return points[0];
   size_t i;
   double f;
-  Locate(ArcLengths(), s, &i, &f);
+  Locate(arc, s, &i, &f);
   return points[i] + f * (points[i + 1] - points[i]);
 }
 
-double Polyline3::RadiusAt(double s) const {
+double Polyline3::RadiusAt(double s, const std::vector<double>& arc) const {
   if (radii.empty()) return 0.0;
   if (radii.size() == 1) return radii[0];
   size_t i;
   double f;
-  Locate(ArcLengths(), s, &i, &f);
+  Locate(arc, s, &i, &f);
   return radii[i] + f * (radii[i + 1] - radii[i]);
 }
 

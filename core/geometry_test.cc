@@ -36,6 +36,16 @@ TEST(Polyline3, PointRadiusAndTangentAtArcLength) {
   EXPECT_TRUE(p.TangentAt(2.5).isApprox(Eigen::Vector3d::UnitY()));
 }
 
+TEST(Polyline3, PointAndRadiusGivenArcLengths) {
+  const Polyline3 p = LShape();
+  const std::vector<double> arc = p.ArcLengths();
+  EXPECT_EQ(p.PointAt(1.5, arc), Eigen::Vector3d(1, 0.5, 0));
+  EXPECT_NEAR(p.RadiusAt(1.5, arc), 0.007, 1e-15);
+  EXPECT_EQ(p.PointAt(-1.0, arc), Eigen::Vector3d(0, 0, 0));  // clamped
+  EXPECT_EQ(p.PointAt(4.0, arc), Eigen::Vector3d(1, 2, 0));
+  EXPECT_EQ(p.RadiusAt(4.0, arc), 0.004);
+}
+
 TEST(Polyline3, TruncateAtKeepsTheBasePart) {
   Polyline3 p = LShape();
   p.TruncateAt(2.0);

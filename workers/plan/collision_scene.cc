@@ -23,43 +23,6 @@ absl::Status SceneOptions::Validate() const {
 
 namespace {
 
-// Polyline3::PointAt and RadiusAt (core/geometry.cc) given the polyline's arc lengths, which
-// those recompute (and allocate) at every call: the same search and arithmetic, so the same
-// values bit for bit.
-void LocateOnArc(const std::vector<double>& arc, double s, size_t* i, double* f) {
-  const size_t n = arc.size();
-  if (n < 2) {
-    *i = 0;
-    *f = 0.0;
-    return;
-  }
-  s = std::clamp(s, 0.0, arc.back());
-  const auto it = std::upper_bound(arc.begin(), arc.end(), s);
-  size_t k = static_cast<size_t>(it - arc.begin());
-  k = std::clamp<size_t>(k, 1, n - 1);
-  *i = k - 1;
-  const double len = arc[k] - arc[k - 1];
-  *f = len > 0.0 ? (s - arc[k - 1]) / len : 0.0;
-}
-
-Eigen::Vector3d PointAtArc(const Polyline3& line, const std::vector<double>& arc, double s) {
-  if (line.points.empty()) return Eigen::Vector3d::Zero();
-  if (line.points.size() == 1) return line.points[0];
-  size_t i;
-  double f;
-  LocateOnArc(arc, s, &i, &f);
-  return line.points[i] + f * (line.points[i + 1] - line.points[i]);
-}
-
-double RadiusAtArc(const Polyline3& line, const std::vector<double>& arc, double s) {
-  if (line.radii.empty()) return 0.0;
-  if (line.radii.size() == 1) return line.radii[0];
-  size_t i;
-  double f;
-  LocateOnArc(arc, s, &i, &f);
-  return line.radii[i] + f * (line.radii[i + 1] - line.radii[i]);
-}
-
 // Chords between the points at arc lengths 0, step, 2 step, ... from the base, and the tip: a grid
 // fixed at the base, so that a cane cut short (fallen_wood.h) keeps the very capsules it had, up
 // to the one its cut falls in, and a trajectory checked on the uncut vine stays free on the cut
@@ -79,10 +42,10 @@ void AppendCaneChords(const Cane& cane, const Eigen::Isometry3d& base_from_platf
   if (grid.size() < 2) grid.insert(grid.begin(), 0.0);  // a cane of (almost) no length
   size_t i = 0;
   for (size_t k = 0; k + 1 < grid.size(); ++k) {
-    const Eigen::Vector3d a = PointAtArc(original, arc, grid[k]);
-    const Eigen::Vector3d b = PointAtArc(original, arc, grid[k + 1]);
-    double radius = std::max(RadiusAtArc(original, arc, grid[k]),
-                             RadiusAtArc(original, arc, grid[k + 1]));
+    const Eigen::Vector3d a = original.PointAt(grid[k], arc);
+    const Eigen::Vector3d b = original.PointAt(grid[k + 1], arc);
+    double radius = std::max(original.RadiusAt(grid[k], arc),
+                             original.RadiusAt(grid[k + 1], arc));
     while (i < arc.size() && arc[i] <= grid[k]) ++i;
     for (size_t j = i; j < arc.size() && arc[j] < grid[k + 1]; ++j)
       radius = std::max(radius, PointSegmentDistance(original.points[j], a, b) + original.radii[j]);
