@@ -268,6 +268,13 @@ TEST(FlipBound, ARememberedFlipFailureRefusesOnlyQueriesWithNoLargerBound) {
   const PathResult home = planner.PlanToAny(start, goal, Deadline::Infinite(), /*only_way=*/true);
   EXPECT_FALSE(home.repeated_failure) << home.message;
   EXPECT_GE(home.start_tree_states + home.goal_tree_states, 400);
+  // The other way round: a failure at the usual bound refuses a later flip (allowed fewer).
+  PathPlanner fresh(checker, JointLimits(), options);
+  const PathResult usual = fresh.PlanToAny(start, goal, Deadline::Infinite(), /*only_way=*/true);
+  ASSERT_FALSE(usual.flip_bound) << usual.message;
+  EXPECT_EQ(fresh.remembered_failures(), 1);
+  const PathResult later_flip = fresh.Plan(start, across, Deadline::Infinite());
+  EXPECT_TRUE(later_flip.repeated_failure) << later_flip.message;
 }
 
 TEST(FlipBound, AnElbowFlipThatCanBeMadeIsStillPlanned) {

@@ -79,6 +79,8 @@ TEST(PrimitiveCheckerExclude, AnswersAsACheckerBuiltWithoutTheObstacles) {
         }
         ASSERT_FALSE(excluded.empty());
         ASSERT_EQ(reduced.obstacles.size() + excluded.size(), scene.obstacles.size());
+        // The scene's own index list is the same rule (ascending, the complement of `reduced`).
+        EXPECT_EQ(scene.CaneNearIndices(CaneId{cane}, point, 0.04), excluded);
       } else {
         point = scene.obstacles[excluded.size()].capsule.a;  // any cane point
       }

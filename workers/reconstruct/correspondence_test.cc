@@ -147,14 +147,19 @@ TEST(MatchSegments, BadInputRejects) {
   EXPECT_NE(std::string(gap.status().message()).find("max_ill_conditioned_gap_samples"),
             std::string::npos)
       << gap.status();
-  for (int k = 0; k < 3; ++k) {
+  const char* const fields[] = {"other_views.gate_px", "other_views.min_cos",
+                                "other_views.max_residual_growth_px", "other_views.rounds",
+                                "other_views.min_associations"};
+  for (int k = 0; k < 5; ++k) {
     bad_options = {};
     if (k == 0) bad_options.other_views.gate_px = 0.0;
     if (k == 1) bad_options.other_views.min_cos = 1.5;
     if (k == 2) bad_options.other_views.max_residual_growth_px = NAN;
+    if (k == 3) bad_options.other_views.rounds = -1;
+    if (k == 4) bad_options.other_views.min_associations = 0;
     const auto other = MatchSegments(views, rig, bad_options, inf);
     EXPECT_EQ(code(other), absl::StatusCode::kInvalidArgument) << k;
-    EXPECT_NE(std::string(other.status().message()).find("other_views"), std::string::npos)
+    EXPECT_NE(std::string(other.status().message()).find(fields[k]), std::string::npos)
         << other.status();
   }
 }
