@@ -25,8 +25,9 @@ struct Polyline3 {
   // Point and radius at arc length s (clamped to [0, Length()]).
   Eigen::Vector3d PointAt(double s) const;
   double RadiusAt(double s) const;
-  // The same, given `arc` = ArcLengths() (which the forms above compute at every call): the same
-  // values bit for bit, for callers that locate many points on one polyline.
+  // The same, given `arc` = ArcLengths() of this polyline, unchanged since (the forms above compute
+  // it at every call; another vector is undefined behaviour): the same values bit for bit, for
+  // callers that locate many points on one polyline.
   Eigen::Vector3d PointAt(double s, const std::vector<double>& arc) const;
   double RadiusAt(double s, const std::vector<double>& arc) const;
   // Unit tangent at arc length s (direction base -> tip).

@@ -64,8 +64,9 @@ class PrimitiveChecker : public CollisionChecker {
   // scene.obstacles) are listed, replacing any earlier exclusion (none: the whole scene again).
   // Every check then answers as a checker built on the scene without them would: excluded pieces
   // become padding, the bounds of the leaves and nodes that held them are refitted to the pieces
-  // left, and each piece is tested on its own, so which pieces share a leaf changes no result. Rebuilding costs far more (cut motions leave
-  // out the cut cane near each cut point, cut_motion.cc). Out-of-range indices are ignored.
+  // left, and each piece is tested on its own, so which pieces share a leaf changes no result.
+  // Rebuilding costs far more (cut motions leave out the cut cane near each cut point,
+  // cut_motion.cc). Out-of-range indices are ignored.
   void Exclude(std::span<const int> obstacles);
 
   // Number of obstacle pieces, leaves and nodes (for benchmarks and tests).

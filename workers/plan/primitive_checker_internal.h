@@ -293,9 +293,9 @@ struct PrimitiveChecker::Impl {
                       double best, int* nearest = nullptr) const;
   // min(cap, clearance at q) if above `floor`, else some value <= floor (returns early).
   double Clearance(const Joints& q, double floor, double cap);
-  // The arm capsule and piece that gave the last Clearance its value (-1: none yet, or the piece
-  // was excluded). When a plane or self pair is nearest, the previous pair is kept: it is only a
-  // warm start. Consecutive queries are mostly nearby configurations with the same nearest pair:
+  // The arm capsule and piece that gave a recent Clearance its value, or -1 (none found below
+  // the cap yet, or the piece was excluded). When a plane or self pair is nearest, or a query
+  // ends early, the previous pair may stay: it is only a warm start. Consecutive queries are mostly nearby configurations with the same nearest pair:
   // its gap, computed first, starts the branch-and-bound low (an exact upper bound either way).
   int last_capsule = -1, last_piece = -1;
 

@@ -31,8 +31,8 @@ bool KeepMotionsFreeOfStubs(CollisionChecker& checker, double max_step_m, bool s
                             CutMotion* motion);
 
 // True when `b` is the half-turn twin of `a`: the same length, joints 1-5 equal bit for bit and
-// joint 6 differing by pi (within 1e-9 rad), configuration by configuration in the same order
-// or in reverse order (a sweep's twin runs the other way).
+// joint 6 turned by the same +pi or -pi throughout (within 1e-9 rad), configuration by
+// configuration in the same order or in reverse order (a sweep's twin runs the other way).
 bool IsHalfTurnTwin(const std::vector<Joints>& a, const std::vector<Joints>& b);
 
 // True when path[c + j] == path[c - j] bit for bit for every j, with c = size / 2 and an odd size
