@@ -35,21 +35,38 @@ std::vector<Cut> CutsNearCaneBases(const VineModel& model) {
   return cuts;
 }
 
+// One simulated stop (vine 0 of `seed`, no neighbours): its ground-truth vine, the collision
+// scene for `robot` and cuts near its canes' bases.
+struct VineStop {
+  VineModel vine;
+  CollisionScene scene;
+  std::vector<Cut> cuts;
+};
+
+VineStop MakeVineStop(uint64_t seed, const RobotModel& robot) {
+  sim::VineGeneratorOptions vine_options;
+  vine_options.neighbours = false;
+  auto generated = sim::GenerateScene(seed, 0, vine_options);
+  EXPECT_TRUE(generated.ok()) << generated.status();
+  if (!generated.ok()) return {};
+  auto scene = CollisionScene::Build(generated->vine, DefaultPlatform(), robot);
+  EXPECT_TRUE(scene.ok()) << scene.status();
+  if (!scene.ok()) return {};
+  std::vector<Cut> cuts = CutsNearCaneBases(generated->vine);
+  return {std::move(generated->vine), *std::move(scene), std::move(cuts)};
+}
+
 TEST(CutMotion, MotionsOnSimulatedVinesAreFreeWhenRecheckedDenselyWithFcl) {
   const RobotModel robot = DefaultUr5(MillEndTool());
   const Eigen::Isometry3d base_from_platform = robot.platform_from_arm_base.inverse();
   const CutMotionOptions options;
   int cuts = 0, planned = 0;
   for (uint64_t seed = 1100; seed < 1110; ++seed) {
-    sim::VineGeneratorOptions vine_options;
-    vine_options.neighbours = false;
-    auto generated = sim::GenerateScene(seed, 0, vine_options);
-    ASSERT_TRUE(generated.ok()) << generated.status();
-    auto scene = CollisionScene::Build(generated->vine, DefaultPlatform(), robot);
-    ASSERT_TRUE(scene.ok()) << scene.status();
-    const std::vector<Cut> vine_cuts = CutsNearCaneBases(generated->vine);
+    const VineStop stop = MakeVineStop(seed, robot);
+    ASSERT_FALSE(stop.vine.canes.empty()) << "seed " << seed;
+    const std::vector<Cut>& vine_cuts = stop.cuts;
     const auto motions =
-        PlanCutMotions(robot, generated->vine, *scene, vine_cuts, options, Deadline::Infinite());
+        PlanCutMotions(robot, stop.vine, stop.scene, vine_cuts, options, Deadline::Infinite());
     ASSERT_EQ(motions.size(), vine_cuts.size());
     cuts += static_cast<int>(vine_cuts.size());
     for (size_t i = 0; i < motions.size(); ++i) {
@@ -64,7 +81,7 @@ TEST(CutMotion, MotionsOnSimulatedVinesAreFreeWhenRecheckedDenselyWithFcl) {
       ++planned;
       EXPECT_LE(m.slid_m, options.max_slide_m + 1e-12);
       // The TCP is on the (slid) cut point, on the cut cane's axis, sweeping across it.
-      const Cane& cane = generated->vine.canes[*generated->vine.IndexOf(vine_cuts[i].cane_id)];
+      const Cane& cane = stop.vine.canes[*stop.vine.IndexOf(vine_cuts[i].cane_id)];
       double off_axis = 1;
       const double s = cane.polyline.Project(m.cut_point_in_platform, &off_axis);
       EXPECT_LT(off_axis, 1e-9);
@@ -76,7 +93,7 @@ TEST(CutMotion, MotionsOnSimulatedVinesAreFreeWhenRecheckedDenselyWithFcl) {
       // An independent checker (FCL primitives), 1 mm resolution, on the scene the planner was
       // allowed: everything but the cut cane near the cut.
       const CollisionScene allowed =
-          scene->WithoutCaneNear(vine_cuts[i].cane_id, base_from_platform * m.cut_point_in_platform,
+          stop.scene.WithoutCaneNear(vine_cuts[i].cane_id, base_from_platform * m.cut_point_in_platform,
                                  options.cut_cane_free_radius_m);
       auto fcl = MakeFclChecker(robot, allowed, FclMode::kPrimitives);
       for (size_t k = 1; k < m.path.size(); ++k) {
@@ -132,17 +149,13 @@ TEST(CutMotion, SharedTwinsGiveTheMotionsOfBothSidesOnSimulatedVines) {
     both_sides.share_rolled_twins = false;
     int planned = 0, alternatives = 0;
     for (uint64_t seed = 1100; seed < 1103; ++seed) {
-      sim::VineGeneratorOptions vine_options;
-      vine_options.neighbours = false;
-      auto generated = sim::GenerateScene(seed, 0, vine_options);
-      ASSERT_TRUE(generated.ok()) << generated.status();
-      auto scene = CollisionScene::Build(generated->vine, DefaultPlatform(), robot);
-      ASSERT_TRUE(scene.ok()) << scene.status();
-      const std::vector<Cut> cuts = CutsNearCaneBases(generated->vine);
+      const VineStop stop = MakeVineStop(seed, robot);
+      ASSERT_FALSE(stop.vine.canes.empty()) << "seed " << seed;
+      const std::vector<Cut>& cuts = stop.cuts;
       const auto shared =
-          PlanCutMotions(robot, generated->vine, *scene, cuts, options, Deadline::Infinite());
+          PlanCutMotions(robot, stop.vine, stop.scene, cuts, options, Deadline::Infinite());
       const auto sampled =
-          PlanCutMotions(robot, generated->vine, *scene, cuts, both_sides, Deadline::Infinite());
+          PlanCutMotions(robot, stop.vine, stop.scene, cuts, both_sides, Deadline::Infinite());
       ASSERT_EQ(shared.size(), sampled.size());
       for (size_t i = 0; i < shared.size(); ++i) {
         const CutMotion& m = shared[i];
