@@ -33,21 +33,14 @@ TwistCachedFrames::TwistCachedFrames(const DhParameters& dh) : dh_(dh) {
   for (int i = 0; i < 6; ++i) ca_[i] = std::cos(dh.alpha[i]), sa_[i] = std::sin(dh.alpha[i]);
 }
 
-// The matrices and products of LinkFrames (ur5_kinematics.cc), written the same way.
+// LinkFrames (ur5_kinematics.cc) with the twists' sines and cosines computed once: the same
+// DhTransform and products, so the same frames bit for bit.
 std::array<Eigen::Isometry3d, 7> TwistCachedFrames::operator()(const Joints& q) const {
   std::array<Eigen::Isometry3d, 7> frames;
   frames[0] = Eigen::Isometry3d::Identity();
   for (int i = 0; i < 6; ++i) {
-    const double ct = std::cos(q[i]), st = std::sin(q[i]);
-    const double ca = ca_[i], sa = sa_[i], a = dh_.a[i], d = dh_.d[i];
-    Eigen::Matrix4d m;
-    m << ct, -st * ca, st * sa, a * ct,
-         st, ct * ca, -ct * sa, a * st,
-         0, sa, ca, d,
-         0, 0, 0, 1;
-    Eigen::Isometry3d t;
-    t.matrix() = m;
-    frames[i + 1] = frames[i] * t;
+    frames[i + 1] = frames[i] * DhTransform(std::cos(q[i]), std::sin(q[i]), ca_[i], sa_[i],
+                                            dh_.a[i], dh_.d[i]);
   }
   return frames;
 }

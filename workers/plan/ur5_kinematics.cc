@@ -40,29 +40,12 @@ bool JointLimits::Contains(const Joints& q) const {
   return (q.array() >= lower.array()).all() && (q.array() <= upper.array()).all();
 }
 
-namespace {
-
-// Rz(theta) Tz(d) Tx(a) Rx(alpha), written out.
-Eigen::Isometry3d DhTransform(double theta, double d, double a, double alpha) {
-  const double ct = std::cos(theta), st = std::sin(theta);
-  const double ca = std::cos(alpha), sa = std::sin(alpha);
-  Eigen::Matrix4d m;
-  m << ct, -st * ca, st * sa, a * ct,
-       st, ct * ca, -ct * sa, a * st,
-       0, sa, ca, d,
-       0, 0, 0, 1;
-  Eigen::Isometry3d t;
-  t.matrix() = m;
-  return t;
-}
-
-}  // namespace
-
 std::array<Eigen::Isometry3d, 7> LinkFrames(const Joints& q, const DhParameters& dh) {
   std::array<Eigen::Isometry3d, 7> frames;
   frames[0] = Eigen::Isometry3d::Identity();
   for (int i = 0; i < 6; ++i) {
-    frames[i + 1] = frames[i] * DhTransform(q[i], dh.d[i], dh.a[i], dh.alpha[i]);
+    frames[i + 1] = frames[i] * DhTransform(std::cos(q[i]), std::sin(q[i]), std::cos(dh.alpha[i]),
+                                            std::sin(dh.alpha[i]), dh.a[i], dh.d[i]);
   }
   return frames;
 }

@@ -43,6 +43,20 @@ struct JointLimits {
 
 // base_from_link[i] for i = 0 (the base itself, identity) .. 6 (the flange).
 std::array<Eigen::Isometry3d, 7> LinkFrames(const Joints& q, const DhParameters& dh = Ur5Dh());
+
+// One DH link transform Rz(theta) Tz(d) Tx(a) Rx(alpha), written out, from the sines and cosines
+// of theta and alpha (LinkFrames's, and safety_margins' TwistCachedFrames with alpha's cached).
+inline Eigen::Isometry3d DhTransform(double ct, double st, double ca, double sa, double a,
+                                     double d) {
+  Eigen::Matrix4d m;
+  m << ct, -st * ca, st * sa, a * ct,
+       st, ct * ca, -ct * sa, a * st,
+       0, sa, ca, d,
+       0, 0, 0, 1;
+  Eigen::Isometry3d t;
+  t.matrix() = m;
+  return t;
+}
 // base_from_flange.
 Eigen::Isometry3d ForwardKinematics(const Joints& q, const DhParameters& dh = Ur5Dh());
 
