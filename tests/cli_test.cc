@@ -307,7 +307,7 @@ TEST(VinebotCli, DecideRejectsMalformedModelsNamingTheField) {
     c.spoil(spoilt);
     const std::string path = dir + "/" + c.name + ".json";
     std::ofstream(path) << spoilt.dump();
-    for (const std::string command : {"decide --out " + dir + "/p.json", std::string("phenomics")}) {
+    for (const std::string& command : {"decide --out " + dir + "/p.json", std::string("phenomics")}) {
       const RunResult run = Vinebot(command + " --model " + path);
       EXPECT_EQ(run.exit_code, 2) << command << " " << c.name << ": " << run.output;
       EXPECT_NE(run.output.find(c.expected), std::string::npos)

@@ -150,12 +150,7 @@ std::vector<int> CollisionScene::CaneNearIndices(CaneId cane_id,
                                                  double radius_m) const {
   std::vector<int> near;
   for (size_t i = 0; i < obstacles.size(); ++i) {
-    const Obstacle& o = obstacles[i];
-    if (o.kind == ObstacleKind::kCane && o.owner_id == cane_id.value &&
-        PointSegmentDistance(point_in_base, o.capsule.a, o.capsule.b) - o.capsule.radius <=
-            radius_m) {
-      near.push_back(static_cast<int>(i));
-    }
+    if (IsCaneNear(obstacles[i], cane_id, point_in_base, radius_m)) near.push_back(static_cast<int>(i));
   }
   return near;
 }

@@ -63,6 +63,16 @@ struct CollisionScene {
                                    double radius_m) const;
 };
 
+// The rule of WithoutCaneNear and CaneNearIndices, which the safety margins' ignored cane
+// (safety_margins.h) shares: `o` is a capsule of cane `cane_id` whose surface comes within
+// `radius_m` of `point_in_base` (the distance to its axis, less its true radius).
+inline bool IsCaneNear(const Obstacle& o, CaneId cane_id, const Eigen::Vector3d& point_in_base,
+                       double radius_m) {
+  return o.kind == ObstacleKind::kCane && o.owner_id == cane_id.value &&
+         PointSegmentDistance(point_in_base, o.capsule.a, o.capsule.b) - o.capsule.radius <=
+             radius_m;
+}
+
 // The chords (kCane obstacles, arm base frame, margin options.default_margin_m) of the stub that
 // `cut` leaves of its cane when made after the cuts `made` on `model` -- the cane in
 // WithoutFallenWood(model, made + {cut}) (fallen_wood.h) -- except those identical to a chord of

@@ -1,35 +1,22 @@
 // SPDX-License-Identifier: Apache-2.0
+// PathPlanner's queries: validation, the straight segments, the bounds on RRT-Connect's trees
+// (rrt_connect.h runs it through OMPL), the remembered failed queries, the check of a path found
+// with coarse edges, and shortcutting (path_shortcut.h).
 #include "workers/plan/path_planner.h"
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
-#include <exception>
 #include <limits>
-#include <mutex>
-#include <random>
 #include <utility>
 #include <vector>
 
 #include "absl/strings/str_cat.h"
-#include "ompl/base/MotionValidator.h"
-#include "ompl/datastructures/NearestNeighbors.h"
-#include "ompl/base/ProblemDefinition.h"
-#include "ompl/base/SpaceInformation.h"
-#include "ompl/base/StateValidityChecker.h"
-#include "ompl/base/goals/GoalState.h"
-#include "ompl/base/spaces/RealVectorStateSpace.h"
-#include "ompl/geometric/PathGeometric.h"
-#include "ompl/geometric/planners/rrt/RRTConnect.h"
-#include "ompl/util/Console.h"
-#include "ompl/util/Exception.h"
-#include "workers/plan/time_parameterization.h"
+#include "workers/plan/path_shortcut.h"
+#include "workers/plan/rrt_connect.h"
 
 namespace vb::plan {
-
-namespace ob = ompl::base;
-namespace og = ompl::geometric;
 
 namespace {
 
@@ -38,178 +25,6 @@ using Clock = std::chrono::steady_clock;
 double SecondsSince(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
-
-Joints ToJoints(const ob::State* state) {
-  const double* v = state->as<ob::RealVectorStateSpace::StateType>()->values;
-  Joints q;
-  for (int i = 0; i < 6; ++i) q[i] = v[i];
-  return q;
-}
-
-void FromJoints(const Joints& q, ob::State* state) {
-  double* v = state->as<ob::RealVectorStateSpace::StateType>()->values;
-  for (int i = 0; i < 6; ++i) v[i] = q[i];
-}
-
-// Uniform samples from our own generator, reseeded on every query: OMPL's default samplers draw
-// their seeds from one process-wide sequence, so a plan would depend on every planner created
-// before it.
-class SeededSampler : public ob::RealVectorStateSampler {
- public:
-  SeededSampler(const ob::StateSpace* space, std::uint_fast32_t seed)
-      : ob::RealVectorStateSampler(space) {
-    rng_.setLocalSeed(seed);
-  }
-};
-
-class Validity : public ob::StateValidityChecker {
- public:
-  Validity(const ob::SpaceInformationPtr& si, CollisionChecker* checker)
-      : ob::StateValidityChecker(si), checker_(checker) {}
-  bool isValid(const ob::State* state) const override { return checker_->IsFree(ToJoints(state)); }
-
- private:
-  CollisionChecker* checker_;
-};
-
-class Motion : public ob::MotionValidator {
- public:
-  // *max_step_m: the resolution of the running query's edge checks.
-  Motion(const ob::SpaceInformationPtr& si, CollisionChecker* checker, const double* max_step_m)
-      : ob::MotionValidator(si), checker_(checker), max_step_m_(max_step_m) {}
-
-  bool checkMotion(const ob::State* s1, const ob::State* s2) const override {
-    const bool ok = checker_->IsMotionFree(ToJoints(s1), ToJoints(s2), *max_step_m_);
-    ok ? ++valid_ : ++invalid_;
-    return ok;
-  }
-
-  // RRT-Connect does not use this form; other OMPL planners do. The segment is split into
-  // kPieces straight pieces checked in order, so `lastValid` is the end of the last free piece
-  // (conservative: the true last valid point may lie further).
-  bool checkMotion(const ob::State* s1, const ob::State* s2,
-                   std::pair<ob::State*, double>& last_valid) const override {
-    constexpr int kPieces = 16;
-    const Joints a = ToJoints(s1), b = ToJoints(s2);
-    Joints prev = a;
-    for (int k = 1; k <= kPieces; ++k) {
-      const Joints next = k == kPieces ? b : Joints(a + (b - a) * (double(k) / kPieces));
-      if (!checker_->IsMotionFree(prev, next, *max_step_m_)) {
-        last_valid.second = double(k - 1) / kPieces;
-        if (last_valid.first != nullptr) FromJoints(prev, last_valid.first);
-        ++invalid_;
-        return false;
-      }
-      prev = next;
-    }
-    ++valid_;
-    return true;
-  }
-
- private:
-  CollisionChecker* checker_;
-  const double* max_step_m_;
-};
-
-// Linear nearest-neighbour search over a tree's joint vectors kept in one contiguous array:
-// OMPL's NearestNeighborsLinear calls a std::function and the state space's virtual distance per
-// element, through a pointer per state, which cost 10-15% of a path query on tuning seeds (perf).
-// Same distances as RealVectorStateSpace::distance (same order of summation, then sqrt) and the
-// same tie rule (the first of equal minima), so RRT-Connect grows exactly the same trees.
-// T is a pointer to a motion whose `state` is a RealVectorStateSpace state of dimension 6.
-template <typename T>
-class JointNearest : public ompl::NearestNeighbors<T> {
- public:
-  bool reportsSortedResults() const override { return true; }
-  void clear() override {
-    data_.clear();
-    q_.clear();
-  }
-  void add(const T& data) override {
-    data_.push_back(data);
-    const double* v = data->state->template as<ob::RealVectorStateSpace::StateType>()->values;
-    q_.insert(q_.end(), v, v + 6);
-  }
-  bool remove(const T& data) override {
-    for (size_t i = data_.size(); i-- > 0;) {
-      if (data_[i] != data) continue;
-      data_.erase(data_.begin() + static_cast<std::ptrdiff_t>(i));
-      q_.erase(q_.begin() + static_cast<std::ptrdiff_t>(6 * i),
-               q_.begin() + static_cast<std::ptrdiff_t>(6 * i + 6));
-      return true;
-    }
-    return false;
-  }
-  T nearest(const T& data) const override {
-    if (data_.empty()) throw ompl::Exception("JointNearest: no elements");
-    // Squared distances, with the square root taken only where one is smaller than the best so
-    // far: the sqrt of a smaller square can round to the same distance, and then OMPL keeps the
-    // earlier element, as this does.
-    const double* x = Values(data);
-    size_t pos = 0;
-    double sq_min = SquaredDistance(0, x), d_min = std::sqrt(sq_min);
-    for (size_t i = 1; i < data_.size(); ++i) {
-      const double sq = SquaredDistance(i, x);
-      if (sq >= sq_min) continue;
-      const double d = std::sqrt(sq);
-      if (d < d_min) pos = i, d_min = d;
-      sq_min = sq;  // a tie keeps pos, and no later element beats d_min with sq >= this
-    }
-    return data_[pos];
-  }
-  void nearestK(const T& data, std::size_t k, std::vector<T>& nbh) const override {
-    std::vector<std::pair<double, size_t>> d = Sorted(data, std::numeric_limits<double>::infinity());
-    nbh.clear();
-    for (size_t i = 0; i < d.size() && i < k; ++i) nbh.push_back(data_[d[i].second]);
-  }
-  void nearestR(const T& data, double radius, std::vector<T>& nbh) const override {
-    nbh.clear();
-    for (const auto& [dist, i] : Sorted(data, radius)) nbh.push_back(data_[i]);
-  }
-  std::size_t size() const override { return data_.size(); }
-  void list(std::vector<T>& data) const override { data = data_; }
-
- private:
-  static const double* Values(const T& data) {
-    return data->state->template as<ob::RealVectorStateSpace::StateType>()->values;
-  }
-  double SquaredDistance(size_t i, const double* x) const {
-    const double* a = &q_[6 * i];
-    double sum = 0.0;
-    for (int j = 0; j < 6; ++j) {
-      const double diff = a[j] - x[j];
-      sum += diff * diff;
-    }
-    return sum;
-  }
-  double Distance(size_t i, const double* x) const { return std::sqrt(SquaredDistance(i, x)); }
-  std::vector<std::pair<double, size_t>> Sorted(const T& data, double radius) const {
-    const double* x = Values(data);
-    std::vector<std::pair<double, size_t>> d;
-    for (size_t i = 0; i < data_.size(); ++i) {
-      const double dist = Distance(i, x);
-      if (dist <= radius) d.emplace_back(dist, i);
-    }
-    std::stable_sort(d.begin(), d.end(),
-                     [](const auto& a, const auto& b) { return a.first < b.first; });
-    return d;
-  }
-
-  std::vector<T> data_;
-  std::vector<double> q_;  // 6 joint values per element, in data_'s order
-};
-
-void SilenceOmpl() {
-  static std::once_flag once;
-  std::call_once(once, [] { ompl::msg::setLogLevel(ompl::msg::LOG_NONE); });
-}
-
-std::uint_fast32_t OmplSeed(uint64_t seed) {
-  // Keep all 64 bits relevant; boost/std generators take 32-bit seeds.
-  return static_cast<std::uint_fast32_t>((seed ^ (seed >> 32)) & 0xffffffffu);
-}
-
-bool NearlyEqual(const Joints& a, const Joints& b) { return (a - b).cwiseAbs().maxCoeff() < 1e-12; }
 
 // Whether a -> b is a segment of `path` (consecutive waypoints, bit-exact): shortcutting keeps
 // such segments as they are and checks every segment it makes.
@@ -272,79 +87,19 @@ std::string_view PathOutcomeName(PathOutcome outcome) {
   return "unknown";
 }
 
-// RRT-Connect with its trees' sizes visible.
-class TreeSizeRRTConnect : public og::RRTConnect {
- public:
-  using og::RRTConnect::RRTConnect;
-  size_t StartTreeSize() const { return tStart_ ? tStart_->size() : 0; }
-  size_t GoalTreeSize() const { return tGoal_ ? tGoal_->size() : 0; }
-  // The joint vectors of the start tree (start_tree) or the goal tree.
-  std::vector<Joints> TreeStates(bool start_tree) const {
-    std::vector<Joints> out;
-    const TreeData& tree = start_tree ? tStart_ : tGoal_;
-    if (!tree) return out;
-    std::vector<Motion*> motions;
-    tree->list(motions);
-    out.reserve(motions.size());
-    for (const Motion* m : motions) out.push_back(ToJoints(m->state));
-    return out;
-  }
-};
-
-struct PathPlanner::Ompl {
-  std::shared_ptr<ob::RealVectorStateSpace> space;
-  ob::SpaceInformationPtr si;
-  ob::ProblemDefinitionPtr pdef;
-  std::shared_ptr<TreeSizeRRTConnect> planner;
-  std::uint_fast32_t seed = 1;  // read by the sampler allocator at every solve
-  ob::State* start = nullptr;
-  ob::State* goal = nullptr;
-  double edge_step_m = 0.01;  // RRT-Connect's edge-check resolution in the running query
-
-  ~Ompl() {
-    if (si != nullptr) {
-      if (start != nullptr) si->freeState(start);
-      if (goal != nullptr) si->freeState(goal);
-    }
-  }
-};
-
 PathPlanner::PathPlanner(CollisionChecker& checker, const JointLimits& limits,
                          const PathOptions& options)
     : checker_(checker), limits_(limits), options_(options) {
-  SilenceOmpl();
   setup_status_ = limits_.Validate();
   if (setup_status_.ok()) setup_status_ = options_.Validate();
   if (!setup_status_.ok()) return;
-  try {
-    auto ompl = std::make_unique<Ompl>();
-    ompl->space = std::make_shared<ob::RealVectorStateSpace>(6);
-    ob::RealVectorBounds bounds(6);
-    for (int i = 0; i < 6; ++i) {
-      bounds.setLow(i, limits_.lower[i]);
-      bounds.setHigh(i, limits_.upper[i]);
-    }
-    ompl->space->setBounds(bounds);
-    Ompl* raw = ompl.get();
-    ompl->space->setStateSamplerAllocator([raw](const ob::StateSpace* space) -> ob::StateSamplerPtr {
-      return std::make_shared<SeededSampler>(space, raw->seed);
-    });
-    ompl->si = std::make_shared<ob::SpaceInformation>(ompl->space);
-    ompl->si->setStateValidityChecker(std::make_shared<Validity>(ompl->si, &checker_));
-    ompl->edge_step_m = options_.max_step_m;
-    ompl->si->setMotionValidator(std::make_shared<Motion>(ompl->si, &checker_, &raw->edge_step_m));
-    ompl->si->setup();
-    ompl->pdef = std::make_shared<ob::ProblemDefinition>(ompl->si);
-    ompl->start = ompl->si->allocState();
-    ompl->goal = ompl->si->allocState();
-    ompl->planner = std::make_shared<TreeSizeRRTConnect>(ompl->si);
-    if (options_.range_rad > 0.0) ompl->planner->setRange(options_.range_rad);
-    ompl->planner->setProblemDefinition(ompl->pdef);
-    ompl->planner->setNearestNeighbors<JointNearest>();  // also runs setup()
-    ompl_ = std::move(ompl);
-  } catch (const std::exception& e) {
-    setup_status_ = absl::InternalError(absl::StrCat("path planner: OMPL setup failed: ", e.what()));
+  absl::StatusOr<std::unique_ptr<RrtConnect>> rrt =
+      RrtConnect::Create(checker_, limits_, options_.range_rad);
+  if (!rrt.ok()) {
+    setup_status_ = rrt.status();
+    return;
   }
+  rrt_ = *std::move(rrt);
 }
 
 PathPlanner::~PathPlanner() = default;
@@ -406,7 +161,7 @@ PathResult PathPlanner::PlanToAny(const Joints& start, std::span<const Joints> g
   }
 
   for (int g : usable) {
-    if (NearlyEqual(start, goals[g]) ||
+    if (SameWaypoint(start, goals[g]) ||
         (options_.try_direct_first && checker_.IsMotionFree(start, goals[g], options_.max_step_m))) {
       result.waypoints = {start, goals[g]};
       result.direct = true;
@@ -443,81 +198,59 @@ PathResult PathPlanner::PlanToAny(const Joints& start, std::span<const Joints> g
   // RRT-Connect checks its edges at tree_max_step_m; the path it returns is then checked at
   // max_step_m, and if that finds a collision the query runs again with the edges checked at
   // max_step_m (same seed, same bounds, within what is left of the time limit).
-  Ompl& o = *ompl_;
+  std::vector<Joints> usable_goals;
+  usable_goals.reserve(usable.size());
+  for (int g : usable) usable_goals.push_back(goals[g]);
+  // Goals walled in (PathOptions::walled_in_after_states).
+  const size_t wall_after = options_.walled_in_after_states > 0
+                                ? static_cast<size_t>(options_.walled_in_after_states)
+                                : SIZE_MAX;
+  const double wall_fraction = options_.walled_in_goal_fraction;
   const double coarse_m = std::max(options_.tree_max_step_m, options_.max_step_m);
   for (const double edge_step_m : {coarse_m, options_.max_step_m}) {
     result.waypoints.clear();
-    o.edge_step_m = edge_step_m;
-    try {
-      o.planner->clear();  // drops both trees and the sampler (re-allocated, seeded, in solve)
-      o.pdef->clearSolutionPaths();
-      o.pdef->clearStartStates();
-      // Reversed roles: RRT-Connect roots its start tree at every start state before the first
-      // iteration, but adds goal states one at a time as its goal tree grows, so a walled-in
-      // first goal would hide the others. The path is reversed below.
-      for (int g : usable) {
-        FromJoints(goals[g], o.goal);
-        o.pdef->addStartState(o.goal);  // copied
+    bool walled_in = false;
+    const absl::StatusOr<RrtRun> run = rrt_->Run(
+        start, usable_goals, options_.seed, edge_step_m,
+        [&end, &deadline, max_states, wall_after, wall_fraction, &walled_in](size_t start_side,
+                                                                            size_t goal_side) {
+          const size_t total = goal_side + start_side;
+          if (total >= wall_after && static_cast<double>(goal_side) <= wall_fraction * total) {
+            walled_in = true;
+          }
+          return walled_in || total >= max_states || Clock::now() >= end || deadline.Cancelled();
+        });
+    if (!run.ok()) return finish(PathOutcome::kNoPathWithinDeadline, std::string(run.status().message()));
+    result.start_tree_states = static_cast<int>(run->start_tree_states);
+    result.goal_tree_states = static_cast<int>(run->goal_tree_states);
+    const size_t total = run->start_tree_states + run->goal_tree_states;
+    if (!run->exact) {
+      // Only a query stopped by the bound on states is remembered: one stopped by time says
+      // nothing reproducible.
+      if (options_.remember_failures && failures_.size() < kMaxRememberedFailures &&
+          (walled_in || total >= max_states)) {
+        // A walled-in query ends whatever its bound; one stopped by the bound refuses only
+        // queries allowed no more states (a flip's failure does not refuse the way home).
+        failures_.push_back({rrt_->TreeStates(/*start_side=*/true),
+                             rrt_->TreeStates(/*start_side=*/false),
+                             walled_in ? SIZE_MAX : max_states});
       }
-      FromJoints(start, o.start);
-      auto goal_region = std::make_shared<ob::GoalState>(o.si);
-      goal_region->setState(o.start);
-      goal_region->setThreshold(1e-9);
-      o.pdef->setGoal(goal_region);
-      o.seed = OmplSeed(options_.seed);
-      const TreeSizeRRTConnect& rrt = *o.planner;
-      // Goals walled in (PathOptions::walled_in_after_states). OMPL's start tree is rooted at our
-      // goals.
-      const size_t wall_after = options_.walled_in_after_states > 0
-                                    ? static_cast<size_t>(options_.walled_in_after_states)
-                                    : SIZE_MAX;
-      const double wall_fraction = options_.walled_in_goal_fraction;
-      bool walled_in = false;
-      const ob::PlannerTerminationCondition ptc(
-          [&end, &deadline, &rrt, max_states, wall_after, wall_fraction, &walled_in] {
-            const size_t goal_side = rrt.StartTreeSize(), total = goal_side + rrt.GoalTreeSize();
-            if (total >= wall_after && static_cast<double>(goal_side) <= wall_fraction * total) {
-              walled_in = true;
-            }
-            return walled_in || total >= max_states || Clock::now() >= end ||
-                   deadline.Cancelled();
-          });
-      const ob::PlannerStatus status = o.planner->solve(ptc);
-      // Roles are reversed: OMPL's start tree is rooted at our goals.
-      result.start_tree_states = static_cast<int>(rrt.GoalTreeSize());
-      result.goal_tree_states = static_cast<int>(rrt.StartTreeSize());
-      if (status != ob::PlannerStatus::EXACT_SOLUTION || !o.pdef->hasExactSolution()) {
-        // Only a query stopped by the bound on states is remembered: one stopped by time says
-        // nothing reproducible. Roles are reversed: OMPL's start tree is rooted at our goals.
-        if (options_.remember_failures && failures_.size() < kMaxRememberedFailures &&
-            (walled_in || rrt.StartTreeSize() + rrt.GoalTreeSize() >= max_states)) {
-          // A walled-in query ends whatever its bound; one stopped by the bound refuses only
-          // queries allowed no more states (a flip's failure does not refuse the way home).
-          failures_.push_back(
-              {rrt.TreeStates(false), rrt.TreeStates(true), walled_in ? SIZE_MAX : max_states});
-        }
-        result.flip_bound = flip && !walled_in && rrt.StartTreeSize() + rrt.GoalTreeSize() >= max_states;
-        if (walled_in) {
-          result.walled_in = true;
-          return finish(PathOutcome::kNoPathWithinDeadline,
-                        absl::StrCat("goals walled in: their tree holds ", rrt.StartTreeSize(),
-                                     " of the ", rrt.StartTreeSize() + rrt.GoalTreeSize(),
-                                     " states of both (walled_in_goal_fraction ", wall_fraction,
-                                     ")"));
-        }
+      result.flip_bound = flip && !walled_in && total >= max_states;
+      if (walled_in) {
+        result.walled_in = true;
         return finish(PathOutcome::kNoPathWithinDeadline,
-                      absl::StrCat("RRT-Connect found no exact path within ", budget_s,
-                                   " s (", status.asString(), ")"));
+                      absl::StrCat("goals walled in: their tree holds ", run->goal_tree_states,
+                                   " of the ", total, " states of both (walled_in_goal_fraction ",
+                                   wall_fraction, ")"));
       }
-      const auto* path = o.pdef->getSolutionPath()->as<og::PathGeometric>();
-      for (std::size_t k = path->getStateCount(); k-- > 0;) {
-        const Joints q = ToJoints(path->getState(k));
-        if (result.waypoints.empty() || !NearlyEqual(result.waypoints.back(), q)) {
-          result.waypoints.push_back(q);
-        }
+      return finish(PathOutcome::kNoPathWithinDeadline,
+                    absl::StrCat("RRT-Connect found no exact path within ", budget_s, " s (",
+                                 run->status, ")"));
+    }
+    for (const Joints& q : run->path) {
+      if (result.waypoints.empty() || !SameWaypoint(result.waypoints.back(), q)) {
+        result.waypoints.push_back(q);
       }
-    } catch (const std::exception& e) {  // ompl::Exception and allocation failures
-      return finish(PathOutcome::kNoPathWithinDeadline, absl::StrCat("OMPL: ", e.what()));
     }
     if (result.waypoints.size() < 2) {
       return finish(PathOutcome::kNoPathWithinDeadline, "RRT-Connect returned a degenerate path");
@@ -608,101 +341,6 @@ PathResult PlanPath(CollisionChecker& checker, const JointLimits& limits, const 
   PathResult result = planner.Plan(start, goal, deadline);
   result.planning_s = SecondsSince(t0);
   return result;
-}
-
-namespace {
-
-// Removes waypoints greedily: from each kept waypoint, jump to the farthest later one whose
-// straight segment is free and faster than the waypoints it skips. Returns shortcuts taken.
-int GreedySkip(CollisionChecker& checker, const JointLimits& limits, double max_step_m,
-               const Deadline& deadline, std::vector<Joints>& w) {
-  int taken = 0;
-  for (size_t i = 0; i + 2 < w.size(); ++i) {
-    for (size_t j = w.size() - 1; j >= i + 2; --j) {
-      if (deadline.Expired()) return taken;
-      const double via = PathTimeS(std::span<const Joints>(w).subspan(i, j - i + 1), limits);
-      if (MoveTimeS(w[i], w[j], limits) >= via) continue;
-      if (checker.IsMotionFree(w[i], w[j], max_step_m)) {
-        w.erase(w.begin() + static_cast<std::ptrdiff_t>(i) + 1, w.begin() + static_cast<std::ptrdiff_t>(j));
-        ++taken;
-        break;
-      }
-    }
-  }
-  return taken;
-}
-
-}  // namespace
-
-int ShortcutPath(CollisionChecker& checker, const JointLimits& limits, double max_step_m,
-                 int rounds, uint64_t seed, const Deadline& deadline,
-                 std::vector<Joints>& waypoints) {
-  std::vector<Joints>& w = waypoints;
-  if (w.size() < 3) return 0;
-  int taken = GreedySkip(checker, limits, max_step_m, deadline, w);
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> unit(0.0, 1.0);
-  // Per path: cumulative joint-space length at each waypoint and the time of each segment;
-  // recomputed only when a shortcut is taken, so a rejected round costs a few MoveTimeS.
-  std::vector<double> cumulative, seg_time;
-  double path_time = 0.0;
-  auto measure = [&] {
-    cumulative.assign(w.size(), 0.0);
-    seg_time.assign(w.size() - 1, 0.0);
-    path_time = 0.0;
-    for (size_t k = 1; k < w.size(); ++k) {
-      cumulative[k] = cumulative[k - 1] + (w[k] - w[k - 1]).norm();
-      seg_time[k - 1] = MoveTimeS(w[k - 1], w[k], limits);
-      path_time += seg_time[k - 1];
-    }
-  };
-  measure();
-  std::vector<Joints> candidate;
-  for (int round = 0; round < rounds && w.size() >= 3; ++round) {
-    if (deadline.Expired()) break;
-    // Two points drawn uniformly by joint-space length along the path; the segment between
-    // them replaces what lies between (OMPL's PathSimplifier::shortcutPath does the same).
-    const double length = cumulative.back();
-    double u = unit(rng) * length, v = unit(rng) * length;
-    if (u > v) std::swap(u, v);
-    auto locate = [&](double s, size_t& seg, Joints& q) {
-      seg = static_cast<size_t>(std::upper_bound(cumulative.begin(), cumulative.end(), s) -
-                                cumulative.begin());
-      seg = std::clamp<size_t>(seg, 1, w.size() - 1) - 1;  // segment seg: w[seg] -> w[seg + 1]
-      const double len = cumulative[seg + 1] - cumulative[seg];
-      const double f = len > 0 ? std::clamp((s - cumulative[seg]) / len, 0.0, 1.0) : 0.0;
-      q = w[seg] + f * (w[seg + 1] - w[seg]);
-    };
-    size_t i = 0, j = 0;
-    Joints qu, qv;
-    locate(u, i, qu);
-    locate(v, j, qv);
-    if (i == j) continue;  // both on one straight segment: nothing to gain
-    // Time of w[0..i], qu, qv, w[j+1..]: the segments i..j are replaced by three.
-    double replaced = 0.0;
-    for (size_t k = i; k <= j; ++k) replaced += seg_time[k];
-    const double joined = MoveTimeS(w[i], qu, limits) + MoveTimeS(qu, qv, limits) +
-                          MoveTimeS(qv, w[j + 1], limits);
-    if (joined >= replaced - 1e-9) continue;
-    // The new joining segment first (it is the one likely to fail), then the two remnants of
-    // old segments: sub-segments of checked segments, but sampled at other points, so they are
-    // checked again to keep the contract that every output segment passed IsMotionFree.
-    if (!checker.IsMotionFree(qu, qv, max_step_m)) continue;
-    if (!checker.IsMotionFree(w[i], qu, max_step_m)) continue;
-    if (!checker.IsMotionFree(qv, w[j + 1], max_step_m)) continue;
-    candidate.assign(w.begin(), w.begin() + static_cast<std::ptrdiff_t>(i) + 1);
-    for (const Joints* q : {&qu, &qv}) {
-      if (!NearlyEqual(candidate.back(), *q)) candidate.push_back(*q);
-    }
-    for (size_t k = j + 1; k < w.size(); ++k) {
-      if (!NearlyEqual(candidate.back(), w[k])) candidate.push_back(w[k]);
-    }
-    w.swap(candidate);
-    measure();
-    ++taken;
-  }
-  taken += GreedySkip(checker, limits, max_step_m, deadline, w);
-  return taken;
 }
 
 }  // namespace vb::plan

@@ -2,7 +2,8 @@
 // Collision-free joint-space paths between two configurations of the arm: the straight segment
 // when it is free (as VAMP does, Thomason et al. ICRA 2024), else RRT-Connect (Kuffner & LaValle,
 // ICRA 2000; OMPL's implementation) with our CollisionChecker as OMPL's StateValidityChecker and
-// MotionValidator, then shortcutting. Every segment of a returned path has been checked with
+// MotionValidator (rrt_connect.h), then shortcutting (path_shortcut.h). Every segment of a
+// returned path has been checked with
 // CollisionChecker::IsMotionFree at the requested resolution; the arm is meant to follow those
 // straight joint-space segments exactly (see time_parameterization.h).
 //
@@ -14,8 +15,8 @@
 // call, and shortcutting uses its own generator. A plan cut short by the time limit or deadline
 // depends on timing, and so cannot be reproduced.
 //
-// OMPL and its exceptions stay inside path_planner.cc; nothing here throws. OMPL's console log
-// is silenced (process-wide, at the first PathPlanner) down to errors.
+// OMPL and its exceptions stay inside rrt_connect.cc; nothing here throws. OMPL's console log
+// is silenced (process-wide, at the first valid PathPlanner) down to errors.
 #pragma once
 
 #include <cstdint>
@@ -31,6 +32,8 @@
 #include "workers/plan/ur5_kinematics.h"
 
 namespace vb::plan {
+
+class RrtConnect;  // rrt_connect.h
 
 struct PathOptions {
   double max_step_m = 0.01;       // motion-check resolution: max travel of any arm point, m
@@ -160,7 +163,6 @@ class PathPlanner {
   int remembered_failures() const { return static_cast<int>(failures_.size()); }
 
  private:
-  struct Ompl;  // OMPL objects, defined in the .cc
   // The trees of a query RRT-Connect gave up on: rooted at its start and at its goals, and the
   // states it was allowed (SIZE_MAX when walled in: that ends a query whatever its bound).
   struct FailedQuery {
@@ -177,23 +179,12 @@ class PathPlanner {
   JointLimits limits_;
   PathOptions options_;
   absl::Status setup_status_;
-  std::unique_ptr<Ompl> ompl_;
+  std::unique_ptr<RrtConnect> rrt_;  // null when setup_status_ is not OK
   std::vector<FailedQuery> failures_;
 };
 
 // One-shot form: builds a PathPlanner and plans once (OMPL setup included in planning_s).
 PathResult PlanPath(CollisionChecker& checker, const JointLimits& limits, const Joints& start,
                     const Joints& goal, const PathOptions& options, const Deadline& deadline);
-
-// Shortens `waypoints` in place (first and last kept): `rounds` times, two random points on the
-// path (anywhere along its segments, drawn from `seed`) are joined by a straight segment when
-// IsMotionFree(max_step_m) and the path's total MoveTimeS drops; then waypoints that can be
-// skipped are removed greedily (each new segment checked). Stops early at the deadline. Returns
-// the number of shortcuts taken. Input segments are not checked: those it keeps are returned
-// bit-exact (same consecutive waypoints), and every segment it makes (the remnants of input
-// segments cut at a new point included) has passed IsMotionFree(max_step_m).
-int ShortcutPath(CollisionChecker& checker, const JointLimits& limits, double max_step_m,
-                 int rounds, uint64_t seed, const Deadline& deadline,
-                 std::vector<Joints>& waypoints);
 
 }  // namespace vb::plan

@@ -17,6 +17,7 @@
 #include "workers/plan/collision_scene.h"
 #include "workers/plan/fake_checker_test_util.h"
 #include "workers/plan/path_planner_test_util.h"
+#include "workers/plan/path_shortcut.h"
 #include "workers/plan/robot_model.h"
 #include "workers/plan/simple_tool_test_util.h"
 #include "workers/plan/time_parameterization.h"

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
-// Internal to the primitive checker (primitive_checker.cc builds the scene and checks one
-// configuration; primitive_checker_batch.cc checks configurations in SIMD lanes): the float lanes,
+// Internal to the primitive checker (primitive_checker.cc builds the arm and checks one
+// configuration; primitive_checker_hierarchy.cc builds the obstacle hierarchy and excludes
+// obstacles; primitive_checker_batch.cc checks configurations in SIMD lanes): the float lanes,
 // the exact capsule test, the lane sincos, and PrimitiveChecker::Impl. Not for other users.
 #pragma once
 
@@ -241,8 +242,8 @@ struct alignas(32) PlacedLanes8 {
 
 namespace vb::plan {
 
-// The checker's state, built once by the constructor (primitive_checker.cc) and read by every
-// check; the scratch members make it thread-compatible only.
+// The checker's state, built once by the constructor (primitive_checker.cc, the obstacles by
+// BuildObstacles) and read by every check; the scratch members make it thread-compatible only.
 struct PrimitiveChecker::Impl {
   using ArmCapsule = prim::ArmCapsule;
   using Frame = prim::Frame;
@@ -259,6 +260,9 @@ struct PrimitiveChecker::Impl {
   bool base_blocked = false;
   double base_clearance = 0;  // the base's (frame 0) gap to the obstacles and planes
 
+  // The obstacle hierarchy below from `scene`'s obstacles (primitive_checker_hierarchy.cc): its
+  // pieces, their leaf order, bounds, balls and boxes, obstacle_pieces; nothing excluded.
+  void BuildObstacles(const CollisionScene& scene);
   std::vector<prim::Piece> pieces;        // in leaf order
   // Exclude(): the pieces of each obstacle of the scene, which pieces are left out, and which
   // obstacles (their lanes in `leaves` are padding lanes while they are).

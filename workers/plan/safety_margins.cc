@@ -134,12 +134,11 @@ bool Beyond(double d2, double limit) { return limit < 0 || d2 > limit * limit; }
 constexpr double kBoundSlackM = 1e-9;
 constexpr double kReachSlackM = 1e-6;
 
-// The same rule as CollisionScene::WithoutCaneNear: the cut cane's capsules near the cut point.
+// The cut cane's capsules near the cut point: the capsules the cut motions' checkers leave out
+// (IsCaneNear, the rule of CollisionScene::WithoutCaneNear), which the stroke may touch.
 bool Ignored(const Obstacle& o, const ProtectedMotion& m) {
-  return m.ignored_cane.value != 0 && o.kind == ObstacleKind::kCane &&
-         o.owner_id == m.ignored_cane.value &&
-         PointSegmentDistance(m.ignored_point_in_base, o.capsule.a, o.capsule.b) <=
-             m.ignored_radius_m;
+  return m.ignored_cane.value != 0 &&
+         IsCaneNear(o, m.ignored_cane, m.ignored_point_in_base, m.ignored_radius_m);
 }
 
 // A uniform grid over the chunks' boxes: each cell lists the chunks whose box meets it

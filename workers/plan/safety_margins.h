@@ -21,8 +21,9 @@
 namespace vb::plan {
 
 // Configurations the margins must leave free. `ignored_cane` (with `ignored_point_in_base` and
-// `ignored_radius_m`) names the cut cane near the cut, which the configurations may touch
-// (CollisionScene::WithoutCaneNear); 0 ignores nothing.
+// `ignored_radius_m`) names the cut cane near the cut, which the configurations may touch: its
+// capsules that CollisionScene::WithoutCaneNear leaves out (IsCaneNear) do not limit their margins
+// for this motion; 0 ignores nothing.
 struct ProtectedMotion {
   std::vector<Joints> path;       // checked along straight joint segments, as IsMotionFree does
   CaneId ignored_cane;

@@ -48,10 +48,12 @@ MarginSummary ReferenceInflateMargins(const RobotModel& robot,
     }
     return pose;
   };
+  // WithoutCaneNear's capsules, written out: the surface within the radius of the cut point.
   auto ignored = [](const Obstacle& o, const ProtectedMotion& m) {
     return m.ignored_cane.value != 0 && o.kind == ObstacleKind::kCane &&
            o.owner_id == m.ignored_cane.value &&
-           PointSegmentDistance(m.ignored_point_in_base, o.capsule.a, o.capsule.b) <=
+           PointSegmentDistance(m.ignored_point_in_base, o.capsule.a, o.capsule.b) -
+                   o.capsule.radius <=
                m.ignored_radius_m;
   };
   const JointLevers lever_m = JointLeverArms(robot);
@@ -159,6 +161,31 @@ TEST(SafetyMargins, TheCutCaneNearTheCutDoesNotLimitItsMargin) {
   InflateMargins(Post(), cut, options, &scene);
   EXPECT_DOUBLE_EQ(scene.obstacles[0].margin_m, options.max_margin_m);  // cane 7: ignored there
   EXPECT_EQ(scene.obstacles[1].margin_m, 0.0);                          // cane 8: touching
+}
+
+// A cut motion ignores exactly the capsules of its cane that the cut motions' checkers leave out
+// (CollisionScene::CaneNearIndices): those whose surface, not axis, is within the radius.
+TEST(SafetyMargins, TheCutCaneIsIgnoredWhereWithoutCaneNearLeavesItOut) {
+  CollisionScene scene;
+  // Balls of cane 7, each touching the post (gap < 0): axis 15-30 mm from the cut point, radius
+  // 10 mm, so their surfaces are 5-20 mm from it; the rule's radius is 12 mm.
+  for (double dz : {0.015, 0.02, 0.021, 0.023, 0.025, 0.03}) {
+    Obstacle o = Ball(0.055, 0.01, ObstacleKind::kCane, 7);
+    o.capsule.a.z() += dz;
+    o.capsule.b.z() += dz;
+    scene.obstacles.push_back(o);
+  }
+  const Eigen::Vector3d cut(0.055, 0, 0.05);
+  const double radius_m = 0.012;
+  const std::vector<int> near = scene.CaneNearIndices(CaneId{7}, cut, radius_m);
+  ASSERT_EQ(near, (std::vector<int>{0, 1, 2}));  // surfaces 5, 10, 11 mm away
+  const std::vector<ProtectedMotion> motion = {{{Joints::Zero()}, CaneId{7}, cut, radius_m}};
+  MarginOptions options;
+  InflateMargins(Post(), motion, options, &scene);
+  for (int i = 0; i < static_cast<int>(scene.obstacles.size()); ++i) {
+    const bool left_out = std::find(near.begin(), near.end(), i) != near.end();
+    EXPECT_DOUBLE_EQ(scene.obstacles[i].margin_m, left_out ? options.max_margin_m : 0.0) << i;
+  }
 }
 
 // The same configuration in several motions (as a stroke's ends are, and alternatives share):

@@ -59,7 +59,9 @@ TEST(Segmenter, BuiltinModelSegmentsARenderedStop) {
   EXPECT_GT(Of(r, PixelClass::kForeground).precision, 0.9);
   EXPECT_GT(r.wide_foreground_recall, 0.95);
   EXPECT_GT(Of(r, PixelClass::kBackground).recall, 0.97);
-  if (Of(r, PixelClass::kWire).true_px > 500) EXPECT_GT(Of(r, PixelClass::kWire).recall, 0.6);
+  if (Of(r, PixelClass::kWire).true_px > 500) {
+    EXPECT_GT(Of(r, PixelClass::kWire).recall, 0.6);
+  }
 }
 
 // Brute-force features of one pixel, straight from the definitions in segmenter_features.h.
