@@ -11,6 +11,9 @@
 //  2. each candidate is triangulated and refined by a Levenberg-Marquardt fit of a 3D polyline
 //     minimising reprojection error in a and b, then checked in the other views
 //     (polyline_fit.h);
+//     With three or more views the fit is then refined in the views outside the match
+//     (RefineInOtherViews; refine_before_scoring), so that a pair that sees the cane nearly
+//     along its epipolar lines, and so puts it 1-2 cm deep, is scored on the corrected geometry;
 //  3. a trained logistic model gives each candidate's probability (match_classifier.h);
 //  4. Gibbs sampling under the one-to-one constraint (candidates of the same view pair claiming
 //     overlapping parts of one 2D segment exclude each other) gives marginal probabilities, and
@@ -45,9 +48,16 @@ struct CorrespondenceOptions {
   // synthetic views (docs/reconstruction.md, section 3).
   int max_ill_conditioned_gap_samples = 0;
   PolylineFitOptions fit;               // the 3D polyline fit
-  // The selected candidates' geometry refined with the views outside each match
-  // (RefineInOtherViews; rounds 0: off). Their scores come from the two-view fit.
+  // The candidates' geometry refined with the views outside each match (RefineInOtherViews;
+  // rounds 0: off). The classifier's two-view attributes (residuals, length, widths...) stay
+  // those of the two-view fit.
   OtherViewFitOptions other_views;
+  // Refine every fitted candidate in the other views before it is scored, so that its other-view
+  // features (CheckInView) and its piece see the refined geometry: a right match whose
+  // ill-conditioned pair puts it 1-2 cm deep is otherwise scored by a third view that sees it
+  // offset (false: only the selected pieces are refined, after Gibbs sampling, as before
+  // branch s14-match). Needs other_views.rounds > 0.
+  bool refine_before_scoring = true;
   double max_rms_px = 8.0;              // candidates fitting worse are dropped before scoring
   MatchClassifier classifier = DefaultMatchClassifier();  // candidate probabilities
   double min_probability = 0.02;        // candidates below are dropped before Gibbs sampling
@@ -72,14 +82,16 @@ struct CorrespondenceOptions {
 // A candidate with its fit, features and classifier probability.
 struct ScoredCandidate {
   MatchCandidate candidate;
-  PolylineFit fit;
+  PolylineFit fit;                    // refined in the other views when `refined`
   MatchFeatures features{};           // with the other views' evidence (when there are any)
   MatchFeatures two_view_features{};  // as if there were only views a and b
   bool multi_view = false;            // `features` used other views
+  bool refined = false;               // `fit` was refined in the other views (RefineInOtherViews)
   double probability = 0.0;           // classifier output for `features`
 };
 
 // Steps 1-3: every candidate that was fitted (finite, inside the volume, RMS <= max_rms_px),
+// refined in the other views if options ask (refine_before_scoring and other_views.rounds > 0),
 // scored with options.classifier. Same errors as MatchSegments. For MatchSegments and for
 // training the classifier.
 absl::StatusOr<std::vector<ScoredCandidate>> ScoreCandidates(
