@@ -11,9 +11,8 @@
 //  2. each candidate is triangulated and refined by a Levenberg-Marquardt fit of a 3D polyline
 //     minimising reprojection error in a and b, then checked in the other views
 //     (polyline_fit.h);
-//     With three or more views the fit is then refined in the views outside the match
-//     (RefineInOtherViews; refine_before_scoring), so that a pair that sees the cane nearly
-//     along its epipolar lines, and so puts it 1-2 cm deep, is scored on the corrected geometry;
+//     Optionally (refine_before_scoring, off) the fit is then refined in the views outside the
+//     match (RefineInOtherViews) and scored on that geometry;
 //  3. a trained logistic model gives each candidate's probability (match_classifier.h);
 //  4. Gibbs sampling under the one-to-one constraint (candidates of the same view pair claiming
 //     overlapping parts of one 2D segment exclude each other) gives marginal probabilities, and
@@ -48,16 +47,17 @@ struct CorrespondenceOptions {
   // synthetic views (docs/reconstruction.md, section 3).
   int max_ill_conditioned_gap_samples = 0;
   PolylineFitOptions fit;               // the 3D polyline fit
-  // The candidates' geometry refined with the views outside each match (RefineInOtherViews;
-  // rounds 0: off). The classifier's two-view attributes (residuals, length, widths...) stay
-  // those of the two-view fit.
+  // The selected candidates' geometry refined with the views outside each match
+  // (RefineInOtherViews; rounds 0: off). Their scores come from the two-view fit (unless
+  // refine_before_scoring).
   OtherViewFitOptions other_views;
   // Refine every fitted candidate in the other views before it is scored, so that its other-view
   // features (CheckInView) and its piece see the refined geometry: a right match whose
   // ill-conditioned pair puts it 1-2 cm deep is otherwise scored by a third view that sees it
-  // offset (false: only the selected pieces are refined, after Gibbs sampling, as before
-  // branch s14-match). Needs other_views.rounds > 0.
-  bool refine_before_scoring = true;
+  // offset. Needs other_views.rounds > 0. Off (only the selected pieces are refined, after
+  // Gibbs sampling): on tuning seeds it raised recall but lowered precision on 1200-1299
+  // (docs/reconstruction.md, section 3, "Refining before scoring").
+  bool refine_before_scoring = false;
   double max_rms_px = 8.0;              // candidates fitting worse are dropped before scoring
   MatchClassifier classifier = DefaultMatchClassifier();  // candidate probabilities
   double min_probability = 0.02;        // candidates below are dropped before Gibbs sampling
