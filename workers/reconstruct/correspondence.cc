@@ -206,6 +206,11 @@ absl::StatusOr<std::vector<ScoredCandidate>> ScoreCandidates(
       std::vector<MatchCandidate> candidates =
           FindCandidates(a, samples[a], rig.cameras[a], b, samples[b], rig.cameras[b],
                          candidate_options);
+      std::vector<OtherView> other_views;
+      for (int c = 0; c < n; ++c) {
+        if (c == a || c == b || IsEmptyView(views[c])) continue;
+        other_views.push_back({&samples[c], &rig.cameras[c]});
+      }
       for (size_t i = 0; i < candidates.size(); ++i) {
         if (i % 64 == 0) VB_RETURN_IF_ERROR(deadline.Check("correspondence"));
         ScoredCandidate s;
@@ -215,12 +220,18 @@ absl::StatusOr<std::vector<ScoredCandidate>> ScoreCandidates(
         bool inside = true;
         for (const Eigen::Vector3d& p : s.fit.control_points) inside = inside && margin_box.contains(p);
         if (!inside) continue;
+        s.two_view_features = ComputeMatchFeatures(s.candidate, s.fit, {}, options.volume);
+        if (options.refine_before_scoring && options.other_views.rounds > 0 &&
+            !other_views.empty()) {
+          RefineInOtherViews(s.candidate, rig.cameras[a], rig.cameras[b], other_views,
+                             options.fit, options.other_views, &s.fit);
+          s.refined = true;
+        }
         std::vector<ViewSupport> others;
         for (int c = 0; c < n; ++c) {
           if (c == a || c == b || IsEmptyView(views[c])) continue;
           others.push_back(CheckInView(s.fit.points, views[c], samples[c], rig.cameras[c]));
         }
-        s.two_view_features = ComputeMatchFeatures(s.candidate, s.fit, {}, options.volume);
         s.multi_view = !others.empty();
         s.features = s.multi_view ? ComputeMatchFeatures(s.candidate, s.fit, others, options.volume)
                                   : s.two_view_features;
@@ -293,7 +304,7 @@ absl::StatusOr<std::vector<Piece3D>> MatchSegments(const std::vector<View2D>& vi
   pieces.reserve(kept.size());
   for (int i : kept) {
     ScoredCandidate& c = candidates[i];
-    if (options.other_views.rounds > 0) {
+    if (options.other_views.rounds > 0 && !c.refined) {
       std::vector<OtherView> others;
       for (int v = 0; v < static_cast<int>(views.size()); ++v) {
         if (v == c.candidate.view_a || v == c.candidate.view_b || IsEmptyView(views[v])) continue;

@@ -11,6 +11,8 @@
 //  2. each candidate is triangulated and refined by a Levenberg-Marquardt fit of a 3D polyline
 //     minimising reprojection error in a and b, then checked in the other views
 //     (polyline_fit.h);
+//     Optionally (refine_before_scoring, off) the fit is then refined in the views outside the
+//     match (RefineInOtherViews) and scored on that geometry;
 //  3. a trained logistic model gives each candidate's probability (match_classifier.h);
 //  4. Gibbs sampling under the one-to-one constraint (candidates of the same view pair claiming
 //     overlapping parts of one 2D segment exclude each other) gives marginal probabilities, and
@@ -46,8 +48,16 @@ struct CorrespondenceOptions {
   int max_ill_conditioned_gap_samples = 0;
   PolylineFitOptions fit;               // the 3D polyline fit
   // The selected candidates' geometry refined with the views outside each match
-  // (RefineInOtherViews; rounds 0: off). Their scores come from the two-view fit.
+  // (RefineInOtherViews; rounds 0: off). Their scores come from the two-view fit (unless
+  // refine_before_scoring).
   OtherViewFitOptions other_views;
+  // Refine every fitted candidate in the other views before it is scored, so that its other-view
+  // features (CheckInView) and its piece see the refined geometry: a right match whose
+  // ill-conditioned pair puts it 1-2 cm deep is otherwise scored by a third view that sees it
+  // offset. Needs other_views.rounds > 0. Off (only the selected pieces are refined, after
+  // Gibbs sampling): on tuning seeds it raised recall but lowered precision on 1200-1299
+  // (docs/reconstruction.md, section 3, "Refining before scoring").
+  bool refine_before_scoring = false;
   double max_rms_px = 8.0;              // candidates fitting worse are dropped before scoring
   MatchClassifier classifier = DefaultMatchClassifier();  // candidate probabilities
   double min_probability = 0.02;        // candidates below are dropped before Gibbs sampling
@@ -72,14 +82,16 @@ struct CorrespondenceOptions {
 // A candidate with its fit, features and classifier probability.
 struct ScoredCandidate {
   MatchCandidate candidate;
-  PolylineFit fit;
+  PolylineFit fit;                    // refined in the other views when `refined`
   MatchFeatures features{};           // with the other views' evidence (when there are any)
   MatchFeatures two_view_features{};  // as if there were only views a and b
   bool multi_view = false;            // `features` used other views
+  bool refined = false;               // `fit` was refined in the other views (RefineInOtherViews)
   double probability = 0.0;           // classifier output for `features`
 };
 
 // Steps 1-3: every candidate that was fitted (finite, inside the volume, RMS <= max_rms_px),
+// refined in the other views if options ask (refine_before_scoring and other_views.rounds > 0),
 // scored with options.classifier. Same errors as MatchSegments. For MatchSegments and for
 // training the classifier.
 absl::StatusOr<std::vector<ScoredCandidate>> ScoreCandidates(

@@ -222,6 +222,9 @@ TEST(MatchClassifier, DISABLED_TrainOnSimulatedStops) {
   ASSERT_TRUE(w_multi.ok()) << w_multi.status();
   ASSERT_TRUE(w_two.ok()) << w_two.status();
   std::printf("training AUC multi %.3f two %.3f\n", Auc(multi, *w_multi), Auc(two, *w_two));
+  const MatchClassifier current = second ? DefaultMatchClassifier() : CalibratedRigMatchClassifier();
+  std::printf("the committed weights on these candidates: AUC multi %.3f two %.3f\n",
+              Auc(multi, current.multi_view), Auc(two, current.two_view));
   PrintWeights("multi_view", *w_multi);
   PrintWeights("two_view", *w_two);
   // Held-out stops (seeds 1100 onwards): coverage and precision of the selected pieces

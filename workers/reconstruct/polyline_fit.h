@@ -67,7 +67,9 @@ struct OtherViewFitOptions {
 // pair nearly along the cane's epipolar lines fixes depth poorly (a 1 px skeleton error is
 // 1-2 cm at 0.8 m with the default rig), and a third view fixes it. Updates control_points and
 // points only: the attributes (residuals, length, radii, ...) stay those of the two-view fit,
-// from which the candidate was scored. Returns the associations of the last round (0: the fit
+// from which the candidate was scored. A round that associates fewer than min_associations
+// ends the rounds: the previous round's associations and fit are kept and judged (round 0:
+// nothing changes). Returns the associations of the last round kept (0: the fit
 // is unchanged: no other view, too few associations, a non-finite result, or residuals beyond
 // max_residual_growth_px). Options are not validated here (CorrespondenceOptions::Validate).
 int RefineInOtherViews(const MatchCandidate& candidate, const CameraCalibration& camera_a,
