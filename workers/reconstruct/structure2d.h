@@ -34,7 +34,7 @@
 namespace vb::reconstruct {
 
 struct Structure2DOptions {
-  int min_speck_area_px = 30;          // foreground components smaller than this are dropped
+  int min_speck_area_px = 8;           // foreground components smaller than this are dropped
   int max_pinhole_area_px = 8;         // non-foreground holes up to this area become foreground
   int max_wire_gap_px = 4;             // wire runs up to this long between foreground are bridged
   double spur_width_factor = 1.0;      // end branches shorter than this * local width are pruned

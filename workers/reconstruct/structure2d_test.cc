@@ -184,6 +184,27 @@ TEST(ExtractStructure, WithoutBridgingTheWireSplitsTheCane) {
   EXPECT_EQ(MustExtract(classes, TestCamera(), options).segments.size(), 2u);
 }
 
+TEST(ExtractStructure, KeepsASmallPieceOfCaneButDropsASpeck) {
+  // A thin cane seen only over 14 px (a 2 px band, 28 px of foreground: what segmentation leaves
+  // of a thin, faint cane between occluders) is kept; a 2x3 px speck is noise.
+  ClassImage classes(kWidth, kHeight);
+  for (int x = 100; x < 114; ++x)
+    for (int y = 60; y < 62; ++y) classes.set(x, y, PixelClass::kForeground);
+  for (int x = 200; x < 203; ++x)
+    for (int y = 150; y < 152; ++y) classes.set(x, y, PixelClass::kForeground);
+  const View2D view = MustExtract(classes);
+  ASSERT_EQ(view.segments.size(), 1u);
+  for (const Eigen::Vector2d& p : view.segments[0].points) {
+    EXPECT_NEAR(p.y(), 60.5, 1.0);
+    EXPECT_GE(p.x(), 99.0);
+    EXPECT_LE(p.x(), 114.0);
+  }
+  // With the previous default (30 px) the piece went as a speck.
+  Structure2DOptions options;
+  options.min_speck_area_px = 30;
+  EXPECT_TRUE(MustExtract(classes, TestCamera(), options).segments.empty());
+}
+
 TEST(ExtractStructure, ThickDiscIsThickAndThinBandIsNot) {
   ClassImage classes(kWidth, kHeight);
   PaintBand(&classes, {100, 120}, {100, 120.01}, 60.0, PixelClass::kForeground);  // a disc
