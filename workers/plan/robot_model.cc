@@ -239,15 +239,15 @@ absl::Status PlatformGeometry::Validate() const {
 
 PlatformGeometry DefaultPlatform() {
   // sim/rig.h's default trinocular rig, hard-coded because workers do not depend on sim: an
-  // equilateral triangle of side 0.22 m centred at (0, 0, 1.05), cam0 lower left, cam1 lower
+  // equilateral triangle of side 0.29 m centred at (0, -0.12, 1.05), cam0 lower left, cam1 lower
   // right, cam2 above the middle.
-  constexpr double kSide = 0.22, kHeight = 1.05, kCameraRadius = 0.07;
+  constexpr double kSide = 0.29, kY = -0.12, kHeight = 1.05, kCameraRadius = 0.07;
   const double circum = kSide / std::sqrt(3.0);  // centroid to vertex
   PlatformGeometry platform;
   platform.fixed_spheres = {
-      {Eigen::Vector3d(-kSide / 2, 0, kHeight - circum / 2), kCameraRadius},
-      {Eigen::Vector3d(kSide / 2, 0, kHeight - circum / 2), kCameraRadius},
-      {Eigen::Vector3d(0, 0, kHeight + circum), kCameraRadius}};
+      {Eigen::Vector3d(-kSide / 2, kY, kHeight - circum / 2), kCameraRadius},
+      {Eigen::Vector3d(kSide / 2, kY, kHeight - circum / 2), kCameraRadius},
+      {Eigen::Vector3d(0, kY, kHeight + circum), kCameraRadius}};
   return platform;
 }
 

@@ -179,10 +179,14 @@ TEST(DefaultPlatform, CamerasFormTheRigTriangle) {
   ASSERT_EQ(platform.fixed_spheres.size(), 3u);
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
   for (const Sphere& s : platform.fixed_spheres) centroid += s.center / 3.0;
-  EXPECT_LT((centroid - Eigen::Vector3d(0, 0, 1.05)).norm(), 1e-12);
+  // sim/rig.h's default rig since 2026-11-22: side 0.29 m centred at (0, -0.12, 1.05).
+  EXPECT_LT((centroid - Eigen::Vector3d(0, -0.12, 1.05)).norm(), 1e-12);
   for (int i = 0; i < 3; ++i) {
     EXPECT_NEAR((platform.fixed_spheres[i].center - platform.fixed_spheres[(i + 1) % 3].center).norm(),
-                0.22, 1e-12);
+                0.29, 1e-12);
+    // In front of the wall behind the rig.
+    EXPECT_GT(platform.fixed_spheres[i].center.y() - platform.fixed_spheres[i].radius,
+              platform.camera_side_wall_y_m);
   }
 }
 
