@@ -20,6 +20,7 @@ CameraCalibration TestCamera(bool distortion = false) {
   RigOptions o;
   o.camera_count = 1;
   o.toe_in = false;
+  o.rig_y_m = 0.0;  // the rig's default is 0.12 m further back
   o.image_width = 640;
   o.image_height = 512;
   if (!distortion) o.k1 = o.k2 = o.p1 = o.p2 = o.k3 = 0.0;

@@ -120,6 +120,13 @@ absl::Status RigOptions::Validate() const {
     return Invalid("aim_below_rig_m",
                    absl::StrCat("must be finite and within +-rig_height_m, is ", aim_below_rig_m));
   }
+  for (const auto& [name, value] :
+       {std::pair<const char*, double>{"apex_aim_up_m", apex_aim_up_m},
+        std::pair<const char*, double>{"pair_aim_up_m", pair_aim_up_m}}) {
+    if (!(std::isfinite(value) && std::abs(value) <= rig_height_m)) {
+      return Invalid(name, absl::StrCat("must be finite and within +-rig_height_m, is ", value));
+    }
+  }
   const std::pair<const char*, double> coefficients[] = {
       {"k1", k1}, {"k2", k2}, {"p1", p1}, {"p2", p2}, {"k3", k3}};
   for (const auto& [name, value] : coefficients) {
@@ -180,8 +187,11 @@ absl::StatusOr<RigCalibration> MakeRig(const RigOptions& options) {
         0.5 * (options.image_height - 1) + offset_y[i], 0.0, 0.0, 1.0;
     c.distortion = {options.k1, options.k2, options.p1, options.p2, options.k3};
     const Eigen::Vector3d centre = rig_centre + centres[i];
+    const bool apex = options.camera_count == 3 && i == 2;
+    const Eigen::Vector3d aim =
+        target + Eigen::Vector3d::UnitZ() * (apex ? options.apex_aim_up_m : options.pair_aim_up_m);
     c.rotation_camera_from_platform =
-        options.toe_in ? LookAlong(target - centre) : LookAlong(Eigen::Vector3d::UnitY());
+        options.toe_in ? LookAlong(aim - centre) : LookAlong(Eigen::Vector3d::UnitY());
     c.translation_camera_from_platform = -c.rotation_camera_from_platform * centre;
     rig.cameras.push_back(std::move(c));
   }

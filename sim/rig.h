@@ -16,13 +16,17 @@ struct RigOptions {
   int image_width = 1280;
   int image_height = 1024;
   double horizontal_fov_deg = 100.0;   // wide lens: one vine and the gaps either side at 0.8 m
-  double baseline_m = 0.22;            // triangle side (0.15-0.3 m)
+  // Triangle side (0.15-0.3 m): 0.29 m at 0.92 m keeps the depth error per pixel of a 0.22 m
+  // triangle at 0.8 m (it grows as distance^2 / baseline).
+  double baseline_m = 0.29;
   double rig_height_m = 1.05;          // z of the rig centre
-  // y of the rig centre in the platform frame (negative: mounted further from the vine).
-  double rig_y_m = 0.0;
+  // y of the rig centre in the platform frame (negative: mounted further from the vine). The
+  // default, 0.12 m behind the platform origin, widens the strip of the vine plane that two
+  // images see (docs/simulator.md, "Choosing the rig").
+  double rig_y_m = -0.12;
   // Across-row distance from the rig to the vine plane: with toe_in the cameras converge on
-  // y = rig_y_m + distance_to_vine_plane_m.
-  double distance_to_vine_plane_m = 0.8;
+  // y = rig_y_m + distance_to_vine_plane_m (the default: the vine plane at y = 0.8 m).
+  double distance_to_vine_plane_m = 0.92;
   double k1 = -0.28;                   // lens distortion of the simulated lenses
   double k2 = 0.09;
   double p1 = 0.0005;
@@ -30,30 +34,39 @@ struct RigOptions {
   double k3 = -0.012;
   bool toe_in = true;                  // cameras converge on the vine plane centre
   // With toe_in, the cameras converge on the vine plane this far below the rig centre (a
-  // downward tilt of the whole rig; 0: at the rig's height).
-  double aim_below_rig_m = 0.0;
+  // downward tilt of the whole rig; 0: at the rig's height). The default, -0.1 m, aims 0.1 m
+  // above it: the upper camera then sees the top wire, and the lower ones keep the arm base of the
+  // default mount (workers/plan) out of view.
+  double aim_below_rig_m = -0.10;
   // 3 cameras: true puts one camera above the lower pair (an upright triangle), false one below
   // an upper pair.
   bool apex_up = true;
+  // With toe_in, the apex camera (cam2 of 3) aims this far above the common target on the vine
+  // plane (negative: below), and the other cameras this far above it: a tilt of those cameras
+  // alone (0 by default; for studies, workers/reconstruct TrellisLoss.DISABLED_RigSweep).
+  double apex_aim_up_m = 0.0;
+  double pair_aim_up_m = 0.0;
 
   // INVALID_ARGUMENT naming the field: camera_count outside [1, 3], image size outside
   // [16, 16384], horizontal_fov_deg outside (10, 170), baseline_m outside (0, 2],
   // rig_height_m or distance_to_vine_plane_m not finite or <= 0.05, rig_y_m not finite or
-  // outside [-1, 1], non-finite distortion, aim_below_rig_m not finite or beyond rig_height_m.
+  // outside [-1, 1], non-finite distortion, aim_below_rig_m, apex_aim_up_m or pair_aim_up_m not
+  // finite or beyond +-rig_height_m.
   absl::Status Validate() const;
 };
 
 // The true calibration of the simulated rig. Cameras are named cam0, cam1, ...
 // Layout (platform frame): for 3 cameras an equilateral triangle of side baseline_m whose centroid
-// is (0, rig_y_m, rig_height_m): cam0 lower left (-x), cam1 lower right (+x), cam2 above the middle
-// (apex_up; otherwise cam0 upper left, cam1 upper right, cam2 below the middle); for 2 cameras a
-// horizontal pair; for 1 a camera at the centre. Cameras look along +y with the image x axis
-// along +x and image down = world down; with toe_in each camera is rotated to look at
-// (0, rig_y_m + distance_to_vine_plane_m, rig_height_m - aim_below_rig_m). fx = fy is chosen so
-// that the half-width of the image sees horizontal_fov_deg / 2 through the distortion model; if
-// that would put the image corners beyond (or within 3% of) the fold of the radial distortion
-// polynomial, where the lens model stops being invertible, fx is increased until they are not
-// (with the default options the horizontal field of view becomes ~96 deg). The principal point is
+// is (0, rig_y_m, rig_height_m) (by default (0, -0.12, 1.05), side 0.29 m): cam0 lower left (-x),
+// cam1 lower right (+x), cam2 above the middle (apex_up; otherwise cam0 upper left, cam1 upper
+// right, cam2 below the middle); for 2 cameras a horizontal pair; for 1 a camera at the centre.
+// Cameras look along +y with the image x axis along +x and image down = world down; with toe_in
+// each camera is rotated to look at (0, rig_y_m + distance_to_vine_plane_m, rig_height_m -
+// aim_below_rig_m) (by default (0, 0.8, 1.15)), raised by apex_aim_up_m / pair_aim_up_m. fx = fy
+// is chosen so that the half-width of the image sees horizontal_fov_deg / 2 through the
+// distortion model; if that would put the image corners beyond (or within 3% of) the fold of the
+// radial distortion polynomial, where the lens model stops being invertible, fx is increased until
+// they are not (with the default options the horizontal field of view becomes ~96 deg). The principal point is
 // the image centre plus a few pixels of offset, different per camera. INVALID_ARGUMENT for
 // invalid options (see Validate) and for distortion that has no invertible region wide enough for
 // the image.

@@ -111,6 +111,9 @@ absl::StatusOr<CollisionScene> CollisionScene::Build(const VineModel& model,
   for (const Sphere& s : platform.fixed_spheres) {
     add(ObstacleKind::kPlatform, 0, s.center, s.center, s.radius);
   }
+  for (const Capsule& c : platform.fixed_capsules) {
+    add(ObstacleKind::kPlatform, 0, c.a, c.b, c.radius);
+  }
 
   // Free sides in the platform frame (n . x <= offset), then into the base frame:
   // n_p . (R x_b + t) <= o  <=>  (R^T n_p) . x_b <= o - n_p . t.

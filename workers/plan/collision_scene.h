@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // What the arm must not touch at one stop, as primitives in the arm's base frame: canes (one
-// capsule per polyline segment), head spheres, wires, posts, and the platform (planes and fixed
-// spheres). Each obstacle carries a safety margin that the adaptive-margin step raises.
+// capsule per polyline segment), head spheres, wires, posts, and the platform (planes, fixed
+// spheres and fixed capsules such as the cameras). Each obstacle carries a safety margin that the
+// adaptive-margin step raises.
 // Plain value types; thread-compatible.
 #pragma once
 

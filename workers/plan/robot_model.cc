@@ -234,20 +234,39 @@ absl::Status PlatformGeometry::Validate() const {
           "platform: fixed_spheres[", i, "]: need finite centre and radius >= 0"));
     }
   }
+  for (size_t i = 0; i < fixed_capsules.size(); ++i) {
+    if (auto s = ValidateCapsule(fixed_capsules[i],
+                                 absl::StrCat("platform: fixed_capsules[", i, "]"));
+        !s.ok()) {
+      return s;
+    }
+  }
   return absl::OkStatus();
 }
 
 PlatformGeometry DefaultPlatform() {
   // sim/rig.h's default trinocular rig, hard-coded because workers do not depend on sim: an
-  // equilateral triangle of side 0.22 m centred at (0, 0, 1.05), cam0 lower left, cam1 lower
-  // right, cam2 above the middle.
-  constexpr double kSide = 0.22, kHeight = 1.05, kCameraRadius = 0.07;
+  // equilateral triangle of side 0.29 m centred at (0, -0.12, 1.05), cam0 lower left, cam1 lower
+  // right, cam2 above the middle, each aimed at (0, 0.80, 1.15) on the vine plane.
+  constexpr double kSide = 0.29, kY = -0.12, kHeight = 1.05;
+  const Eigen::Vector3d aim(0.0, 0.80, 1.15);
+  // Each camera's body (docs/plan.md "Collision checking"): a machine-vision camera of 0.03 x
+  // 0.03 x 0.06 m with a lens of 0.03 m diameter and 0.05 m length in front of it, its centre of
+  // projection anywhere in the lens, so body and lens lie between 0.11 m behind the centre and
+  // 0.05 m in front of it, within 0.0212 m of the optical axis (the body's half diagonal). The
+  // capsule reaches back 0.13 m to the camera-side wall (the bracket and cable) and pads the
+  // body's edges by 0.024 m (the lens by 0.03 m).
+  constexpr double kBehindM = 0.13, kAheadM = 0.05, kRadiusM = 0.045;
   const double circum = kSide / std::sqrt(3.0);  // centroid to vertex
+  const Eigen::Vector3d centres[] = {Eigen::Vector3d(-kSide / 2, kY, kHeight - circum / 2),
+                                     Eigen::Vector3d(kSide / 2, kY, kHeight - circum / 2),
+                                     Eigen::Vector3d(0, kY, kHeight + circum)};
   PlatformGeometry platform;
-  platform.fixed_spheres = {
-      {Eigen::Vector3d(-kSide / 2, 0, kHeight - circum / 2), kCameraRadius},
-      {Eigen::Vector3d(kSide / 2, 0, kHeight - circum / 2), kCameraRadius},
-      {Eigen::Vector3d(0, 0, kHeight + circum), kCameraRadius}};
+  for (const Eigen::Vector3d& centre : centres) {
+    const Eigen::Vector3d axis = (aim - centre).normalized();
+    platform.fixed_capsules.push_back(
+        {centre - kBehindM * axis, centre + kAheadM * axis, kRadiusM});
+  }
   return platform;
 }
 

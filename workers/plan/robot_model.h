@@ -59,13 +59,16 @@ struct PlatformGeometry {
   double roof_z_m = 2.2;              // platform roof
   double camera_side_wall_y_m = -0.25;// wall behind the camera rig (free side: y greater)
   double backdrop_y_m = 1.25;         // backdrop panel across the row (free side: y smaller)
-  std::vector<Sphere> fixed_spheres;  // e.g. the cameras of the rig, as enclosing spheres
+  std::vector<Sphere> fixed_spheres;  // fixed parts of the platform, as enclosing spheres
+  std::vector<Capsule> fixed_capsules;// e.g. the cameras of the rig, each along its optical axis
 
   absl::Status Validate() const;
 };
 
 // The default platform around the simulator's default rig (sim/rig.h): walls and ground as
-// above and one 0.07 m sphere around each of the three cameras.
+// above and, for each of the three cameras, a capsule of radius 0.045 m along its optical axis
+// from 0.13 m behind its centre of projection (at the camera-side wall) to 0.05 m in front of it,
+// enclosing a 0.03 x 0.03 x 0.06 m camera body and a 0.03 x 0.05 m lens (docs/plan.md).
 PlatformGeometry DefaultPlatform();
 
 }  // namespace vb::plan

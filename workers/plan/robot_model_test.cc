@@ -3,8 +3,10 @@
 
 #include <cmath>
 #include <random>
+#include <vector>
 
 #include "gtest/gtest.h"
+#include "sim/rig.h"
 #include "workers/plan/simple_tool_test_util.h"
 
 namespace vb::plan {
@@ -173,16 +175,54 @@ TEST(RobotModel, ValidateRejectsBadGeometry) {
   EXPECT_FALSE(robot.Validate().ok());
 }
 
-TEST(DefaultPlatform, CamerasFormTheRigTriangle) {
+// The planner's camera bodies against the simulator's default rig (sim::MakeRig): workers/plan
+// hard-codes them (workers do not depend on sim), so this test ties the two.
+TEST(DefaultPlatform, CameraBodiesLieAlongTheDefaultRigsOpticalAxes) {
   const PlatformGeometry platform = DefaultPlatform();
   ASSERT_TRUE(platform.Validate().ok());
-  ASSERT_EQ(platform.fixed_spheres.size(), 3u);
-  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-  for (const Sphere& s : platform.fixed_spheres) centroid += s.center / 3.0;
-  EXPECT_LT((centroid - Eigen::Vector3d(0, 0, 1.05)).norm(), 1e-12);
-  for (int i = 0; i < 3; ++i) {
-    EXPECT_NEAR((platform.fixed_spheres[i].center - platform.fixed_spheres[(i + 1) % 3].center).norm(),
-                0.22, 1e-12);
+  const auto rig = sim::MakeRig();
+  ASSERT_TRUE(rig.ok());
+  EXPECT_TRUE(platform.fixed_spheres.empty());
+  ASSERT_EQ(platform.fixed_capsules.size(), rig->cameras.size());
+  for (size_t i = 0; i < rig->cameras.size(); ++i) {
+    SCOPED_TRACE(rig->cameras[i].name);
+    const Capsule& body = platform.fixed_capsules[i];
+    const Eigen::Vector3d centre = rig->cameras[i].CentreInPlatform();
+    // The optical axis (camera z) in the platform frame.
+    const Eigen::Vector3d optical =
+        rig->cameras[i].rotation_camera_from_platform.row(2).transpose().normalized();
+    const Eigen::Vector3d along = (body.b - body.a).normalized();
+    EXPECT_GT(along.dot(optical), 1.0 - 1e-12);
+    const auto [off_axis, behind_a] = AxisCoordinates(centre, body.a, along);
+    EXPECT_LT(off_axis, 1e-9);
+    // A 0.03 x 0.03 x 0.06 m body behind a lens of 0.03 m diameter and 0.05 m length, the
+    // centre of projection anywhere in the lens (from its rear, u = 0, to its front, u = 0.05):
+    // every corner of the body and every rim point of the lens is inside the capsule, with at
+    // least 0.02 m to spare.
+    const Eigen::Vector3d side = optical.cross(Eigen::Vector3d::UnitZ()).normalized();
+    const Eigen::Vector3d up = optical.cross(side);
+    for (double u : {0.0, 0.025, 0.05}) {
+      std::vector<Eigen::Vector3d> points;
+      for (double axial : {-u - 0.06, -u}) {
+        for (double s : {-0.015, 0.015}) {
+          for (double t : {-0.015, 0.015}) points.push_back(centre + axial * optical + s * side + t * up);
+        }
+      }
+      for (double axial : {-u, 0.05 - u}) {
+        for (int k = 0; k < 16; ++k) {
+          const double angle = M_PI * k / 8;
+          points.push_back(centre + axial * optical +
+                           0.015 * (std::cos(angle) * side + std::sin(angle) * up));
+        }
+      }
+      for (const Eigen::Vector3d& p : points) {
+        EXPECT_LE(PointSegmentDistance(p, body.a, body.b), body.radius - 0.02);
+      }
+    }
+    // Back to the camera-side wall (the bracket), not beyond the lens toward the vine.
+    EXPECT_LE(body.a.y() - body.radius, platform.camera_side_wall_y_m);
+    EXPECT_LE((body.b - centre).dot(optical), 0.05 + 1e-9);
+    EXPECT_GT(behind_a, 0.11);
   }
 }
 
@@ -194,8 +234,11 @@ TEST(PlatformGeometry, ValidateRejectsBadPlanes) {
   platform.backdrop_y_m = std::nan("");
   EXPECT_NE(platform.Validate().message().find("backdrop_y_m"), std::string::npos);
   platform = DefaultPlatform();
-  platform.fixed_spheres[1].radius = -1;
+  platform.fixed_spheres = {{Eigen::Vector3d::Zero(), 0.05}, {Eigen::Vector3d::Zero(), -1.0}};
   EXPECT_NE(platform.Validate().message().find("fixed_spheres[1]"), std::string::npos);
+  platform = DefaultPlatform();
+  platform.fixed_capsules[2].b.x() = std::nan("");
+  EXPECT_NE(platform.Validate().message().find("fixed_capsules[2]"), std::string::npos);
 }
 
 }  // namespace

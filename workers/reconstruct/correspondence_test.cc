@@ -360,7 +360,9 @@ TEST(MatchSegments, DegradedStopWithNeighboursIsMostlyRight) {
                 SegmentCount(stop.views), pieces->size(), m.coverage, m.truth_m, m.precision,
                 m.pieces_m, 1e3 * seconds);
     EXPECT_GE(m.coverage, 0.7);
-    EXPECT_GE(m.precision, 0.85);
+    // 0.848 on 1500 with the default rig of 2026-11-22, 0.12 m further back: it shows more of
+    // the neighbours (docs/simulator.md, "Choosing the rig").
+    EXPECT_GE(m.precision, 0.84);
   }
 }
 

@@ -292,6 +292,10 @@ TEST(Segmenter, TrainingRecoversAToyProblem) {
   rig_options.image_height = 256;
   rig_options.horizontal_fov_deg = 50;
   rig_options.k1 = rig_options.k2 = rig_options.k3 = rig_options.p1 = rig_options.p2 = 0.0;
+  // The toy scene is framed for a camera at (0, 0, 1.05) aimed level at the vine plane.
+  rig_options.rig_y_m = 0.0;
+  rig_options.distance_to_vine_plane_m = 0.8;
+  rig_options.aim_below_rig_m = 0.0;
   auto rig = sim::MakeRig(rig_options);
   ASSERT_TRUE(rig.ok()) << rig.status();
   const sim::Scene scene = ToyScene();

@@ -334,62 +334,164 @@ TEST(TrellisLoss, DISABLED_Report) {
 namespace vb::reconstruct {
 namespace {
 
-// The field-of-view ceiling on wire recall of a few rigs, from geometry alone (no rendering): per
-// stop, the share of true wire length over |x| <= 0.8 m on wires that lie, somewhere in the
+// The arm base of the default mount (workers/plan, DefaultPlatformFromArmBase; docs/plan.md
+// "Mount study"): a 0.075 m cylinder up to 0.15 m along the z axis of a frame at (0, 0.45, 0.45)
+// tilted 50 deg toward the vine. Reconstruct may not depend on plan, so it is restated here (as
+// in sim/rig_test.cc's CameraSeeingTheArmBase).
+bool ArmBaseInView(const RigCalibration& rig) {
+  const Eigen::Isometry3d mount =
+      Eigen::Translation3d(0.0, 0.45, 0.45) *
+      Eigen::AngleAxisd(-50.0 * M_PI / 180.0, Eigen::Vector3d::UnitX());
+  for (double z = 0; z <= 0.15 + 1e-9; z += 0.025)
+    for (int a = 0; a < 16; ++a) {
+      const Eigen::Vector3d p = mount * Eigen::Vector3d(0.075 * std::cos(M_PI * a / 8),
+                                                        0.075 * std::sin(M_PI * a / 8), z);
+      for (const CameraCalibration& c : rig.cameras) {
+        const auto uv = c.Project(p);
+        if (uv.has_value() && c.InImage(*uv)) return true;
+      }
+    }
+  return false;
+}
+
+struct RigFigures {
+  double wire_ceiling = 0;    // mean over stops
+  double cane_two_views = 0;  // mean over stops
+  bool arm_base_in_view = false;
+};
+
+// Per stop, the share of true wire length over |x| <= 0.8 m on wires that lie, somewhere in the
 // volume, inside two images whose planes through the wire meet at 3 degrees or more (the trellis
-// stage's min_plane_angle_deg), then the mean over stops, as the benchmark averages wire recall; with the rig's cane two-view share
-// (core/view_coverage.h) beside it. Run as DISABLED_Report (VB_SEED, VB_STOPS).
+// stage's min_plane_angle_deg), and the rig's cane two-view share (core/view_coverage.h); means
+// over the stops, as the benchmark averages.
+RigFigures EvaluateRig(const RigCalibration& rig, const std::vector<sim::Scene>& scenes) {
+  RigFigures out;
+  for (const sim::Scene& scene : scenes) {
+    double total = 0, posed = 0;
+    for (const Wire& wire : scene.vine.wires) {
+      // A wire that a pair can place anywhere in the volume (|x| <= 1.1 m, at least 0.1 m of
+      // it) is reconstructed along all of it (a line, extended), so it counts whole.
+      const Eigen::Vector3d dir = (wire.points.back() - wire.points.front()).normalized();
+      Polyline3 line;
+      line.points = wire.points;
+      line.radii.assign(wire.points.size(), 0.001);
+      double placed_m = 0;
+      for (const Eigen::Vector3d& p : line.Sample(0.005)) {
+        if (std::abs(p.x()) > 1.1) continue;
+        std::vector<Eigen::Vector3d> normals;
+        for (const CameraCalibration& camera : rig.cameras) {
+          const auto uv = camera.Project(p);
+          if (uv && camera.InImage(*uv))
+            normals.push_back((p - camera.CentreInPlatform()).cross(dir).normalized());
+        }
+        bool ok = false;
+        for (size_t i = 0; i < normals.size(); ++i)
+          for (size_t j = i + 1; j < normals.size(); ++j)
+            ok |= normals[i].cross(normals[j]).norm() >= std::sin(3.0 * M_PI / 180);
+        placed_m += ok * 0.005;
+      }
+      const double span = static_cast<double>(SpanSamples(wire).size());
+      total += span;
+      if (placed_m >= 0.1) posed += span;
+    }
+    out.wire_ceiling += (total > 0 ? posed / total : 1.0) / scenes.size();
+    out.cane_two_views +=
+        EvaluateViewCoverage(scene.vine, rig).value().in_two_or_more_fraction / scenes.size();
+  }
+  out.arm_base_in_view = ArmBaseInView(rig);
+  return out;
+}
+
+std::vector<sim::Scene> ReportScenes(uint64_t first, int count) {
+  std::vector<sim::Scene> scenes;
+  for (int k = 0; k < count; ++k) scenes.push_back(sim::GenerateScene(first + k, 1).value());
+  return scenes;
+}
+
+// The field-of-view ceiling on wire recall of a few rigs, from geometry alone (no rendering),
+// with the rig's cane two-view share beside it and whether the default arm mount's base shows in
+// an image (EvaluateRig). Run as DISABLED_Report (VB_SEED, VB_STOPS).
 TEST(TrellisLoss, DISABLED_RigCeiling) {
   const auto [first, count, images, fiducials] = ReportStopsFromEnv(1100, 100);
   struct Variant {
     const char* name;
     sim::RigOptions options;
   };
-  std::vector<Variant> variants(3);
-  variants[0].name = "default (toe-in at rig height)";
-  variants[1].name = "no toe-in (axes parallel)";
+  // The default before 2026-11-22: 0.8 m from the vine plane, side 0.22 m, aimed at rig height.
+  sim::RigOptions old;
+  old.rig_y_m = 0.0;
+  old.distance_to_vine_plane_m = 0.8;
+  old.baseline_m = 0.22;
+  old.aim_below_rig_m = 0.0;
+  std::vector<Variant> variants(6, Variant{"", old});
+  variants[0].name = "old default (toe-in at rig height)";
+  variants[1].name = "old, no toe-in (axes parallel)";
   variants[1].options.toe_in = false;
-  variants[2].name = "apex below (upper pair)";
+  variants[2].name = "old, apex below (upper pair)";
   variants[2].options.apex_up = false;
+  variants[3].name = "old, apex camera aimed 0.3 m up";
+  variants[3].options.apex_aim_up_m = 0.3;
+  variants[4].name = "default (0.12 m back, aimed up)";
+  variants[4].options = sim::RigOptions();
+  variants[5].name = "default, apex below";
+  variants[5].options = sim::RigOptions();
+  variants[5].options.apex_up = false;
+  const std::vector<sim::Scene> scenes = ReportScenes(first, count);
   for (const Variant& variant : variants) {
-    const RigCalibration rig = sim::MakeRig(variant.options).value();
-    double wire_sum = 0, cane_sum = 0;
-    for (int k = 0; k < count; ++k) {
-      const sim::Scene scene = sim::GenerateScene(first + k, 1).value();
-      double total = 0, posed = 0;
-      for (const Wire& wire : scene.vine.wires) {
-        // A wire that a pair can place anywhere in the volume (|x| <= 1.1 m, at least 0.1 m of
-        // it) is reconstructed along all of it (a line, extended), so it counts whole.
-        const Eigen::Vector3d dir = (wire.points.back() - wire.points.front()).normalized();
-        Polyline3 line;
-        line.points = wire.points;
-        line.radii.assign(wire.points.size(), 0.001);
-        double placed_m = 0;
-        for (const Eigen::Vector3d& p : line.Sample(0.005)) {
-          if (std::abs(p.x()) > 1.1) continue;
-          std::vector<Eigen::Vector3d> normals;
-          for (const CameraCalibration& camera : rig.cameras) {
-            const auto uv = camera.Project(p);
-            if (uv && camera.InImage(*uv))
-              normals.push_back((p - camera.CentreInPlatform()).cross(dir).normalized());
-          }
-          bool ok = false;
-          for (size_t i = 0; i < normals.size(); ++i)
-            for (size_t j = i + 1; j < normals.size(); ++j)
-              ok |= normals[i].cross(normals[j]).norm() >= std::sin(3.0 * M_PI / 180);
-          placed_m += ok * 0.005;
-        }
-        const double span = static_cast<double>(SpanSamples(wire).size());
-        total += span;
-        if (placed_m >= 0.1) posed += span;
-      }
-      wire_sum += total > 0 ? posed / total : 1.0;
-      cane_sum += EvaluateViewCoverage(scene.vine, rig).value().in_two_or_more_fraction;
-    }
-    std::printf("%-32s wire ceiling %.3f, cane length in two views %.3f (stops %d from %llu)\n",
-                variant.name, wire_sum / count, cane_sum / count, count,
-                static_cast<unsigned long long>(first));
+    const RigFigures f = EvaluateRig(sim::MakeRig(variant.options).value(), scenes);
+    std::printf("%-36s wire ceiling %.3f, cane length in two views %.3f, arm base in view %s "
+                "(stops %d from %llu)\n",
+                variant.name, f.wire_ceiling, f.cane_two_views, f.arm_base_in_view ? "YES" : "no",
+                count, static_cast<unsigned long long>(first));
   }
+}
+
+// A grid over the rig's placement (apex up/down, distance, triangle side, height, aim, and the
+// apex camera's and the pair's own aim), one line per rig: wire ceiling, cane two-view share, arm
+// base in view. Geometry only (EvaluateRig; ~0.25 s per rig on 100 stops). The triangle side is
+// the default rig's scaled by (distance / 0.8 m)^2, which keeps its depth error per pixel, times
+// VB_SWEEP_SIDE_SCALE. Each grid axis is a comma-separated list from the environment:
+// VB_SWEEP_APEX_UP, VB_SWEEP_Y (rig_y_m), VB_SWEEP_SIDE_SCALE, VB_SWEEP_HEIGHT, VB_SWEEP_BELOW
+// (aim_below_rig_m), VB_SWEEP_APEX_AIM, VB_SWEEP_PAIR_AIM; the defaults below are the coarse
+// grid of docs/simulator.md. VB_SEED, VB_STOPS (100 by default).
+TEST(TrellisLoss, DISABLED_RigSweep) {
+  const auto [first, count, images, fiducials] = ReportStopsFromEnv(1100, 100);
+  auto axis = [](const char* name, std::vector<double> fallback) {
+    const char* v = std::getenv(name);
+    if (v == nullptr) return fallback;
+    std::vector<double> out;
+    for (const char* p = v; *p != '\0';) {
+      char* end = nullptr;
+      out.push_back(std::strtod(p, &end));
+      if (end == p) break;
+      p = *end == ',' ? end + 1 : end;
+    }
+    return out;
+  };
+  const std::vector<sim::Scene> scenes = ReportScenes(first, count);
+  for (double apex_up : axis("VB_SWEEP_APEX_UP", {1, 0}))
+    for (double rig_y : axis("VB_SWEEP_Y", {0.0, -0.05, -0.1, -0.15}))
+      for (double side_scale : axis("VB_SWEEP_SIDE_SCALE", {1.0, 1.15}))
+        for (double height : axis("VB_SWEEP_HEIGHT", {1.0, 1.05, 1.1, 1.15, 1.2}))
+          for (double aim_below : axis("VB_SWEEP_BELOW", {-0.1, 0.0, 0.1}))
+            for (double apex_aim : axis("VB_SWEEP_APEX_AIM", {0.0, 0.15, 0.3}))
+              for (double pair_aim : axis("VB_SWEEP_PAIR_AIM", {-0.1, 0.0, 0.1})) {
+                sim::RigOptions o;
+                o.apex_up = apex_up != 0;
+                o.rig_y_m = rig_y;
+                o.distance_to_vine_plane_m = 0.8 - rig_y;
+                const double d = o.distance_to_vine_plane_m / 0.8;
+                o.baseline_m = 0.22 * d * d * side_scale;
+                o.rig_height_m = height;
+                o.aim_below_rig_m = aim_below;
+                o.apex_aim_up_m = apex_aim;
+                o.pair_aim_up_m = pair_aim;
+                const RigFigures f = EvaluateRig(sim::MakeRig(o).value(), scenes);
+                std::printf("SWEEP apex_up %d y %.2f side %.3f h %.2f below %.2f apex_aim %.2f "
+                            "pair_aim %.2f wire %.3f cane %.4f arm %d\n",
+                            o.apex_up, rig_y, o.baseline_m, height, aim_below, apex_aim, pair_aim,
+                            f.wire_ceiling, f.cane_two_views, f.arm_base_in_view);
+              }
 }
 
 }  // namespace
