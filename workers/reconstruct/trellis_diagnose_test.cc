@@ -580,6 +580,12 @@ TEST(TrellisLoss, DISABLED_FalseCaneLength) {
   // neighbour's cane, other false length.
   constexpr int kBins = 6;
   double bin_right[kBins] = {}, bin_neighbour[kBins] = {}, bin_other[kBins] = {};
+  // Model canes that reach beyond 0.5 m of the trunk along the row and have no child, by how
+  // much thicker their inner third is than their outer third (inner / outer mean radius < 1 /
+  // 1.1, < 1 / 1.2, < 1 / 1.4: a cane that thickens away from the vine): right length,
+  // neighbour's, other false.
+  const double kRatios[3] = {1.1, 1.2, 1.4};
+  double thick_out_right[3] = {}, thick_out_neighbour[3] = {}, thick_out_other[3] = {};
   ReconstructOptions options;
   for (int k = 0; k < count; ++k) {
     const uint64_t seed = first + k;
@@ -593,6 +599,64 @@ TEST(TrellisLoss, DISABLED_FalseCaneLength) {
       neighbour_canes.insert(neighbour_canes.end(), n.canes.begin(), n.canes.end());
     double stop_total = 0, stop_false[6] = {0, 0, 0, 0, 0, 0};
     for (const Cane& cane : result->model.canes) {
+      double cane_m = 0, cane_neighbour_m = 0;
+      for (const Eigen::Vector3d& p : cane.polyline.Sample(0.005)) {
+        cane_m += 0.005;
+        if (DistanceToCanes(p, truth.canes) > 0.010 && DistanceToCanes(p, neighbour_canes) <= 0.010)
+          cane_neighbour_m += 0.005;
+      }
+      // A model cane that is mostly a neighbour's: what it hangs on, and whether its base is the
+      // end nearer the vine (x = 0).
+      if (verbose && cane_neighbour_m > 0.5 * cane_m) {
+        bool on_trunk = false;
+        for (const Cane& other : result->model.canes)
+          on_trunk |= other.id == cane.parent_id && other.kind == CaneKind::kTrunk;
+        const Eigen::Vector3d& base = cane.polyline.points.front();
+        const Eigen::Vector3d& tip = cane.polyline.points.back();
+        std::printf("  neighbour's cane %.2f m (%.2f of it), base x %.2f z %.2f, tip x %.2f, on %s, "
+                    "base radius %.1f mm tip %.1f mm\n",
+                    cane_m, cane_neighbour_m / cane_m, base.x(), base.z(), tip.x(),
+                    on_trunk ? "the trunk/head" : "a cane", 1000 * cane.polyline.radii.front(),
+                    1000 * cane.polyline.radii.back());
+      }
+      if (cane.kind == CaneKind::kCane) {
+        bool leaf = true, on_trunk = false;
+        for (const Cane& other : result->model.canes) {
+          leaf &= other.parent_id != cane.id;
+          on_trunk |= other.id == cane.parent_id && other.kind == CaneKind::kTrunk;
+        }
+        const Polyline3& line = cane.polyline;
+        bool far = false;
+        for (const Eigen::Vector3d& p : line.points) far |= std::abs(p.x()) > 0.5;
+        const double length = line.Length();
+        if (leaf && far && length >= 0.03) {
+          auto mean_radius = [&](double from, double to) {
+            double sum = 0, s = 0;
+            int n = 0;
+            for (size_t i = 0; i < line.points.size(); ++i) {
+              if (i > 0) s += (line.points[i] - line.points[i - 1]).norm();
+              if (s >= from && s <= to) sum += line.radii[i], ++n;
+            }
+            return n > 0 ? sum / n : 0.0;
+          };
+          const double front = mean_radius(0, length / 3), back = mean_radius(2 * length / 3, length);
+          const bool front_inner = std::abs(line.points.front().x()) < std::abs(line.points.back().x());
+          const double inner = front_inner ? front : back, outer = front_inner ? back : front;
+          double right_m = 0, neighbour_m = 0, other_m = 0;
+          for (const Eigen::Vector3d& p : line.Sample(0.005)) {
+            if (DistanceToCanes(p, truth.canes) <= 0.010) right_m += 0.005;
+            else if (DistanceToCanes(p, neighbour_canes) <= 0.010) neighbour_m += 0.005;
+            else other_m += 0.005;
+          }
+          for (int r = 0; r < 3; ++r)
+            if (outer > 0 && inner / outer < 1.0 / kRatios[r]) {
+              thick_out_right[r] += right_m;
+              thick_out_neighbour[r] += neighbour_m;
+              thick_out_other[r] += other_m;
+            }
+          (void)on_trunk;
+        }
+      }
       for (const Eigen::Vector3d& p : cane.polyline.Sample(0.005)) {
         stop_total += 0.005;
         Eigen::Vector3d nearest = p;
@@ -655,6 +719,10 @@ TEST(TrellisLoss, DISABLED_FalseCaneLength) {
     std::printf("  |x| %.1f-%s m: right %.4f, neighbour's %.4f, other false %.4f\n", 0.6 + 0.1 * b,
                 b + 1 < kBins ? std::to_string(0.7 + 0.1 * b).substr(0, 3).c_str() : "",
                 bin_right[b] / total, bin_neighbour[b] / total, bin_other[b] / total);
+  for (int r = 0; r < 3; ++r)
+    std::printf("  leaf canes reaching beyond 0.5 m, outer third %.1fx thicker than inner: right "
+                "%.4f, neighbour's %.4f, other false %.4f\n", kRatios[r], thick_out_right[r] / total,
+                thick_out_neighbour[r] / total, thick_out_other[r] / total);
   std::printf("  mis-placed: mean offset along y (depth) %.1f mm, across (x, z) %.1f mm\n",
               1000 * misplaced_dy / std::max(by_class[1], 1e-9),
               1000 * misplaced_dxz / std::max(by_class[1], 1e-9));
