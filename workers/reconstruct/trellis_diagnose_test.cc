@@ -730,3 +730,78 @@ TEST(TrellisLoss, DISABLED_FalseCaneLength) {
 
 }  // namespace
 }  // namespace vb::reconstruct
+
+namespace vb::reconstruct {
+namespace {
+
+// Where the true head is not enclosed by the model's spheres (head_enclosed_fraction's
+// complement), per stop: the share missed, and the missed part's extent against the true head's
+// (x, y = depth, z), on a 2 mm grid. VB_SEED, VB_STOPS (default 1189, 1), VB_OLD_RIG=1,
+// VB_HEAD_OVERLAP (HeadOptions::head_overlap_m).
+TEST(TrellisLoss, DISABLED_HeadMisses) {
+  const auto [first, count, images, fiducials] = ReportStopsFromEnv(1189, 1, true);
+  sim::RigOptions rig_options;
+  const char* old_rig = std::getenv("VB_OLD_RIG");
+  if (old_rig != nullptr && std::string(old_rig) == "1") {
+    rig_options.rig_y_m = 0.0;
+    rig_options.distance_to_vine_plane_m = 0.8;
+    rig_options.baseline_m = 0.22;
+    rig_options.aim_below_rig_m = 0.0;
+  }
+  for (int k = 0; k < count; ++k) {
+    const uint64_t seed = first + k;
+    const SimulatedStop stop = MakeRenderedStopWithRig(seed, images, fiducials, rig_options);
+    ASSERT_FALSE(stop.views.empty());
+    ReconstructOptions options;
+    if (const char* v = std::getenv("VB_HEAD_OVERLAP")) options.head.head_overlap_m = std::atof(v);
+    const auto result = ReconstructFromViews(stop.views, stop.rig, options, Deadline::Infinite());
+    ASSERT_TRUE(result.ok()) << result.status();
+    const std::vector<Sphere>& truth = stop.scene.vine.head.spheres;
+    const std::vector<Sphere>& model = result->model.head.spheres;
+    Eigen::AlignedBox3d box, missed_box, model_box;
+    for (const Sphere& s : truth) {
+      box.extend(s.center - Eigen::Vector3d::Constant(s.radius));
+      box.extend(s.center + Eigen::Vector3d::Constant(s.radius));
+    }
+    for (const Sphere& s : model) {
+      model_box.extend(s.center - Eigen::Vector3d::Constant(s.radius));
+      model_box.extend(s.center + Eigen::Vector3d::Constant(s.radius));
+    }
+    int inside = 0, missed = 0;
+    for (double x = box.min().x(); x <= box.max().x(); x += 0.002)
+      for (double y = box.min().y(); y <= box.max().y(); y += 0.002)
+        for (double z = box.min().z(); z <= box.max().z(); z += 0.002) {
+          const Eigen::Vector3d p(x, y, z);
+          bool in_truth = false;
+          for (const Sphere& s : truth) in_truth |= (p - s.center).squaredNorm() <= s.radius * s.radius;
+          if (!in_truth) continue;
+          ++inside;
+          bool in_model = false;
+          for (const Sphere& s : model) {
+            if ((p - s.center).squaredNorm() <= s.radius * s.radius) {
+              in_model = true;
+              break;
+            }
+          }
+          if (!in_model) {
+            ++missed;
+            missed_box.extend(p);
+          }
+        }
+    auto print_box = [](const char* name, const Eigen::AlignedBox3d& b) {
+      if (b.isEmpty()) return std::printf(" %s empty", name), void();
+      std::printf(" %s x %.3f..%.3f y %.3f..%.3f z %.3f..%.3f", name, b.min().x(), b.max().x(),
+                  b.min().y(), b.max().y(), b.min().z(), b.max().z());
+    };
+    std::printf("seed %llu: head enclosed %.4f (%d of %d cells missed);",
+                static_cast<unsigned long long>(seed), 1.0 - static_cast<double>(missed) / std::max(1, inside),
+                missed, inside);
+    print_box("true head", box);
+    print_box("missed", missed_box);
+    print_box("model", model_box);
+    std::printf("\n");
+  }
+}
+
+}  // namespace
+}  // namespace vb::reconstruct
