@@ -167,6 +167,11 @@ absl::Status ConnectOptions::Validate() const {
         "connect options: keep_taper_ratio must be 0 (off) or > 1 (a cane of even thickness "
         "would pass any ratio <= 1)");
   }
+  if (!std::isfinite(drop_thickening_ratio) || drop_thickening_ratio < 0 ||
+      (drop_thickening_ratio > 0 && drop_thickening_ratio <= 1)) {
+    return absl::InvalidArgumentError(
+        "connect options: drop_thickening_ratio must be 0 (off) or > 1");
+  }
   if (!(min_gap_support >= 0.0 && min_gap_support <= 1.0)) {
     return absl::InvalidArgumentError("connect options: min_gap_support must be in [0, 1]");
   }
@@ -438,6 +443,25 @@ absl::StatusOr<VineModel> BuildTree(const PreparedCanes& prepared_in,
       parent[child] = joins[best].parent;
       join[child] = best;
       ++sum.kept_near;
+    }
+  }
+  // A leaf of the tree that reaches beyond keep_within_m and thickens away from the centre is a
+  // neighbour's cane hung on this vine's (by its tip, near a cane it crosses): drop it.
+  if (options.drop_thickening_ratio > 0.0 && options.keep_within_m > 0.0) {
+    const double centre_x = prepared->trunk->points.back().x();
+    std::vector<char> has_child(n, 0);
+    for (int i = 0; i < n; ++i)
+      if (kept[i] == 1 && parent[i] >= 0) has_child[parent[i]] = 1;
+    for (int i = 0; i < n; ++i) {
+      if (kept[i] != 1 || has_child[i]) continue;
+      const bool far = std::any_of(canes[i].points.begin(), canes[i].points.end(),
+                                   [&](const Eigen::Vector3d& p) {
+                                     return std::abs(p.x() - centre_x) > options.keep_within_m;
+                                   });
+      if (far && TaperTowardCentre(canes[i], centre_x) * options.drop_thickening_ratio < 1.0) {
+        kept[i] = 0;
+        ++sum.dropped_thickening;
+      }
     }
   }
   // Orient every kept cane base first, and give it a first point on its parent.

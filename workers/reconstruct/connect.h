@@ -79,6 +79,11 @@ struct ConnectOptions {
                                      // at its end nearer the vine's centre (TaperTowardCentre):
                                      // canes taper from base to tip, a neighbour's the other way;
                                      // 0 (or keep_within_m 0) turns this off; otherwise > 1
+  double drop_thickening_ratio = 1.1;  // a cane in the tree without children that reaches beyond
+                                     // keep_within_m and is this much thicker at its end farther
+                                     // from the vine's centre is a neighbour's and is dropped
+                                     // (the new rig shows more of them); 0 turns this off;
+                                     // otherwise > 1
 
   absl::Status Validate() const;
 };
@@ -88,6 +93,7 @@ struct ConnectSummary {
   int unattached = 0;     // canes left out: never near the tree
   int kept_near = 0;      // of the attached: canes kept by step 6 (near the vine, no likely join)
   int inside_trunk_or_head = 0;  // canes dropped as duplicates of the trunk or head
+  int dropped_thickening = 0;  // canes dropped as neighbours' (drop_thickening_ratio)
 };
 
 // Builds the model's canes: id 1 the trunk (from `trunk`, or if absent the thickest cane reaching

@@ -294,6 +294,52 @@ TEST(ConnectCanes, AFarCaneThinningAwayFromTheVineIsKeptByItsThickerEnd) {
   }
 }
 
+// A neighbour's cane hung on this vine's by a likely join (its tip near a cane it crosses):
+// reaching beyond keep_within_m and thickening away from the centre, a leaf of the tree, it is
+// dropped (drop_thickening_ratio); this vine's far cane, thinning outward, stays; with the ratio
+// 0 both stay. A ratio in (0, 1] is rejected, naming the field.
+TEST(ConnectCanes, AFarLeafThickeningAwayFromTheVineIsDropped) {
+  PreparedCanes prepared;
+  prepared.trunk = Line({0, 0.8, 0}, {0, 0.8, 0.95}, 0.025);
+  prepared.canes = {Line({0.05, 0.8, 1.1}, {0.45, 0.8, 1.3}, 0.006),               // A, near
+                    TaperedLine({0.5, 0.8, 1.3}, {0.9, 0.8, 1.32}, 0.005, 0.003),  // B, ours
+                    TaperedLine({0.5, 0.8, 1.2}, {0.9, 0.8, 1.2}, 0.003, 0.005)};  // C, theirs
+  auto join = [](int child, int parent, double p) {
+    JoinCandidate c;
+    c.child = child;
+    c.parent = parent;
+    c.target = parent < 0 ? JoinTarget::kHead : JoinTarget::kCane;
+    c.point = parent < 0 ? Eigen::Vector3d(0.05, 0.8, 1.05) : Eigen::Vector3d(0.25, 0.8, 1.2);
+    c.probability = p;
+    return c;
+  };
+  const std::vector<JoinCandidate> joins = {join(0, -1, 0.9), join(1, 0, 0.8), join(2, 0, 0.8)};
+  ConnectOptions off;
+  off.drop_thickening_ratio = 0.0;
+  ConnectSummary summary;
+  auto model = BuildTree(prepared, joins, Head(), off, &summary);
+  ASSERT_TRUE(model.ok()) << model.status();
+  EXPECT_EQ(summary.attached, 3);
+  EXPECT_EQ(summary.dropped_thickening, 0);
+
+  model = BuildTree(prepared, joins, Head(), ConnectOptions(), &summary);
+  ASSERT_TRUE(model.ok()) << model.status();
+  ASSERT_TRUE(model->Validate().ok()) << model->Validate();
+  EXPECT_EQ(summary.attached, 2);
+  EXPECT_EQ(summary.dropped_thickening, 1);
+  ASSERT_EQ(model->canes.size(), 3u);
+  EXPECT_NEAR(model->canes[2].polyline.points.back().z(), 1.32, 1e-9);  // B, not C
+
+  for (const double ratio : {-1.0, 0.5, 1.0}) {
+    ConnectOptions bad;
+    bad.drop_thickening_ratio = ratio;
+    const auto rejected = BuildTree(prepared, joins, Head(), bad);
+    EXPECT_EQ(rejected.status().code(), absl::StatusCode::kInvalidArgument) << ratio;
+    EXPECT_NE(std::string(rejected.status().message()).find("drop_thickening_ratio"),
+              std::string::npos);
+  }
+}
+
 TEST(ConnectCanes, TheStereoTrunkReplacesTheSilhouetteAxis) {
   const Polyline3 silhouette = Line({0.01, 0.8, 0}, {0.01, 0.8, 0.95}, 0.03);
   const std::vector<Polyline3> canes = {Line({0.0, 0.8, 0.9}, {0.0, 0.8, 0.35}, 0.02)};

@@ -35,13 +35,14 @@ JoinWeights DefaultJoinWeights() {
   // Trained by JoinClassifier.DISABLED_TrainOnSimulatedStops (join_classifier_test.cc) on the
   // candidate joins of the real pipeline, rig refinement included (MatchWithRigRefinement), on
   // rendered stops, seeds 1000-1099, vine 1, calibration 1 px off, once from the renderer's label
-  // images and once from the segmenter's output: 98300 joins to a cane (4124 right) and 6035 to
-  // the trunk or head (3767 right), gaps up to 15 cm; training AUC 0.949.
+  // images and once from the segmenter's output, the default rig since 2026-11-22 (sim/rig.h):
+  // 64151 joins to a cane (2312 right) and 5472 to the trunk or head (3602 right), gaps up to
+  // 15 cm; training AUC 0.957 (the weights before, trained on the old rig: 0.956).
   JoinWeights w;
-  w.cane = {-1.2139, -0.1304, -1.3839, 0.0000, 0.0000, 1.8388, 0.3131, -1.2641, -0.8144,
-            -0.5831, 0.4344, -0.0426, 2.1683, 1.9745, -0.2300, -0.3947, -1.8483};
-  w.root = {0.0375, -0.1257, -0.1564, -0.5324, 0.5324, 0.0000, 0.3971, 0.0000, 0.0000,
-            0.2487, 0.2238, 0.0000, 2.2878, -0.2551, 0.1184, 0.0812, 0.4196};
+  w.cane = {-1.4083, -0.0842, -1.4277, 0.0000, 0.0000, 1.0544, 0.6892, -0.6722, 0.0497,
+            -0.6116, 0.1984, -0.0807, 2.0749, 1.7590, -0.0868, -0.3779, -1.5914};
+  w.root = {0.1559, -0.0357, -0.1283, -0.3345, 0.3345, 0.0000, 0.4247, 0.0000, 0.0000,
+            0.2657, 0.1414, 0.0000, 2.5095, -0.9737, 0.1256, -0.0280, 1.4525};
   return w;
 }
 
