@@ -15,11 +15,12 @@
 //     spanning arborescence (Chu and Liu 1965; Edmonds 1967). "None" has probability
 //     `min_join_probability`; a cane with no parent, and every cane hanging on it, is left out
 //     (a neighbour's canes, ghosts): the arm must avoid them, but they are not pruned.
-//     Before that, a join to a cane that the child visibly goes on across (beyond the paper:
-//     the images show wood along the child's line continued past the parent, MeasureCrossing,
-//     from the caller's GapSupportFn) is a crossing, not a fork: its probability is multiplied
-//     by `crossing_factor`, but not below "none" if it was above it (a cane whose only likely
-//     join is a crossing keeps it rather than being lost).
+//     Optionally (off by default: no gain on the bench, docs/reconstruction.md section 6), a
+//     join to a cane that the child visibly goes on across (beyond the paper: the images show
+//     wood along the child's line continued past the parent, MeasureCrossing, from the caller's
+//     GapSupportFn) is taken for a crossing, not a fork: its probability is multiplied by
+//     `crossing_factor`, but not below "none" if it was above it (a cane whose only likely join
+//     is a crossing keeps it rather than being lost).
 //  4. A cane that continues its parent from the parent's tip (a cane broken at a crossing or an
 //     occlusion) is appended to it, so that canes come out whole.
 //  5. A base near its join point (`max_bridge_m`) gets a first point there. So does a farther
@@ -74,12 +75,13 @@ struct ConnectOptions {
   JoinWeights join_weights = DefaultJoinWeights();  // the join classifier
   double min_gap_support = 0.9;      // a gap wider than max_bridge_m is drawn when at least this
                                      // fraction of it is wood in the images (GapSupportFn)
-  double crossing_factor = 0.5;      // a join to a cane that the child's line, continued past
+  double crossing_factor = 1.0;      // a join to a cane that the child's line, continued past
                                      // the join, visibly crosses (the images show wood along
                                      // crossing_reach_m of it beyond the parent, at least
                                      // crossing_min_support of it: MeasureCrossing) has its
                                      // probability multiplied by this (not below "none" if it
-                                     // was above); 1 turns this off; in (0, 1]
+                                     // was above); 1 (the default) turns this off; in (0, 1];
+                                     // 0.5 was measured (docs/reconstruction.md section 6)
   double crossing_min_support = 0.9; // ... the fraction of that stretch that must be wood
   double crossing_min_miss_m = 0.0;  // ... and the child's line must pass the parent's axis at
                                      // least this far (MeasureCrossing)
