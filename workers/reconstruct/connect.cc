@@ -407,21 +407,22 @@ absl::StatusOr<VineModel> BuildTree(const PreparedCanes& prepared_in,
   }
   std::vector<Polyline3> canes = prepared->canes;
   const int n = static_cast<int>(canes.size());
-  // A join to a cane the child visibly goes on across is a crossing, not a fork.
+  // A join to a cane the child visibly goes on across is a crossing, not a fork (off by
+  // default: crossing_factor 1).
   std::vector<double> probability(joins.size());
   for (size_t k = 0; k < joins.size(); ++k) {
     const JoinCandidate& c = joins[k];
     probability[k] = c.probability;
-    if (options.crossing_factor < 1.0 && c.parent >= 0 &&
-        gap_support) {
-      const CrossingEvidence e = MeasureCrossing(canes[c.child], c.base_is_last, canes[c.parent],
-                                                 c.point, options, gap_support);
-      if (e.past_support >= options.crossing_min_support && e.miss_m >= options.crossing_min_miss_m)
-        // Ranked below the other joins, but not below "no parent" if it was above: a cane
-        // whose only likely join is a crossing keeps it (its true parent is then mostly not
-        // among the candidates, and left out its length would be lost to recall).
-        probability[k] = std::max(c.probability * options.crossing_factor,
-                                  std::min(c.probability, 1.001 * options.min_join_probability));
+    if (options.crossing_factor >= 1.0 || c.parent < 0 || !gap_support) continue;
+    const CrossingEvidence e = MeasureCrossing(canes[c.child], c.base_is_last, canes[c.parent],
+                                               c.point, options, gap_support);
+    if (e.past_support >= options.crossing_min_support &&
+        e.miss_m >= options.crossing_min_miss_m) {
+      // Ranked below the other joins, but not below "no parent" if it was above: a cane whose
+      // only likely join is a crossing keeps it (its true parent is then mostly not among the
+      // candidates, and left out its length would be lost to recall).
+      probability[k] = std::max(c.probability * options.crossing_factor,
+                                std::min(c.probability, 1.001 * options.min_join_probability));
     }
   }
 

@@ -386,12 +386,14 @@ TEST(ConnectCanes, ACaneThatVisiblyGoesOnAcrossAnotherDoesNotHangOnIt) {
   EXPECT_EQ(summary.unattached, 0);
   EXPECT_EQ(model->canes.size(), 4u);
 
-  for (auto [factor, support, field] :
-       {std::tuple{0.0, 0.9, "crossing_factor"}, std::tuple{1.5, 0.9, "crossing_factor"},
-        std::tuple{0.5, 1.5, "crossing_min_support"}}) {
+  for (auto [factor, support, miss, field] :
+       {std::tuple{0.0, 0.9, 0.0, "crossing_factor"}, std::tuple{1.5, 0.9, 0.0, "crossing_factor"},
+        std::tuple{0.5, 1.5, 0.0, "crossing_min_support"},
+        std::tuple{0.5, 0.9, -0.01, "crossing_min_miss_m"}}) {
     ConnectOptions bad;
     bad.crossing_factor = factor;
     bad.crossing_min_support = support;
+    bad.crossing_min_miss_m = miss;
     const auto rejected = BuildTree(prepared, joins, Head(), bad);
     EXPECT_EQ(rejected.status().code(), absl::StatusCode::kInvalidArgument) << field;
     EXPECT_NE(std::string(rejected.status().message()).find(field), std::string::npos) << field;
