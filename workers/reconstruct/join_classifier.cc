@@ -34,14 +34,16 @@ double DistanceToLine(const Eigen::Vector3d& p, const Polyline3& line) {
 JoinWeights DefaultJoinWeights() {
   // Trained by JoinClassifier.DISABLED_TrainOnSimulatedStops (join_classifier_test.cc) on the
   // candidate joins of the real pipeline, rig refinement included (MatchWithRigRefinement), on
-  // rendered stops, seeds 1000-1099, vine 1, calibration 1 px off, once from the renderer's label
-  // images and once from the segmenter's output: 98300 joins to a cane (4124 right) and 6035 to
-  // the trunk or head (3767 right), gaps up to 15 cm; training AUC 0.949.
+  // rendered stops with the platform's fiducials, seeds 1000-1099, vine 1, calibration 1 px off,
+  // once from the renderer's label images and once from the segmenter's output (main d2d0533's
+  // pipeline): 63288 joins to a cane (2226 right) and 5160 to the trunk or head (3362 right),
+  // gaps up to 15 cm; training AUC 0.957 (the previous weights 0.955 on the same joins). Used
+  // with ConnectOptions::min_join_probability 0.12 (docs/reconstruction.md section 6).
   JoinWeights w;
-  w.cane = {-1.2139, -0.1304, -1.3839, 0.0000, 0.0000, 1.8388, 0.3131, -1.2641, -0.8144,
-            -0.5831, 0.4344, -0.0426, 2.1683, 1.9745, -0.2300, -0.3947, -1.8483};
-  w.root = {0.0375, -0.1257, -0.1564, -0.5324, 0.5324, 0.0000, 0.3971, 0.0000, 0.0000,
-            0.2487, 0.2238, 0.0000, 2.2878, -0.2551, 0.1184, 0.0812, 0.4196};
+  w.cane = {-1.0182, -0.0559, -1.5357, 0.0000, 0.0000, 0.5341, 0.5073, -0.4121, 0.4987,
+            -0.6448, 0.1947, -0.1707, 1.9917, 1.7472, -0.0651, -0.4369, -1.5173};
+  w.root = {0.1569, -0.1006, -0.1176, -0.3721, 0.3721, 0.0000, 0.3781, 0.0000, 0.0000,
+            0.1190, 0.1167, 0.0000, 2.6093, -0.7673, 0.1016, 0.0254, 1.0847};
   return w;
 }
 
