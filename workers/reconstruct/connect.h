@@ -68,7 +68,7 @@ struct ConnectOptions {
   double trunk_axis_min_fraction = 0.3;  // a stereo cane inside the silhouette trunk at least
                                          // this fraction of its length replaces its axis
   double sample_step_m = 0.01;       // spacing of samples along canes for distances
-  double min_join_probability = 0.1; // a cane hangs on the tree only by a join this likely
+  double min_join_probability = 0.12; // a cane hangs on the tree only by a join this likely
   bool merge_continuations = true;   // append canes that continue their parent's tip to it
   double continuation_gap_m = 0.02;  // ... joining within this of the tip (arc length)
   double continuation_angle_deg = 35.0;  // ... with tangents within this angle
