@@ -146,12 +146,43 @@ double TaperTowardCentre(const Polyline3& cane, double centre_x) {
   return outer > 0.0 ? inner / outer : 1.0;
 }
 
+CrossingEvidence MeasureCrossing(const Polyline3& child, bool base_is_last,
+                                 const Polyline3& parent, const Eigen::Vector3d& point,
+                                 const ConnectOptions& options, const GapSupportFn& gap_support) {
+  CrossingEvidence e;
+  if (child.points.size() < 2 || parent.points.size() < 2) return e;
+  const Eigen::Vector3d base = base_is_last ? child.points.back() : child.points.front();
+  const Eigen::Vector3d out = EndOutward(child, base_is_last);
+  // Past the parent along the child's own line, not past the join point: a crossing child
+  // passes in front of or behind the parent's axis.
+  const double along = std::max(0.0, (point - base).dot(out));
+  const double radius = parent.RadiusAt(parent.Project(point));
+  e.miss_m = kInf;
+  const int steps = 20;
+  for (int k = 0; k <= steps; ++k) {
+    const double t = (along + radius + options.crossing_clearance_m) * k / steps;
+    e.miss_m = std::min(e.miss_m, DistanceToPolyline(base + out * t, parent, nullptr));
+  }
+  const Eigen::Vector3d from = base + out * (along + radius + options.crossing_clearance_m);
+  const Eigen::Vector3d to = from + out * options.crossing_reach_m;
+  // A stretch that ends on the parent runs along it (the child continues the parent from its
+  // tip): the wood there is the parent's, not the child's going on.
+  if (gap_support &&
+      DistanceToPolyline(to, parent, nullptr) > radius + options.crossing_clearance_m) {
+    e.past_support = gap_support(from, to);
+  }
+  return e;
+}
+
 absl::Status ConnectOptions::Validate() const {
   for (auto [v, name] : {std::pair{max_attach_m, "max_attach_m"}, {sample_step_m, "sample_step_m"},
                          {inside_fraction, "inside_fraction"},
                          {max_bridge_m, "max_bridge_m"},
                          {continuation_gap_m, "continuation_gap_m"},
-                         {continuation_angle_deg, "continuation_angle_deg"}}) {
+                         {continuation_angle_deg, "continuation_angle_deg"},
+                         {crossing_reach_m, "crossing_reach_m"},
+                         {crossing_clearance_m, "crossing_clearance_m"},
+                         {crossing_factor, "crossing_factor"}}) {
     if (!std::isfinite(v) || v <= 0)
       return absl::InvalidArgumentError(absl::StrCat("connect options: ", name, " must be > 0"));
   }
@@ -171,6 +202,15 @@ absl::Status ConnectOptions::Validate() const {
       (drop_thickening_ratio > 0 && drop_thickening_ratio <= 1)) {
     return absl::InvalidArgumentError(
         "connect options: drop_thickening_ratio must be 0 (off) or > 1");
+  }
+  if (!(crossing_factor > 0.0 && crossing_factor <= 1.0)) {
+    return absl::InvalidArgumentError("connect options: crossing_factor must be in (0, 1]");
+  }
+  if (!std::isfinite(crossing_min_miss_m) || crossing_min_miss_m < 0) {
+    return absl::InvalidArgumentError("connect options: crossing_min_miss_m must be >= 0");
+  }
+  if (!(crossing_min_support >= 0.0 && crossing_min_support <= 1.0)) {
+    return absl::InvalidArgumentError("connect options: crossing_min_support must be in [0, 1]");
   }
   if (!(min_gap_support >= 0.0 && min_gap_support <= 1.0)) {
     return absl::InvalidArgumentError("connect options: min_gap_support must be in [0, 1]");
@@ -372,14 +412,33 @@ absl::StatusOr<VineModel> BuildTree(const PreparedCanes& prepared_in,
   }
   std::vector<Polyline3> canes = prepared->canes;
   const int n = static_cast<int>(canes.size());
+  // A join to a cane the child visibly goes on across is a crossing, not a fork (off by
+  // default: crossing_factor 1).
+  std::vector<double> probability(joins.size());
+  for (size_t k = 0; k < joins.size(); ++k) {
+    const JoinCandidate& c = joins[k];
+    probability[k] = c.probability;
+    if (options.crossing_factor >= 1.0 || c.parent < 0 || !gap_support) continue;
+    const CrossingEvidence e = MeasureCrossing(canes[c.child], c.base_is_last, canes[c.parent],
+                                               c.point, options, gap_support);
+    if (e.past_support >= options.crossing_min_support &&
+        e.miss_m >= options.crossing_min_miss_m) {
+      // Ranked below the other joins, but not below "no parent" if it was above: a cane whose
+      // only likely join is a crossing keeps it (its true parent is then mostly not among the
+      // candidates, and left out its length would be lost to recall).
+      probability[k] = std::max(c.probability * options.crossing_factor,
+                                std::min(c.probability, 1.001 * options.min_join_probability));
+    }
+  }
 
   // Node 0 is the trunk and head; cane i is node i + 1. Arcs 0 .. n-1 are "no parent" (from the
   // root, marked as such); then one arc per candidate join.
   std::vector<Arc> arcs;
   const double none = std::log(options.min_join_probability);
   for (int i = 0; i < n; ++i) arcs.push_back({0, i + 1, none});
-  for (const JoinCandidate& c : joins) {
-    arcs.push_back({c.parent + 1, c.child + 1, std::log(std::max(c.probability, 1e-12))});
+  for (size_t k = 0; k < joins.size(); ++k) {
+    arcs.push_back({joins[k].parent + 1, joins[k].child + 1,
+                    std::log(std::max(probability[k], 1e-12))});
   }
   const std::vector<int> chosen = MaxArborescence(n + 1, 0, arcs);
   // parent[i]: -1 trunk/head, -2 none, else a cane; join[i]: the chosen candidate.
@@ -435,7 +494,7 @@ absl::StatusOr<VineModel> BuildTree(const PreparedCanes& prepared_in,
         if (near[c.child] == 2 && c.base_is_last != static_cast<bool>(inner_is_last[c.child])) {
           continue;
         }
-        if (best < 0 || c.probability > joins[best].probability) best = static_cast<int>(k);
+        if (best < 0 || probability[k] > probability[best]) best = static_cast<int>(k);
       }
       if (best < 0) break;
       const int child = joins[best].child;

@@ -15,6 +15,12 @@
 //     spanning arborescence (Chu and Liu 1965; Edmonds 1967). "None" has probability
 //     `min_join_probability`; a cane with no parent, and every cane hanging on it, is left out
 //     (a neighbour's canes, ghosts): the arm must avoid them, but they are not pruned.
+//     Optionally (off by default: no gain on the bench, docs/reconstruction.md section 6), a
+//     join to a cane that the child visibly goes on across (beyond the paper: the images show
+//     wood along the child's line continued past the parent, MeasureCrossing, from the caller's
+//     GapSupportFn) is taken for a crossing, not a fork: its probability is multiplied by
+//     `crossing_factor`, but not below "none" if it was above it (a cane whose only likely join
+//     is a crossing keeps it rather than being lost).
 //  4. A cane that continues its parent from the parent's tip (a cane broken at a crossing or an
 //     occlusion) is appended to it, so that canes come out whole.
 //  5. A base near its join point (`max_bridge_m`) gets a first point there. So does a farther
@@ -62,13 +68,25 @@ struct ConnectOptions {
   double trunk_axis_min_fraction = 0.3;  // a stereo cane inside the silhouette trunk at least
                                          // this fraction of its length replaces its axis
   double sample_step_m = 0.01;       // spacing of samples along canes for distances
-  double min_join_probability = 0.1; // a cane hangs on the tree only by a join this likely
+  double min_join_probability = 0.12; // a cane hangs on the tree only by a join this likely
   bool merge_continuations = true;   // append canes that continue their parent's tip to it
   double continuation_gap_m = 0.02;  // ... joining within this of the tip (arc length)
   double continuation_angle_deg = 35.0;  // ... with tangents within this angle
   JoinWeights join_weights = DefaultJoinWeights();  // the join classifier
   double min_gap_support = 0.9;      // a gap wider than max_bridge_m is drawn when at least this
                                      // fraction of it is wood in the images (GapSupportFn)
+  double crossing_factor = 1.0;      // a join to a cane that the child's line, continued past
+                                     // the join, visibly crosses (the images show wood along
+                                     // crossing_reach_m of it beyond the parent, at least
+                                     // crossing_min_support of it: MeasureCrossing) has its
+                                     // probability multiplied by this (not below "none" if it
+                                     // was above); 1 (the default) turns this off; in (0, 1];
+                                     // 0.5 was measured (docs/reconstruction.md section 6)
+  double crossing_min_support = 0.9; // ... the fraction of that stretch that must be wood
+  double crossing_min_miss_m = 0.0;  // ... and the child's line must pass the parent's axis at
+                                     // least this far (MeasureCrossing)
+  double crossing_reach_m = 0.03;    // ... the length of the stretch looked at
+  double crossing_clearance_m = 0.008;  // ... starting this far past the parent's surface
   double keep_within_m = 0.5;        // a cane left without a parent but lying wholly within this
                                      // of the vine's centre along the row (x) is this vine's: it
                                      // hangs on its likeliest join to the tree; 0 turns this off
@@ -110,6 +128,24 @@ absl::StatusOr<VineModel> ConnectCanes(const std::vector<Polyline3>& canes,
 // the row, divided by that of the third at the other end: > 1 when the cane thins away from
 // the vine's centre. 1 for a cane shorter than 3 cm.
 double TaperTowardCentre(const Polyline3& cane, double centre_x);
+
+// What tells a cane crossing another from one growing out of it, for a join of `child` (its
+// base the last point if `base_is_last`) to the cane `parent` at `point`: the child's line is
+// continued from its base along its outward tangent past the parent.
+struct CrossingEvidence {
+  double past_support = 0.0;  // the fraction of crossing_reach_m of that line, beginning
+                              // crossing_clearance_m beyond the parent's surface, that the
+                              // images show as wood (`gap_support`; 0 without it): near 1 when
+                              // the child goes on across the parent, near 0 when it ends there;
+                              // 0 when the stretch ends on the parent (it runs along it: the
+                              // child continues the parent from its tip)
+  double miss_m = 0.0;        // the nearest that line (up to where past_support starts) comes
+                              // to the parent's axis: a fork meets it, a crossing passes in front
+                              // of or behind it
+};
+CrossingEvidence MeasureCrossing(const Polyline3& child, bool base_is_last,
+                                 const Polyline3& parent, const Eigen::Vector3d& point,
+                                 const ConnectOptions& options, const GapSupportFn& gap_support);
 
 // Steps 1-2 alone (PrepareCanes, FindJoins), for training the join classifier and diagnosis.
 struct PreparedCanes {

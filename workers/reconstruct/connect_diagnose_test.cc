@@ -7,6 +7,11 @@
 //    not the true one (core/model_metrics.h), by the first wrong cane on that route: a ghost, a
 //    descendant of the true cane (hung upside down), or another true cane; and whether a
 //    reconstruction of the true parent existed in the model.
+//  - With VB_CROSSING=1: per child of this vine, its likeliest join to a cane, right or wrong
+//    (LabelJoins), with its crossing evidence (MeasureCrossing: wood past the parent, miss).
+// Variants of the connect options (diagnosis only): VB_INSIDE, VB_KEEP_WITHIN,
+// VB_KEEP_MIN_LENGTH, VB_KEEP_TAPER, VB_MIN_JOIN, VB_MAX_ATTACH, VB_NO_MERGE, VB_CROSS_FACTOR,
+// VB_CROSS_SUPPORT, VB_CROSS_REACH, VB_CROSS_MISS.
 // Run with
 //   VB_INPUT=images VB_SEED=1300 VB_STOPS=12 [VB_VERBOSE=1] vb_reconstruct_test
 //     --gtest_also_run_disabled_tests --gtest_filter='ConnectLoss.DISABLED_*'
@@ -70,6 +75,12 @@ TEST(ConnectLoss, DISABLED_Report) {
   if (const char* v = std::getenv("VB_MIN_JOIN"))
     options.connect.min_join_probability = std::atof(v);
   if (const char* v = std::getenv("VB_MAX_ATTACH")) options.connect.max_attach_m = std::atof(v);
+  if (std::getenv("VB_NO_MERGE")) options.connect.merge_continuations = false;
+  if (const char* v = std::getenv("VB_CROSS_FACTOR")) options.connect.crossing_factor = std::atof(v);
+  if (const char* v = std::getenv("VB_CROSS_SUPPORT"))
+    options.connect.crossing_min_support = std::atof(v);
+  if (const char* v = std::getenv("VB_CROSS_REACH")) options.connect.crossing_reach_m = std::atof(v);
+  if (const char* v = std::getenv("VB_CROSS_MISS")) options.connect.crossing_min_miss_m = std::atof(v);
   double final_recall = 0, final_precision = 0, final_connectivity = 0;
   // Lost in connection, by the reason of the assembled cane nearest the sample.
   enum Lost { kInside, kNoJoin, kFar, kShort, kOtherLeftOut, kInModel, kLostCount };
@@ -83,7 +94,7 @@ TEST(ConnectLoss, DISABLED_Report) {
                                           "first wrong ancestor a descendant (upside down)",
                                           "first wrong ancestor another true cane"};
   double wrong[kWrongCount] = {}, wrong_parent_present[kWrongCount] = {};
-  double total = 0, recalled = 0, connected = 0;
+  double total = 0, recalled = 0, connected = 0, on_root_not_true = 0;
   // Length of this vine's prepared canes (trunk excluded): all; likeliest join wrong though a
   // right one was a candidate; likeliest join wrong and no right candidate.
   double join_length[3] = {};
@@ -213,6 +224,12 @@ TEST(ConnectLoss, DISABLED_Report) {
         }
         if (first_wrong < 0) {
           connected += 1;
+          // Counted connected by the metric's reading (a cane on the trunk or head is), though
+          // its true parent is another cane.
+          const Cane& o = model->canes[owner];
+          if (o.parent_id && model->canes[*model->IndexOf(*o.parent_id)].kind == CaneKind::kTrunk &&
+              true_parent > 0)
+            on_root_not_true += 1;
           continue;
         }
         const int h = majority[first_wrong];
@@ -253,6 +270,35 @@ TEST(ConnectLoss, DISABLED_Report) {
                     b.parent, h, flipped ? ", wrong end" : "", b.features[1] * 0.02,
                     b.features[7], best_right >= 0 ? joins[best_right].probability : -1.0,
                     best_right >= 0 && joins[best_right].parent < 0 ? " (root)" : "");
+      }
+    }
+    // Crossings (VB_CROSSING=1): per child, its likeliest join to a cane, labelled; how much
+    // wood the images show along the child's line continued past the parent (a crossing cane
+    // goes on, a fork ends), and how near that line passes the parent's axis (skew).
+    if (std::getenv("VB_CROSSING")) {
+      for (size_t i = 0; i < prepared->canes.size(); ++i) {
+        const int g = MajorityCane(prepared->canes[i], truth);
+        if (g <= 0) continue;
+        int best = -1;
+        for (size_t j = 0; j < joins.size(); ++j) {
+          if (joins[j].child != int(i)) continue;
+          if (best < 0 || joins[j].probability > joins[best].probability) best = int(j);
+        }
+        if (best < 0 || joins[best].parent < 0) continue;
+        const JoinCandidate& b = joins[best];
+        const Polyline3& c = prepared->canes[i];
+        const Polyline3& par = prepared->canes[b.parent];
+        const double len = c.Length();
+        const double r_par = par.RadiusAt(par.Project(b.point));
+        const CrossingEvidence e =
+            MeasureCrossing(c, b.base_is_last, par, b.point, options.connect, gap_support);
+        const double beyond = e.past_support, skew = e.miss_m;
+        const int h = MajorityCane(par, truth);
+        std::printf("  crossing seed %llu child %zu true %d len %.3f -> cane %d true %d: %s p %.3f "
+                    "gap %.3f beyond %.2f skew %.4f r_par %.4f r_child %.4f\n",
+                    static_cast<unsigned long long>(seed), i, g, len, b.parent, h,
+                    labels[best].right ? "RIGHT" : "WRONG", b.probability, b.features[1] * 0.02,
+                    beyond, skew, r_par, b.base_is_last ? c.radii.back() : c.radii.front());
       }
     }
     // Canes reaching beyond keep_within that thin away from the centre (kept by their taper):
@@ -297,6 +343,8 @@ TEST(ConnectLoss, DISABLED_Report) {
   }
   std::printf("%d stops: recalled after connection %.3f, connected %.3f (of true length)\n", count,
               recalled / total, connected / total);
+  std::printf("  of the connected, on the trunk or head though the true parent is a cane %.3f\n",
+              on_root_not_true / total);
   std::printf("final (refined) recall %.4f precision %.4f connectivity %.4f (means over stops)\n",
               final_recall, final_precision, final_connectivity);
   std::printf("lost in connection:\n");

@@ -1,6 +1,10 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "workers/reconstruct/connect.h"
 
+#include <optional>
+#include <string>
+#include <tuple>
+
 #include "gtest/gtest.h"
 
 namespace vb::reconstruct {
@@ -112,6 +116,7 @@ TEST(ConnectCanes, ASeenGapIsDrawnAndAnUnseenOneIsNot) {
   const Eigen::Vector3d on_a(0.3, 0.8, 1.0 + 0.1 * 0.24 / 0.54);  // A below B's base
   ConnectOptions options;
   options.min_join_probability = 1e-3;  // whatever the classifier makes of a 6 cm gap
+  options.crossing_factor = 1.0;        // no crossing test: every call below is for the gap
   for (const double support : {1.0, 0.5}) {
     int calls = 0;
     const GapSupportFn gap_support = [&](const Eigen::Vector3d& base, const Eigen::Vector3d& at) {
@@ -337,6 +342,108 @@ TEST(ConnectCanes, AFarLeafThickeningAwayFromTheVineIsDropped) {
     EXPECT_EQ(rejected.status().code(), absl::StatusCode::kInvalidArgument) << ratio;
     EXPECT_NE(std::string(rejected.status().message()).find("drop_thickening_ratio"),
               std::string::npos);
+  }
+}
+
+
+// A cane from the head broken where another cane X crosses 1.5 cm in front of it: the outer
+// piece B touches X, and the join classifier likes that better than B's 6 cm gap to the inner
+// piece A. Where the images show B's line going on across X (wood beyond it), X is a crossing,
+// not B's parent: B hangs on A and is appended to it. Where they show nothing beyond X, B forks
+// from X. A crossing that is B's only likely join is kept.
+TEST(ConnectCanes, ACaneThatVisiblyGoesOnAcrossAnotherDoesNotHangOnIt) {
+  const Polyline3 trunk = Line({0, 0.8, 0}, {0, 0.8, 0.95}, 0.025);
+  PreparedCanes prepared;
+  prepared.trunk = trunk;
+  prepared.canes = {Line({0.05, 0.8, 1.0}, {0.40, 0.8, 1.0}, 0.005),     // A, from the head
+                    Line({0.43, 0.785, 0.85}, {0.43, 0.785, 1.3}, 0.005),  // X, crossing
+                    Line({0.46, 0.8, 1.0}, {0.80, 0.8, 1.0}, 0.0045)};   // B, A's outer piece
+  auto join = [](int child, int parent, const Eigen::Vector3d& at, double p) {
+    JoinCandidate c;
+    c.child = child;
+    c.parent = parent;
+    c.target = parent < 0 ? JoinTarget::kHead : JoinTarget::kCane;
+    c.point = at;
+    c.probability = p;
+    return c;
+  };
+  const Eigen::Vector3d on_head(0.05, 0.8, 1.0);
+  const std::vector<JoinCandidate> joins = {
+      join(0, -1, on_head, 0.9), join(1, -1, on_head, 0.9),
+      join(2, 1, {0.43, 0.785, 1.0}, 0.6),  // B on X, where it passes
+      join(2, 0, {0.40, 0.8, 1.0}, 0.35)};  // B on A's tip
+  // Wood along the stretch of B's line beyond X (x 0.417 .. 0.387), where A is.
+  int crossing_calls = 0;
+  auto images = [&](bool wood_beyond) -> GapSupportFn {
+    return [&, wood_beyond](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+      const bool beyond = a.x() < 0.425 && b.x() < 0.425 && b.x() > 0.35;
+      crossing_calls += beyond;
+      return beyond && wood_beyond ? 1.0 : 0.0;
+    };
+  };
+  ConnectOptions options;
+  options.crossing_factor = 0.5;
+  const CrossingEvidence e = MeasureCrossing(prepared.canes[2], false, prepared.canes[1],
+                                             joins[2].point, options, images(true));
+  EXPECT_NEAR(e.miss_m, 0.015, 0.002);
+  EXPECT_DOUBLE_EQ(e.past_support, 1.0);
+  // A stretch along the parent (B continuing A from its tip) is not a crossing, wood or not.
+  EXPECT_DOUBLE_EQ(MeasureCrossing(prepared.canes[2], false, prepared.canes[0], joins[3].point,
+                                   options, [](const Eigen::Vector3d&, const Eigen::Vector3d&) {
+                                     return 1.0;
+                                   }).past_support,
+                   0.0);
+  // A fork meets its parent's axis.
+  EXPECT_LT(MeasureCrossing(Line({0.46, 0.785, 1.0}, {0.80, 0.785, 1.0}), false,
+                            prepared.canes[1], joins[2].point, ConnectOptions(), {})
+                .miss_m,
+            1e-3);
+
+  auto parent_of_b = [](const VineModel& model) -> std::optional<CaneId> {
+    for (const Cane& cane : model.canes)
+      if (cane.polyline.points.back().isApprox(Eigen::Vector3d(0.80, 0.8, 1.0)))
+        return cane.parent_id;
+    return std::nullopt;
+  };
+  for (const bool wood_beyond : {true, false}) {
+    crossing_calls = 0;
+    ConnectSummary summary;
+    const auto model =
+        BuildTree(prepared, joins, Head(), options, &summary, images(wood_beyond));
+    ASSERT_TRUE(model.ok()) << model.status();
+    ASSERT_TRUE(model->Validate().ok()) << model->Validate();
+    EXPECT_GT(crossing_calls, 0);
+    const std::optional<CaneId> parent = parent_of_b(*model);
+    ASSERT_TRUE(parent.has_value()) << wood_beyond;
+    if (wood_beyond) {  // appended to A, which hangs on the head
+      EXPECT_EQ(*parent, CaneId(1));
+      EXPECT_EQ(model->canes.size(), 3u);
+    } else {  // on X, which reaches z 0.85 .. 1.3
+      const Cane& p = model->canes[*model->IndexOf(*parent)];
+      EXPECT_NEAR(p.polyline.points.back().z(), 1.3, 1e-9);
+      EXPECT_EQ(model->canes.size(), 4u);
+    }
+  }
+  // Without the join to A, the crossing is B's only likely join: B keeps it.
+  const std::vector<JoinCandidate> only_crossing(joins.begin(), joins.begin() + 3);
+  ConnectSummary summary;
+  const auto model =
+      BuildTree(prepared, only_crossing, Head(), options, &summary, images(true));
+  ASSERT_TRUE(model.ok()) << model.status();
+  EXPECT_EQ(summary.unattached, 0);
+  EXPECT_EQ(model->canes.size(), 4u);
+
+  for (auto [factor, support, miss, field] :
+       {std::tuple{0.0, 0.9, 0.0, "crossing_factor"}, std::tuple{1.5, 0.9, 0.0, "crossing_factor"},
+        std::tuple{0.5, 1.5, 0.0, "crossing_min_support"},
+        std::tuple{0.5, 0.9, -0.01, "crossing_min_miss_m"}}) {
+    ConnectOptions bad;
+    bad.crossing_factor = factor;
+    bad.crossing_min_support = support;
+    bad.crossing_min_miss_m = miss;
+    const auto rejected = BuildTree(prepared, joins, Head(), bad);
+    EXPECT_EQ(rejected.status().code(), absl::StatusCode::kInvalidArgument) << field;
+    EXPECT_NE(std::string(rejected.status().message()).find(field), std::string::npos) << field;
   }
 }
 

@@ -34,15 +34,16 @@ double DistanceToLine(const Eigen::Vector3d& p, const Polyline3& line) {
 JoinWeights DefaultJoinWeights() {
   // Trained by JoinClassifier.DISABLED_TrainOnSimulatedStops (join_classifier_test.cc) on the
   // candidate joins of the real pipeline, rig refinement included (MatchWithRigRefinement), on
-  // rendered stops, seeds 1000-1099, vine 1, calibration 1 px off, once from the renderer's label
-  // images and once from the segmenter's output, the default rig since 2026-11-22 (sim/rig.h):
-  // 64151 joins to a cane (2312 right) and 5472 to the trunk or head (3602 right), gaps up to
-  // 15 cm; training AUC 0.957 (the weights before, trained on the old rig: 0.956).
+  // rendered stops with the platform's fiducials, seeds 1000-1099, vine 1, calibration 1 px off,
+  // once from the renderer's label images and once from the segmenter's output (main d2d0533's
+  // pipeline): 63288 joins to a cane (2226 right) and 5160 to the trunk or head (3362 right),
+  // gaps up to 15 cm; training AUC 0.957 (the previous weights 0.955 on the same joins). Used
+  // with ConnectOptions::min_join_probability 0.12 (docs/reconstruction.md section 6).
   JoinWeights w;
-  w.cane = {-1.4083, -0.0842, -1.4277, 0.0000, 0.0000, 1.0544, 0.6892, -0.6722, 0.0497,
-            -0.6116, 0.1984, -0.0807, 2.0749, 1.7590, -0.0868, -0.3779, -1.5914};
-  w.root = {0.1559, -0.0357, -0.1283, -0.3345, 0.3345, 0.0000, 0.4247, 0.0000, 0.0000,
-            0.2657, 0.1414, 0.0000, 2.5095, -0.9737, 0.1256, -0.0280, 1.4525};
+  w.cane = {-1.0182, -0.0559, -1.5357, 0.0000, 0.0000, 0.5341, 0.5073, -0.4121, 0.4987,
+            -0.6448, 0.1947, -0.1707, 1.9917, 1.7472, -0.0651, -0.4369, -1.5173};
+  w.root = {0.1569, -0.1006, -0.1176, -0.3721, 0.3721, 0.0000, 0.3781, 0.0000, 0.0000,
+            0.1190, 0.1167, 0.0000, 2.6093, -0.7673, 0.1016, 0.0254, 1.0847};
   return w;
 }
 

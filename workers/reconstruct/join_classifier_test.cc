@@ -109,7 +109,8 @@ double Auc(const std::vector<LabelledJoin>& examples, const JoinWeights& w) {
 //       --gtest_filter=JoinClassifier.DISABLED_TrainOnSimulatedStops   (one command line)
 // Candidate joins of the real pipeline (ExtractStructure on the renderer's label images and on
 // the segmenter's output, correspondence, assembly, head) on training seeds 1000 onwards,
-// labelled against the true vine (LabelJoins).
+// rendered with the platform's fiducials as the bench renders them, labelled against the true
+// vine (LabelJoins).
 TEST(JoinClassifier, DISABLED_TrainOnSimulatedStops) {
   const char* env = std::getenv("VB_TRAIN_STOPS");
   const int stops = env ? std::atoi(env) : 100;
@@ -117,7 +118,7 @@ TEST(JoinClassifier, DISABLED_TrainOnSimulatedStops) {
   std::vector<LabelledJoin> examples;
   for (bool images : {false, true}) {
     for (int k = 0; k < stops; ++k) {
-      const SimulatedStop stop = MakeRenderedStop(1000 + k, images);
+      const SimulatedStop stop = MakeRenderedStop(1000 + k, images, /*fiducials=*/true);
       if (stop.views.empty()) continue;
       const Deadline deadline = Deadline::Infinite();
       // Correspondence with the rig refined in between, as the pipeline does it.
