@@ -38,7 +38,9 @@ JoinWeights DefaultJoinWeights() {
   // once from the renderer's label images and once from the segmenter's output (main d2d0533's
   // pipeline): 63288 joins to a cane (2226 right) and 5160 to the trunk or head (3362 right),
   // gaps up to 15 cm; training AUC 0.957 (the previous weights 0.955 on the same joins). Used
-  // with ConnectOptions::min_join_probability 0.12 (docs/reconstruction.md section 6).
+  // with ConnectOptions::min_join_probability 0.12 (docs/reconstruction.md section 6). Retrained
+  // on the rig adopted the same day (sim/rig.h), weights reach the same AUC (0.960) and do no
+  // better in the bench, so these were kept.
   JoinWeights w;
   w.cane = {-1.0182, -0.0559, -1.5357, 0.0000, 0.0000, 0.5341, 0.5073, -0.4121, 0.4987,
             -0.6448, 0.1947, -0.1707, 1.9917, 1.7472, -0.0651, -0.4369, -1.5173};
