@@ -10,7 +10,8 @@
 // cubes become their bounding spheres, so the union of spheres contains the visual hull, which
 // contains the true head and trunk: enclosure is the property the arm's safety needs. The
 // largest connected part of the hull is this vine's head and trunk; the slabs where it is as
-// narrow as a trunk give the trunk axis, the wider top gives the head.
+// narrow as a trunk give the trunk axis, the wider top gives the head. Each side (left, right of
+// the trunk) of the head may start lower, where that side alone widens past the trunk's edge.
 //
 // A trinocular rig looks at the vine from nearly one direction (+-8 deg), so a visual hull is
 // long in depth (y). The head's depth is therefore bounded by its measured width and height,

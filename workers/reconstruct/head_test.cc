@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "workers/reconstruct/head.h"
 
+#include <algorithm>
+
 #include "core/model_metrics.h"
 #include "gtest/gtest.h"
 #include "sim/rig.h"
@@ -139,6 +141,43 @@ TEST(ReconstructHeadAndTrunk, RejectsMismatchedViews) {
                 .status()
                 .code(),
             absl::StatusCode::kInvalidArgument);
+}
+
+// One side of the head hangs below the slab that starts it (tuning stops 1253 and 1189 with the
+// rig that sees more: seen from slightly below, the lobe widens the hull on its side only, too
+// little for the slab to count as head, and 0.76 of the 1253 head was enclosed). A head wide on
+// both sides only near its top starts there; the lobe on the right must be enclosed too.
+TEST(ReconstructHeadAndTrunk, LobeHangingOnOneSideIsEnclosed) {
+  const RigCalibration rig = sim::MakeRig().value();
+  VineModel vine;
+  Cane trunk;
+  trunk.id = CaneId(1);
+  trunk.kind = CaneKind::kTrunk;
+  for (double z = 0.0; z <= 0.9001; z += 0.02) {
+    trunk.polyline.points.push_back({0.04, 0.78, z});
+    trunk.polyline.radii.push_back(0.035);
+  }
+  vine.canes.push_back(trunk);
+  // The lobe: 4.5 cm right of the trunk axis, from 0.78 m; the top: wide on both sides.
+  for (double z = 0.80; z <= 0.9001; z += 0.02)
+    vine.head.spheres.push_back({{0.10, 0.78, z}, 0.022});
+  for (double x : {-0.02, 0.04, 0.10}) vine.head.spheres.push_back({{x, 0.78, 0.925}, 0.025});
+  const std::vector<View2D> views = SyntheticViews(vine, rig);
+  const auto result =
+      ReconstructHeadAndTrunk(views, rig, WorkingVolume(), HeadOptions(), Deadline::Infinite());
+  ASSERT_TRUE(result.ok()) << result.status();
+  const ReconstructionMetrics m = HeadMetrics(result->head, vine.head);
+  EXPECT_GE(m.head_enclosed_fraction, 0.99);
+  EXPECT_LT(m.head_volume_ratio, 25.0);
+  // Only the lobe's side starts lower: left of the trunk, nothing below the head's top part
+  // and its margin is head.
+  double lowest_left = 1e9, lowest = 1e9;
+  for (const Sphere& s : result->head.spheres) {
+    lowest = std::min(lowest, s.center.z());
+    if (s.center.x() < -0.01) lowest_left = std::min(lowest_left, s.center.z());
+  }
+  EXPECT_LT(lowest, 0.80);
+  EXPECT_GT(lowest_left, 0.84);
 }
 
 }  // namespace
