@@ -449,8 +449,12 @@ absl::StatusOr<HeadAndTrunk> ReconstructHeadAndTrunk(const std::vector<View2D>& 
         kept[c].centre.x() + half <= trunk_mid_x   ? side_bottom_z[0]
         : kept[c].centre.x() - half >= trunk_mid_x ? side_bottom_z[1]
                                                    : std::min(side_bottom_z[0], side_bottom_z[1]);
-    in_head[c] = in_head[c] && kept[c].centre.z() + half >= std::min(head_bottom_z, bottom_z);
-    if (!in_head[c]) continue;
+    const bool above_bottom = kept[c].centre.z() + half >= head_bottom_z;
+    in_head[c] = in_head[c] && (above_bottom || kept[c].centre.z() + half >= bottom_z);
+    // The head's extent (depth hints, depth, hidden box) comes from the cubes above the global
+    // bottom only: a side's lower cubes are added, never move what the rest is judged by, so the
+    // head holds every sphere it held without the side bottoms.
+    if (!in_head[c] || !above_bottom) continue;
     any_head = true;
     head_min_x = std::min(head_min_x, kept[c].centre.x() - 0.5 * kept[c].side);
     head_max_x = std::max(head_max_x, kept[c].centre.x() + 0.5 * kept[c].side);
