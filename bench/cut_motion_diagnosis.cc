@@ -9,7 +9,7 @@
 // Obstacle classes: the cut cane beyond the free radius (distal: toward its tip, falls with the
 // cut; proximal: toward its base), another cane that the plan removes anyway ("goes": it or that
 // part of it falls with one of the plan's cuts, planned or not) or that stays, the trunk, the
-// head spheres, wires, posts, the platform (planes by name, camera spheres) and self-collision;
+// head spheres, wires, posts, the platform (planes by name, camera capsules) and self-collision;
 // for the secateur also the cut cane near the cut, which must lie between the open jaws.
 // A candidate's blockers are the classes touched at its cut configuration or along its stroke.
 // Per cut it prints the IK solutions over all slides and poses, those free at the cut, the strokes
@@ -149,7 +149,7 @@ std::vector<std::string> ObstacleClasses(const CollisionScene& scene, const Vine
         out.push_back("post");
         continue;
       case ObstacleKind::kPlatform:
-        out.push_back("camera_sphere");
+        out.push_back("camera");
         continue;
       case ObstacleKind::kCane:
         break;

@@ -80,11 +80,12 @@ struct PlanOptions {
     return o;
   }();
   // Cuts that no cut motion frees in a pass that plans none (the passes would end there: mostly
-  // canes at the head that block each other) are searched once more, sliding up to this far
-  // (> cut_motion.max_slide_m; 0: off), before they are given up. On tuning seeds 1110-1199 (cut
-  // motions alone, vb_cut_motion_bench) 48 of 53 such cuts are then planned (40 up to 0.15 m, 29
-  // of them within 0.12 m; 0.15 m until s14); the search runs only for those cuts, so it costs no
-  // measurable time (docs/plan.md, "The plan stage" and "Reach, again").
+  // canes at the head that block each other) are searched once more, sliding up to this far (meant
+  // to exceed cut_motion.max_slide_m, else it repeats the pass's search; 0: off), before they are
+  // given up. On tuning seeds 1110-1199 (cut motions alone, vb_cut_motion_bench) 48 of 53 such cuts
+  // are then planned (40 up to 0.15 m, 29 of them within 0.12 m; 0.15 m until s14); the search runs
+  // only for those cuts, so it costs no measurable time (docs/plan.md, "The plan stage" and "Reach,
+  // again").
   double last_resort_max_slide_m = 0.20;
   MarginOptions margins;
   // Paths between cuts, one query per cut to all its alternative motions. A path that

@@ -14,7 +14,8 @@
 //     the log-probabilities of the chosen joins is largest and the joins form a tree: a maximum
 //     spanning arborescence (Chu and Liu 1965; Edmonds 1967). "None" has probability
 //     `min_join_probability`; a cane with no parent, and every cane hanging on it, is left out
-//     (a neighbour's canes, ghosts): the arm must avoid them, but they are not pruned.
+//     (a neighbour's canes, ghosts). Left-out canes are not in the model at all: neither
+//     pruned nor avoided by the planner (like any cane the reconstruction misses).
 //     Optionally (off by default: no gain on the bench, docs/reconstruction.md section 6), a
 //     join to a cane that the child visibly goes on across (beyond the paper: the images show
 //     wood along the child's line continued past the parent, MeasureCrossing, from the caller's
@@ -38,6 +39,10 @@
 //     third, TaperTowardCentre): canes thin from base to tip, so the far piece of this vine's cane thins
 //     outward and a neighbour's cane, entering the view tip first, thins inward. Such a cane
 //     hangs by its thicker end only.
+//  6b. Neighbours' leaves dropped (beyond the paper): a cane in the tree without children that
+//     reaches beyond `keep_within_m` and is at least `drop_thickening_ratio` times as thick at
+//     its far third as at its third nearer the centre is a neighbour's cane hung by its tip on
+//     this vine's, and is left out (counted in ConnectSummary::dropped_thickening and unattached).
 // Thread-safe (pure).
 #pragma once
 
@@ -100,15 +105,15 @@ struct ConnectOptions {
   double drop_thickening_ratio = 1.1;  // a cane in the tree without children that reaches beyond
                                      // keep_within_m and is this much thicker at its end farther
                                      // from the vine's centre is a neighbour's and is dropped
-                                     // (the new rig shows more of them); 0 turns this off;
-                                     // otherwise > 1
+                                     // (the new rig shows more of them); 0 (or keep_within_m
+                                     // 0) turns this off; otherwise > 1
 
   absl::Status Validate() const;
 };
 
 struct ConnectSummary {
   int attached = 0;       // canes in the tree (trunk excluded)
-  int unattached = 0;     // canes left out: never near the tree
+  int unattached = 0;     // canes left out: no parent, or dropped as a neighbour's leaf
   int kept_near = 0;      // of the attached: canes kept by step 6 (near the vine, no likely join)
   int inside_trunk_or_head = 0;  // canes dropped as duplicates of the trunk or head
   int dropped_thickening = 0;  // canes dropped as neighbours' (drop_thickening_ratio)

@@ -54,9 +54,9 @@ struct CorrespondenceOptions {
   // Refine every fitted candidate in the other views before it is scored, so that its other-view
   // features (CheckInView) and its piece see the refined geometry: a right match whose
   // ill-conditioned pair puts it 1-2 cm deep is otherwise scored by a third view that sees it
-  // offset. Needs other_views.rounds > 0. Off (only the selected pieces are refined, after
-  // Gibbs sampling): on tuning seeds it raised recall but lowered precision on 1200-1299
-  // (docs/reconstruction.md, section 3, "Refining before scoring").
+  // offset. Does nothing with other_views.rounds 0 (the first pass sets that). Off (only the
+  // selected pieces are refined, after Gibbs sampling): on tuning seeds it raised recall but
+  // lowered precision on 1200-1299 (docs/reconstruction.md, section 3, "Refining before scoring").
   bool refine_before_scoring = false;
   double max_rms_px = 8.0;              // candidates fitting worse are dropped before scoring
   MatchClassifier classifier = DefaultMatchClassifier();  // candidate probabilities
