@@ -106,8 +106,10 @@ inline SimulatedStop MakeSimulatedStop(uint64_t seed, double break_px = 100.0) {
 // is not linked here). With `fiducials`, as the bench by default: the platform's fiducials are
 // drawn and listed in both rigs, found in each image (DetectFiducials) and cleared from the
 // classes (ClearFiducials), and each view carries its detections for the rig refinement.
-// Returns a stop without views if rendering or the 2D stage fails.
-inline SimulatedStop MakeRenderedStop(uint64_t seed, bool segment, bool fiducials = false) {
+// `rig_options` place the rig (the simulator's default rig unless given). Returns a stop
+// without views if rendering or the 2D stage fails.
+inline SimulatedStop MakeRenderedStop(uint64_t seed, bool segment, bool fiducials = false,
+                                      const sim::RigOptions& rig_options = {}) {
   SimulatedStop stop;
   const int vine = 1;
   const uint64_t noise_seed = seed * 1000003 + vine;  // as app/bench_command.cc
@@ -117,7 +119,7 @@ inline SimulatedStop MakeRenderedStop(uint64_t seed, bool segment, bool fiducial
     for (const Cane& cane : neighbour.canes) stop.drawn.canes.push_back(cane);
     for (const Sphere& s : neighbour.head.spheres) stop.drawn.head.spheres.push_back(s);
   }
-  stop.true_rig = sim::MakeRig().value();
+  stop.true_rig = sim::MakeRig(rig_options).value();
   if (fiducials) {
     stop.true_rig.fiducials = sim::PlatformFiducials().value();
     stop.scene.fiducials = stop.true_rig.fiducials;

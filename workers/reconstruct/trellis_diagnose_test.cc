@@ -501,40 +501,6 @@ TEST(TrellisLoss, DISABLED_RigSweep) {
 namespace vb::reconstruct {
 namespace {
 
-// MakeRenderedStop (correspondence_test_util.h) with the given rig in place of the default.
-SimulatedStop MakeRenderedStopWithRig(uint64_t seed, bool segment, bool fiducials,
-                                      const sim::RigOptions& rig_options) {
-  SimulatedStop stop;
-  const int vine = 1;
-  const uint64_t noise_seed = seed * 1000003 + vine;
-  stop.scene = sim::GenerateScene(seed, vine).value();
-  stop.true_rig = sim::MakeRig(rig_options).value();
-  if (fiducials) {
-    stop.true_rig.fiducials = sim::PlatformFiducials().value();
-    stop.scene.fiducials = stop.true_rig.fiducials;
-  }
-  stop.rig = sim::PerturbCalibration(stop.true_rig, 1.0, noise_seed ^ 0xCA11B4A7Eull);
-  for (size_t i = 0; i < stop.true_rig.cameras.size(); ++i) {
-    const auto view = sim::Render(stop.scene, stop.true_rig.cameras[i], sim::RenderOptions{},
-                                  noise_seed + 7919 * (i + 1));
-    if (!view.ok()) return {};
-    ClassImage classes = ClassesOfSimLabels(view->labels);
-    if (segment) classes = Segment(view->image, BuiltinSegmenterModel()).value();
-    std::vector<FiducialObservation> found;
-    if (fiducials) {
-      found = DetectFiducials(view->image, stop.rig.cameras[i], stop.rig.fiducials,
-                              FiducialDetectOptions{}).value();
-      ClearFiducials(found, stop.rig.cameras[i], stop.rig.fiducials, &classes);
-    }
-    auto view2d = ExtractStructure(classes, stop.rig.cameras[i], Structure2DOptions{},
-                                   Deadline::Infinite());
-    if (!view2d.ok()) return {};
-    view2d->fiducials = std::move(found);
-    stop.views.push_back(std::move(*view2d));
-  }
-  return stop;
-}
-
 double DistanceToCanes(const Eigen::Vector3d& p, const std::vector<Cane>& canes,
                        Eigen::Vector3d* nearest = nullptr) {
   double best = 1e9;
@@ -589,7 +555,7 @@ TEST(TrellisLoss, DISABLED_FalseCaneLength) {
   ReconstructOptions options;
   for (int k = 0; k < count; ++k) {
     const uint64_t seed = first + k;
-    const SimulatedStop stop = MakeRenderedStopWithRig(seed, images, fiducials, rig_options);
+    const SimulatedStop stop = MakeRenderedStop(seed, images, fiducials, rig_options);
     ASSERT_FALSE(stop.views.empty());
     const auto result = ReconstructFromViews(stop.views, stop.rig, options, Deadline::Infinite());
     ASSERT_TRUE(result.ok()) << result.status();
@@ -750,7 +716,7 @@ TEST(TrellisLoss, DISABLED_HeadMisses) {
   }
   for (int k = 0; k < count; ++k) {
     const uint64_t seed = first + k;
-    const SimulatedStop stop = MakeRenderedStopWithRig(seed, images, fiducials, rig_options);
+    const SimulatedStop stop = MakeRenderedStop(seed, images, fiducials, rig_options);
     ASSERT_FALSE(stop.views.empty());
     ReconstructOptions options;
     if (const char* v = std::getenv("VB_HEAD_OVERLAP")) options.head.head_overlap_m = std::atof(v);
