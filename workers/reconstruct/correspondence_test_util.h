@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/deadline.h"
+#include "core/geometry.h"
 #include "sim/fiducials.h"
 #include "sim/renderer.h"
 #include "sim/rig.h"
@@ -151,6 +152,23 @@ inline SimulatedStop MakeRenderedStop(uint64_t seed, bool segment, bool fiducial
     stop.views.push_back(std::move(*view2d));
   }
   return stop;
+}
+
+// Distance from p to the nearest of `wires` (polylines); `error`, if given, gets the vector
+// from p to that nearest point.
+inline double DistanceToWires(const Eigen::Vector3d& p, const std::vector<Wire>& wires,
+                       Eigen::Vector3d* error = nullptr) {
+  double best = 1e9;
+  for (const Wire& w : wires)
+    for (size_t i = 0; i + 1 < w.points.size(); ++i) {
+      double t = 0;
+      const double d = PointSegmentDistance(p, w.points[i], w.points[i + 1], &t);
+      if (d < best) {
+        best = d;
+        if (error) *error = w.points[i] + t * (w.points[i + 1] - w.points[i]) - p;
+      }
+    }
+  return best;
 }
 
 // Points of a piece, sampled along its polyline every 2 mm.
