@@ -21,6 +21,20 @@
 namespace vb::reconstruct {
 namespace {
 
+// The default rig, or with VB_OLD_RIG=1 the default rig before 2026-11-22 (at the vine's
+// distance 0.8 m, triangle side 0.22 m, aimed at its own height).
+sim::RigOptions RigOptionsFromEnv() {
+  sim::RigOptions rig_options;
+  const char* old_rig = std::getenv("VB_OLD_RIG");
+  if (old_rig != nullptr && std::string(old_rig) == "1") {
+    rig_options.rig_y_m = 0.0;
+    rig_options.distance_to_vine_plane_m = 0.8;
+    rig_options.baseline_m = 0.22;
+    rig_options.aim_below_rig_m = 0.0;
+  }
+  return rig_options;
+}
+
 double DistanceToCanes(const Eigen::Vector3d& p, const std::vector<Cane>& canes,
                        Eigen::Vector3d* nearest = nullptr) {
   double best = 1e9;
@@ -50,14 +64,7 @@ double DistanceToCanes(const Eigen::Vector3d& p, const std::vector<Cane>& canes,
 TEST(TrellisLoss, DISABLED_FalseCaneLength) {
   const auto [first, count, images, fiducials] = ReportStopsFromEnv(1100, 20, true);
   const bool verbose = std::getenv("VB_VERBOSE") != nullptr;
-  sim::RigOptions rig_options;
-  const char* old_rig = std::getenv("VB_OLD_RIG");
-  if (old_rig != nullptr && std::string(old_rig) == "1") {
-    rig_options.rig_y_m = 0.0;
-    rig_options.distance_to_vine_plane_m = 0.8;
-    rig_options.baseline_m = 0.22;
-    rig_options.aim_below_rig_m = 0.0;
-  }
+  const sim::RigOptions rig_options = RigOptionsFromEnv();
   const char* kNames[] = {"neighbour's cane", "mis-placed (10-30 mm from a true cane)",
                           "along a wire", "on a post", "near the head", "ghost"};
   double total = 0, right = 0, by_class[6] = {0, 0, 0, 0, 0, 0}, far_x[6] = {0, 0, 0, 0, 0, 0};
@@ -196,7 +203,7 @@ TEST(TrellisLoss, DISABLED_FalseCaneLength) {
   }
   std::printf("stops %d from %llu (%s, %s rig): model cane length %.1f m, within 10 mm %.4f\n",
               count, static_cast<unsigned long long>(first), images ? "images" : "labels",
-              old_rig != nullptr && std::string(old_rig) == "1" ? "old" : "default", total,
+              rig_options.baseline_m == sim::RigOptions().baseline_m ? "default" : "old", total,
               right / std::max(total, 1e-9));
   for (int c = 0; c < 6; ++c)
     std::printf("  %-40s %.4f (beyond |x| 0.8 m: %.4f)\n", kNames[c], by_class[c] / total,
@@ -226,14 +233,7 @@ namespace {
 // VB_HEAD_OVERLAP (HeadOptions::head_overlap_m).
 TEST(TrellisLoss, DISABLED_HeadMisses) {
   const auto [first, count, images, fiducials] = ReportStopsFromEnv(1189, 1, true);
-  sim::RigOptions rig_options;
-  const char* old_rig = std::getenv("VB_OLD_RIG");
-  if (old_rig != nullptr && std::string(old_rig) == "1") {
-    rig_options.rig_y_m = 0.0;
-    rig_options.distance_to_vine_plane_m = 0.8;
-    rig_options.baseline_m = 0.22;
-    rig_options.aim_below_rig_m = 0.0;
-  }
+  const sim::RigOptions rig_options = RigOptionsFromEnv();
   for (int k = 0; k < count; ++k) {
     const uint64_t seed = first + k;
     const SimulatedStop stop = MakeRenderedStop(seed, images, fiducials, rig_options);
