@@ -21,6 +21,18 @@ ReconstructionMetrics HeadMetrics(const HeadModel& reconstructed, const HeadMode
   return EvaluateReconstruction(model, true_model).value();
 }
 
+// A vertical trunk of the given radius at (x, y), sampled every step_m from the ground to top_z.
+Cane VerticalTrunk(double x, double y, double top_z, double step_m, double radius_m) {
+  Cane trunk;
+  trunk.id = CaneId(1);
+  trunk.kind = CaneKind::kTrunk;
+  for (double z = 0.0; z <= top_z + 1e-4; z += step_m) {
+    trunk.polyline.points.push_back({x, y, z});
+    trunk.polyline.radii.push_back(radius_m);
+  }
+  return trunk;
+}
+
 // Enclosure of the true head by the carved spheres, on simulated vines drawn without rendering
 // (so any miss is the carving's, not the segmentation's). Seeds from the development range.
 TEST(ReconstructHeadAndTrunk, EnclosesTheTrueHeadAndFindsTheTrunk) {
@@ -54,14 +66,7 @@ TEST(ReconstructHeadAndTrunk, EnclosesTheTrueHeadAndFindsTheTrunk) {
 TEST(ReconstructHeadAndTrunk, WeakWideningStillEnclosesATallHead) {
   const RigCalibration rig = sim::MakeRig().value();
   VineModel vine;
-  Cane trunk;
-  trunk.id = CaneId(1);
-  trunk.kind = CaneKind::kTrunk;
-  for (double z = 0.0; z <= 0.8201; z += 0.02) {
-    trunk.polyline.points.push_back({0.0, 0.8, z});
-    trunk.polyline.radii.push_back(0.035);
-  }
-  vine.canes.push_back(trunk);
+  vine.canes.push_back(VerticalTrunk(0.0, 0.8, 0.82, 0.02, 0.035));
   for (double z = 0.84; z <= 0.9801; z += 0.02)
     for (double x : {-0.02, 0.0, 0.02}) vine.head.spheres.push_back({{x, 0.8, z}, 0.035});
   const std::vector<View2D> views = SyntheticViews(vine, rig);
@@ -79,14 +84,7 @@ TEST(ReconstructHeadAndTrunk, WeakWideningStillEnclosesATallHead) {
 TEST(ReconstructHeadAndTrunk, PostBesideTheTrunkStillEnclosesTheHead) {
   const RigCalibration rig = sim::MakeRig().value();
   VineModel vine;
-  Cane trunk;
-  trunk.id = CaneId(1);
-  trunk.kind = CaneKind::kTrunk;
-  for (double z = 0.0; z <= 0.9001; z += 0.05) {
-    trunk.polyline.points.push_back({-0.072, 0.825, z});
-    trunk.polyline.radii.push_back(0.015);
-  }
-  vine.canes.push_back(trunk);
+  vine.canes.push_back(VerticalTrunk(-0.072, 0.825, 0.90, 0.05, 0.015));
   for (const Eigen::Vector4d& s :
        {Eigen::Vector4d(-0.069, 0.823, 0.902, 0.034), Eigen::Vector4d(-0.093, 0.82, 0.906, 0.021),
         Eigen::Vector4d(-0.108, 0.814, 0.917, 0.02), Eigen::Vector4d(-0.044, 0.808, 0.916, 0.02),
@@ -150,14 +148,7 @@ TEST(ReconstructHeadAndTrunk, RejectsMismatchedViews) {
 TEST(ReconstructHeadAndTrunk, LobeHangingOnOneSideIsEnclosed) {
   const RigCalibration rig = sim::MakeRig().value();
   VineModel vine;
-  Cane trunk;
-  trunk.id = CaneId(1);
-  trunk.kind = CaneKind::kTrunk;
-  for (double z = 0.0; z <= 0.9001; z += 0.02) {
-    trunk.polyline.points.push_back({0.04, 0.78, z});
-    trunk.polyline.radii.push_back(0.035);
-  }
-  vine.canes.push_back(trunk);
+  vine.canes.push_back(VerticalTrunk(0.04, 0.78, 0.90, 0.02, 0.035));
   // The lobe: 4.5 cm right of the trunk axis, from 0.78 m; the top: wide on both sides.
   for (double z = 0.80; z <= 0.9001; z += 0.02)
     vine.head.spheres.push_back({{0.10, 0.78, z}, 0.022});
