@@ -171,6 +171,17 @@ inline double DistanceToWires(const Eigen::Vector3d& p, const std::vector<Wire>&
   return best;
 }
 
+// Whether `view` shows foreground within `r` px (a square) of pixel (x, y), inside the image.
+inline bool ForegroundWithin(const View2D& view, int x, int y, int r) {
+  for (int dy = -r; dy <= r; ++dy)
+    for (int dx = -r; dx <= r; ++dx) {
+      const int xx = x + dx, yy = y + dy;
+      if (xx < 0 || yy < 0 || xx >= view.width || yy >= view.height) continue;
+      if (view.IsForeground(xx, yy)) return true;
+    }
+  return false;
+}
+
 // Points of a piece, sampled along its polyline every 2 mm.
 inline std::vector<Eigen::Vector3d> PiecePoints(const Piece3D& piece) { return piece.polyline.Sample(0.002); }
 

@@ -181,14 +181,7 @@ TEST(MatchLoss, DISABLED_Report) {
           const View2D& view = stop.views[v];
           const int x = static_cast<int>(std::lround(uv->x()));
           const int y = static_cast<int>(std::lround(uv->y()));
-          bool f = false;
-          for (int dy = -2; dy <= 2 && !f; ++dy)
-            for (int dx = -2; dx <= 2 && !f; ++dx) {
-              const int xx = x + dx, yy = y + dy;
-              if (xx < 0 || yy < 0 || xx >= view.width || yy >= view.height) continue;
-              f = view.IsForeground(xx, yy);
-            }
-          if (!f) continue;
+          if (!ForegroundWithin(view, x, y, 2)) continue;
           ++fg;
           if (x < 0 || y < 0 || x >= view.width || y >= view.height) continue;
           seg[v] = seg_at[v][static_cast<size_t>(y) * view.width + x];

@@ -112,14 +112,7 @@ TEST(SkeletonLoss, DISABLED_Report) {
           const View2D& view = stop.views[v];
           const int x = static_cast<int>(std::lround(uv->x()));
           const int y = static_cast<int>(std::lround(uv->y()));
-          bool f = false;
-          for (int dy = -2; dy <= 2 && !f; ++dy)
-            for (int dx = -2; dx <= 2 && !f; ++dx) {
-              const int xx = x + dx, yy = y + dy;
-              if (xx < 0 || yy < 0 || xx >= view.width || yy >= view.height) continue;
-              f = view.IsForeground(xx, yy);
-            }
-          if (!f) continue;
+          if (!ForegroundWithin(view, x, y, 2)) continue;
           ++fg;
           fg_view[v] = 1;
           bool s = false;
