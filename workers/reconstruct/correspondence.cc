@@ -108,6 +108,18 @@ double Support(const std::vector<Eigen::Vector3d>& points, const std::vector<Vie
   return static_cast<double>(supported) / points.size();
 }
 
+// The views outside the pair (a, b) that show anything, for RefineInOtherViews.
+std::vector<OtherView> OtherViewsOf(int a, int b, const std::vector<View2D>& views,
+                                    const std::vector<ViewSamples>& samples,
+                                    const RigCalibration& rig) {
+  std::vector<OtherView> others;
+  for (int c = 0; c < static_cast<int>(views.size()); ++c) {
+    if (c == a || c == b || IsEmptyView(views[c])) continue;
+    others.push_back({&samples[c], &rig.cameras[c]});
+  }
+  return others;
+}
+
 }  // namespace
 
 absl::Status CorrespondenceOptions::Validate() const {
@@ -206,11 +218,7 @@ absl::StatusOr<std::vector<ScoredCandidate>> ScoreCandidates(
       std::vector<MatchCandidate> candidates =
           FindCandidates(a, samples[a], rig.cameras[a], b, samples[b], rig.cameras[b],
                          candidate_options);
-      std::vector<OtherView> other_views;
-      for (int c = 0; c < n; ++c) {
-        if (c == a || c == b || IsEmptyView(views[c])) continue;
-        other_views.push_back({&samples[c], &rig.cameras[c]});
-      }
+      const std::vector<OtherView> other_views = OtherViewsOf(a, b, views, samples, rig);
       for (size_t i = 0; i < candidates.size(); ++i) {
         if (i % 64 == 0) VB_RETURN_IF_ERROR(deadline.Check("correspondence"));
         ScoredCandidate s;
@@ -305,14 +313,10 @@ absl::StatusOr<std::vector<Piece3D>> MatchSegments(const std::vector<View2D>& vi
   for (int i : kept) {
     ScoredCandidate& c = candidates[i];
     if (options.other_views.rounds > 0 && !c.refined) {
-      std::vector<OtherView> others;
-      for (int v = 0; v < static_cast<int>(views.size()); ++v) {
-        if (v == c.candidate.view_a || v == c.candidate.view_b || IsEmptyView(views[v])) continue;
-        others.push_back({&samples[v], &rig.cameras[v]});
-      }
       RefineInOtherViews(c.candidate, rig.cameras[c.candidate.view_a],
-                         rig.cameras[c.candidate.view_b], others, options.fit,
-                         options.other_views, &c.fit);
+                         rig.cameras[c.candidate.view_b],
+                         OtherViewsOf(c.candidate.view_a, c.candidate.view_b, views, samples, rig),
+                         options.fit, options.other_views, &c.fit);
     }
     Piece3D piece;
     piece.polyline.points = c.fit.control_points;
