@@ -132,6 +132,14 @@ double MeanRadius(const Polyline3& line, double from, double to) {
   return sum / n;
 }
 
+// Whether every point of the cane lies within `within_m` of the vine's centre along the row:
+// what keeping near the vine takes as this vine's, and what dropping a far leaf does not.
+bool WhollyWithin(const Polyline3& cane, double centre_x, double within_m) {
+  return std::all_of(cane.points.begin(), cane.points.end(), [&](const Eigen::Vector3d& p) {
+    return std::abs(p.x() - centre_x) <= within_m;
+  });
+}
+
 }  // namespace
 
 double TaperTowardCentre(const Polyline3& cane, double centre_x) {
@@ -473,10 +481,7 @@ absl::StatusOr<VineModel> BuildTree(const PreparedCanes& prepared_in,
     std::vector<char> near(n, 0), inner_is_last(n, 0);
     for (int i = 0; i < n; ++i) {
       if (kept[i] != 0 || canes[i].Length() < options.keep_min_length_m) continue;
-      near[i] = std::all_of(canes[i].points.begin(), canes[i].points.end(),
-                            [&](const Eigen::Vector3d& p) {
-                              return std::abs(p.x() - centre_x) <= options.keep_within_m;
-                            });
+      near[i] = WhollyWithin(canes[i], centre_x, options.keep_within_m);
       if (!near[i] && options.keep_taper_ratio > 0.0 &&
           TaperTowardCentre(canes[i], centre_x) >= options.keep_taper_ratio) {
         near[i] = 2;
@@ -513,10 +518,7 @@ absl::StatusOr<VineModel> BuildTree(const PreparedCanes& prepared_in,
       if (kept[i] == 1 && parent[i] >= 0) has_child[parent[i]] = 1;
     for (int i = 0; i < n; ++i) {
       if (kept[i] != 1 || has_child[i]) continue;
-      const bool far = std::any_of(canes[i].points.begin(), canes[i].points.end(),
-                                   [&](const Eigen::Vector3d& p) {
-                                     return std::abs(p.x() - centre_x) > options.keep_within_m;
-                                   });
+      const bool far = !WhollyWithin(canes[i], centre_x, options.keep_within_m);
       if (far && TaperTowardCentre(canes[i], centre_x) * options.drop_thickening_ratio < 1.0) {
         kept[i] = 0;
         ++sum.dropped_thickening;
