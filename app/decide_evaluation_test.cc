@@ -1,8 +1,11 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "app/decide_evaluation.h"
 
+#include <unistd.h>
+
 #include <filesystem>
 #include <fstream>
+#include <string>
 
 #include "gtest/gtest.h"
 #include "sim/vine_generator.h"
@@ -47,7 +50,8 @@ TEST(PolicyAndWeightFiles, DefaultsWhenNoPathAndErrorsNameTheFile) {
   auto weights = WeightsOrDefault("");
   ASSERT_TRUE(weights.ok());
   EXPECT_EQ(weights->w, decide::DefaultSchemeWeights().w);
-  const std::string path = ::testing::TempDir() + "/vinebot_bad_weights.json";
+  const std::string path = ::testing::TempDir() + "/vinebot_bad_weights_" +
+                           std::to_string(getpid()) + ".json";
   std::ofstream(path) << R"({"version": 1, "weights": {"no_such_feature": 1}})";
   weights = WeightsOrDefault(path);
   ASSERT_FALSE(weights.ok());

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "core/cut_plan.h"
 
+#include <unistd.h>
+
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -103,7 +105,8 @@ TEST(CutPlan, RoundTripsExactly) {
 }
 
 TEST(CutPlan, FileRoundTripAndPathInErrors) {
-  const std::string path = testing::TempDir() + "/cut_plan_test.json";
+  const std::string path = testing::TempDir() + "/cut_plan_test_" +
+                           std::to_string(getpid()) + ".json";
   ASSERT_TRUE(WriteCutPlan(path, SamplePlan()).ok());
   auto back = ReadCutPlan(path);
   ASSERT_TRUE(back.ok()) << back.status();

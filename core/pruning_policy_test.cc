@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "core/pruning_policy.h"
 
+#include <unistd.h>
+
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -171,7 +173,8 @@ TEST(PruningPolicyJson, RejectsUnknownFieldsWrongTypesAndBadValues) {
 }
 
 TEST(PruningPolicyJson, ReadPrefixesErrorsWithThePath) {
-  const std::string path = testing::TempDir() + "/policy_test.json";
+  const std::string path =
+      testing::TempDir() + "/policy_test_" + std::to_string(getpid()) + ".json";
   {
     std::ofstream out(path);
     out << R"({"canes_to_keep": 3, "spur_length_m": 0.08})";

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "core/trajectory.h"
 
+#include <unistd.h>
+
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -88,7 +90,8 @@ TEST(Trajectory, RoundTripsThroughJson) {
 }
 
 TEST(Trajectory, FileRoundTripAndPathInErrors) {
-  const std::string path = testing::TempDir() + "/trajectory_test.json";
+  const std::string path = testing::TempDir() + "/trajectory_test_" +
+                           std::to_string(getpid()) + ".json";
   ASSERT_TRUE(WriteTrajectory(path, SampleTrajectory()).ok());
   auto back = ReadTrajectory(path);
   ASSERT_TRUE(back.ok()) << back.status();

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "core/vine_model_json.h"
 
+#include <unistd.h>
+
 #include <cstdio>
 #include <string>
 
@@ -60,7 +62,8 @@ TEST(VineModelJson, RoundTripsExactly) {
 }
 
 TEST(VineModelJson, FileRoundTripAndMissingFile) {
-  const std::string path = ::testing::TempDir() + "/vine_model_json_test.json";
+  const std::string path = ::testing::TempDir() + "/vine_model_json_test_" +
+                           std::to_string(getpid()) + ".json";
   ASSERT_TRUE(WriteVineModel(path, SmallVine()).ok());
   auto back = ReadVineModel(path);
   ASSERT_TRUE(back.ok()) << back.status();
@@ -133,7 +136,8 @@ TEST(VineModelJson, EmptyModelIsValid) {
 }
 
 TEST(ReadJsonFile, RejectsNonJsonNamingTheFile) {
-  const std::string path = ::testing::TempDir() + "/not_json.json";
+  const std::string path =
+      ::testing::TempDir() + "/not_json_" + std::to_string(getpid()) + ".json";
   FILE* f = std::fopen(path.c_str(), "w");
   std::fputs("{\"format\": ", f);
   std::fclose(f);

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // End-to-end tests of the vinebot binary: its files, its exit codes and its error messages.
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <array>
@@ -43,7 +44,8 @@ RunResult Vinebot(const std::string& args) {
 }
 
 std::string FreshDir(const std::string& name) {
-  const std::string dir = ::testing::TempDir() + "/vinebot_cli_" + name;
+  const std::string dir = ::testing::TempDir() + "/vinebot_cli_" + name + "_" +
+                          std::to_string(getpid());
   std::filesystem::remove_all(dir);
   return dir;
 }

@@ -1,9 +1,12 @@
 // SPDX-License-Identifier: Apache-2.0
 // The simulator's images agree with its ground truth and its calibration: ground-truth cane
 // points projected through calibration.yaml land on pixels the renderer drew as that cane.
+#include <unistd.h>
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <string>
 
 #include "core/geometry.h"
 #include "core/vine_model_json.h"
@@ -167,7 +170,8 @@ TEST(SimCapture, BundleRoundTripsThroughImport) {
   options.render.pixel_format = PixelFormat::kBayerRg8;
   auto capture = capture::RenderSimCapture(*scene, options, 5);
   ASSERT_TRUE(capture.ok());
-  const std::string dir = ::testing::TempDir() + "/sim_capture_round_trip";
+  const std::string dir = ::testing::TempDir() + "/sim_capture_round_trip_" +
+                          std::to_string(getpid());
   std::filesystem::remove_all(dir);
   ASSERT_TRUE(capture::WriteSimCapture(dir, *capture).ok());
   auto bundle = capture::ReadBundle(dir);

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "workers/decide/labelled_examples.h"
 
+#include <unistd.h>
+
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -22,7 +24,8 @@ class LabelledExamplesTest : public ::testing::Test {
   void SetUp() override {
     dir_ = (fs::path(::testing::TempDir()) /
             (std::string("vb_labels_") +
-             ::testing::UnitTest::GetInstance()->current_test_info()->name()))
+             ::testing::UnitTest::GetInstance()->current_test_info()->name() +
+             "_" + std::to_string(getpid())))
                .string();
     fs::remove_all(dir_);
   }

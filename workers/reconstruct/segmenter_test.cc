@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "workers/reconstruct/segmenter.h"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cstdio>
 #include <random>
@@ -22,7 +24,8 @@ namespace {
 using ::testing::HasSubstr;
 
 std::string TempPath(const std::string& name) {
-  return std::string(::testing::TempDir()) + "/segmenter_test_" + name;
+  return std::string(::testing::TempDir()) + "/segmenter_test_" + name + "_" +
+         std::to_string(getpid());
 }
 
 sim::RenderedView MustRender(const sim::Scene& scene, const CameraCalibration& camera,
