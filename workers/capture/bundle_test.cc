@@ -1,170 +1,42 @@
 // SPDX-License-Identifier: Apache-2.0
+// Capture bundles on disk: round trips, PNG files, every rejected file, demosaicing.
 #include "workers/capture/bundle.h"
 
-#include <unistd.h>
-
-#include <cmath>
+#include <array>
 #include <cstdint>
 #include <filesystem>
-#include <fstream>
 #include <ostream>
 #include <random>
-#include <sstream>
 #include <string>
 #include <vector>
 
-#include "absl/strings/str_cat.h"
-#include "gmock/gmock.h"
-#include "gtest/gtest.h"
 #include "opencv2/core.hpp"
 #include "opencv2/imgcodecs.hpp"
+
+#include "gmock/gmock.h"
+#include "gtest/gtest.h"
+#include "workers/capture/bundle_test_util.h"
 
 namespace vb::capture {
 namespace {
 
 using ::testing::AllOf;
 using ::testing::HasSubstr;
+using bundle_test_util::kWidth;
+using bundle_test_util::kHeight;
+using bundle_test_util::Message;
+using bundle_test_util::BundleFilesTest;
+using bundle_test_util::BundlePngTest;
+using bundle_test_util::ReadText;
+using bundle_test_util::WriteText;
+using bundle_test_util::MakeImage;
+using bundle_test_util::MakeBundle;
+using bundle_test_util::ExpectSameCalibration;
+using bundle_test_util::YamlMatrix;
+using bundle_test_util::YamlCamera;
+using bundle_test_util::ThreeYamlCameras;
+using bundle_test_util::BundleTest;
 
-constexpr int kWidth = 64;
-constexpr int kHeight = 48;
-
-std::string Message(const absl::Status& s) { return std::string(s.message()); }
-
-// A fresh directory per test, removed afterwards.
-class TempDirTest : public ::testing::Test {
- protected:
-  void SetUp() override {
-    const ::testing::TestInfo* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = std::filesystem::path(::testing::TempDir()) /
-           absl::StrCat("vb_bundle_", info->test_suite_name(), "_", info->name(), "_", getpid());
-    std::filesystem::remove_all(dir_);
-    std::filesystem::create_directories(dir_);
-  }
-  void TearDown() override {
-    std::error_code ec;
-    std::filesystem::remove_all(dir_, ec);
-  }
-  std::string Path(const std::string& name) const { return (dir_ / name).string(); }
-  std::string BundleDir() const { return Path("bundle"); }
-  std::string BundleFile(const std::string& name) const { return (dir_ / "bundle" / name).string(); }
-
-  std::filesystem::path dir_;
-};
-
-using BundleFilesTest = TempDirTest;     // bundle-level behaviour without a prepared bundle
-using BundlePngTest = TempDirTest;       // single PNG files
-using CalibrationYamlTest = TempDirTest;  // calibration.yaml alone
-
-std::string ReadText(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-void WriteText(const std::string& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out << text;
-}
-
-CameraCalibration MakeCalibration(const std::string& name, int index) {
-  CameraCalibration c;
-  c.name = name;
-  c.image_width = kWidth;
-  c.image_height = kHeight;
-  c.camera_matrix << 71.123456789012345, 0.0, 31.7 + index, 0.0, 70.98765432101234, 23.9, 0, 0, 1;
-  c.distortion = {-0.123456789, 0.0456789, 1.5e-4, -2.5e-4, -0.0012345};
-  c.rotation_camera_from_platform =
-      Eigen::AngleAxisd(0.1 * (index + 1), Eigen::Vector3d(0.3, -1.0, 0.2).normalized())
-          .toRotationMatrix();
-  c.translation_camera_from_platform = Eigen::Vector3d(-0.12 * index, 0.013, 1.234567890123);
-  return c;
-}
-
-Image MakeImage(PixelFormat format, int width, int height, uint32_t seed) {
-  Image image(width, height, format);
-  std::mt19937 rng(seed);
-  std::uniform_int_distribution<int> byte(0, 255);
-  for (uint8_t& v : image.data) v = static_cast<uint8_t>(byte(rng));
-  return image;
-}
-
-CaptureBundle MakeBundle() {
-  CaptureBundle b;
-  b.metadata.row = "row-07";
-  b.metadata.vine_position_m = 12.4;
-  b.metadata.captured_at = "2026-07-14T09:12:03Z";
-  const PixelFormat formats[] = {PixelFormat::kRgb8, PixelFormat::kBayerRg8, PixelFormat::kMono8};
-  for (int i = 0; i < 3; ++i) {
-    const std::string name = absl::StrCat("cam", i);
-    b.metadata.cameras.push_back({name, name + ".png", formats[i]});
-    b.calibration.cameras.push_back(MakeCalibration(name, i));
-    b.images.push_back(MakeImage(formats[i], kWidth, kHeight, 100 + i));
-  }
-  return b;
-}
-
-void ExpectSameCalibration(const CameraCalibration& a, const CameraCalibration& b) {
-  EXPECT_EQ(a.name, b.name);
-  EXPECT_EQ(a.image_width, b.image_width);
-  EXPECT_EQ(a.image_height, b.image_height);
-  EXPECT_LE((a.camera_matrix - b.camera_matrix).cwiseAbs().maxCoeff(), 1e-12);
-  for (int i = 0; i < 5; ++i) EXPECT_NEAR(a.distortion[i], b.distortion[i], 1e-12) << i;
-  EXPECT_LE((a.rotation_camera_from_platform - b.rotation_camera_from_platform).cwiseAbs().maxCoeff(),
-            1e-12);
-  EXPECT_LE(
-      (a.translation_camera_from_platform - b.translation_camera_from_platform).cwiseAbs().maxCoeff(),
-      1e-12);
-}
-
-// --- calibration.yaml written by hand, one field at a time replaceable ---
-
-std::string YamlMatrix(int rows, int cols, const std::string& data) {
-  return absl::StrCat("!!opencv-matrix\n      rows: ", rows, "\n      cols: ", cols,
-                      "\n      dt: d\n      data: [ ", data, " ]\n");
-}
-
-struct YamlCamera {
-  std::string name = "cam0";
-  std::string width = "64";
-  std::string height = "48";
-  std::string camera_matrix = YamlMatrix(3, 3, "70., 0., 32., 0., 70., 24., 0., 0., 1.");
-  std::string distortion = YamlMatrix(1, 5, "0., 0., 0., 0., 0.");
-  std::string rotation = YamlMatrix(3, 3, "1., 0., 0., 0., 1., 0., 0., 0., 1.");
-  std::string translation = YamlMatrix(3, 1, "0., 0., 1.");
-};
-
-std::string YamlText(const std::vector<YamlCamera>& cameras) {
-  std::string text = "%YAML:1.0\n---\ncameras:\n";
-  for (const YamlCamera& c : cameras) {
-    absl::StrAppend(&text, "   - name: ", c.name, "\n     image_width: ", c.width,
-                    "\n     image_height: ", c.height, "\n     camera_matrix: ", c.camera_matrix,
-                    "     distortion_coefficients: ", c.distortion,
-                    "     rotation_camera_from_platform: ", c.rotation,
-                    "     translation_camera_from_platform: ", c.translation);
-  }
-  return text;
-}
-
-std::vector<YamlCamera> ThreeYamlCameras() {
-  std::vector<YamlCamera> cams(3);
-  for (int i = 0; i < 3; ++i) cams[i].name = absl::StrCat("cam", i);
-  return cams;
-}
-
-// Writes the standard bundle; tests then break one thing in it.
-class BundleTest : public TempDirTest {
- protected:
-  void SetUp() override {
-    TempDirTest::SetUp();
-    ASSERT_TRUE(WriteBundle(BundleDir(), MakeBundle()).ok());
-  }
-  // Replaces calibration.yaml with hand-written cameras.
-  void WriteYaml(const std::vector<YamlCamera>& cameras) {
-    WriteText(BundleFile("calibration.yaml"), YamlText(cameras));
-  }
-  absl::Status ReadStatus() { return ReadBundle(BundleDir()).status(); }
-};
 
 TEST_F(BundleTest, RoundTripsThreeCameraBundle) {
   const CaptureBundle original = MakeBundle();
@@ -365,161 +237,6 @@ TEST_F(BundleTest, UnknownPixelFormatRejects) {
                                 HasSubstr("pixel_format"), HasSubstr("bayer_xy16")));
 }
 
-TEST_F(BundleTest, CameraWithoutCalibrationRejects) {
-  std::vector<YamlCamera> cams = ThreeYamlCameras();
-  cams.pop_back();  // cam2 is captured but not calibrated
-  WriteYaml(cams);
-  const absl::Status s = ReadStatus();
-  EXPECT_EQ(s.code(), absl::StatusCode::kInvalidArgument);
-  EXPECT_THAT(Message(s), AllOf(HasSubstr("'cam2'"), HasSubstr("calibration.yaml")));
-}
-
-TEST_F(BundleTest, HandWrittenCalibrationIsAccepted) {
-  // Guards the rejection tests below: only the one field they change is wrong.
-  WriteYaml(ThreeYamlCameras());
-  EXPECT_TRUE(ReadStatus().ok()) << ReadStatus();
-}
-
-TEST_F(BundleTest, NonFiniteCameraMatrixRejects) {
-  std::vector<YamlCamera> cams = ThreeYamlCameras();
-  cams[1].camera_matrix = YamlMatrix(3, 3, "70., 0., .nan, 0., 70., 24., 0., 0., 1.");
-  WriteYaml(cams);
-  const absl::Status s = ReadStatus();
-  EXPECT_EQ(s.code(), absl::StatusCode::kInvalidArgument);
-  EXPECT_THAT(Message(s), AllOf(HasSubstr("calibration.yaml"), HasSubstr("cam1"),
-                                HasSubstr("camera_matrix"), HasSubstr("not finite")));
-}
-
-TEST_F(BundleTest, SingularCameraMatrixRejects) {
-  std::vector<YamlCamera> cams = ThreeYamlCameras();
-  cams[0].camera_matrix = YamlMatrix(3, 3, "0., 0., 32., 0., 70., 24., 0., 0., 1.");
-  WriteYaml(cams);
-  const absl::Status s = ReadStatus();
-  EXPECT_EQ(s.code(), absl::StatusCode::kInvalidArgument);
-  EXPECT_THAT(Message(s), AllOf(HasSubstr("calibration.yaml"), HasSubstr("cam0"),
-                                HasSubstr("camera_matrix"), HasSubstr("singular")));
-}
-
-TEST_F(BundleTest, NonOrthonormalRotationRejects) {
-  std::vector<YamlCamera> cams = ThreeYamlCameras();
-  cams[2].rotation = YamlMatrix(3, 3, "1., 0., 0., 0., 1., 0.01, 0., 0., 1.");
-  WriteYaml(cams);
-  const absl::Status s = ReadStatus();
-  EXPECT_EQ(s.code(), absl::StatusCode::kInvalidArgument);
-  EXPECT_THAT(Message(s), AllOf(HasSubstr("calibration.yaml"), HasSubstr("cam2"),
-                                HasSubstr("rotation_camera_from_platform")));
-}
-
-TEST_F(BundleTest, ReflectionRotationRejects) {
-  std::vector<YamlCamera> cams = ThreeYamlCameras();
-  cams[2].rotation = YamlMatrix(3, 3, "1., 0., 0., 0., 1., 0., 0., 0., -1.");
-  WriteYaml(cams);
-  const absl::Status s = ReadStatus();
-  EXPECT_EQ(s.code(), absl::StatusCode::kInvalidArgument);
-  EXPECT_THAT(Message(s), HasSubstr("rotation_camera_from_platform"));
-}
-
-TEST_F(BundleTest, MalformedYamlRejects) {
-  WriteText(BundleFile("calibration.yaml"),
-            "%YAML:1.0\n---\ncameras:\n   - name: cam0\n     image_width: [ 64,\n  : }\n");
-  const absl::Status s = ReadStatus();
-  EXPECT_EQ(s.code(), absl::StatusCode::kInvalidArgument);
-  EXPECT_THAT(Message(s), AllOf(HasSubstr("calibration.yaml"), HasSubstr("malformed YAML at line 6")));
-}
-
-TEST_F(CalibrationYamlTest, AcceptsFileWithoutYamlDirective) {
-  std::string yaml = YamlText({YamlCamera()});
-  ASSERT_EQ(yaml.rfind("%YAML:1.0\n---\n", 0), 0u);
-  WriteText(Path("plain.yaml"), yaml.substr(std::string("%YAML:1.0\n---\n").size()));
-  absl::StatusOr<RigCalibration> rig = ReadCalibrationYaml(Path("plain.yaml"));
-  ASSERT_TRUE(rig.ok()) << rig.status();
-  EXPECT_EQ(rig->cameras[0].camera_matrix(0, 2), 32.0);
-}
-
-TEST_F(BundleTest, WrongMatrixShapeRejects) {
-  std::vector<YamlCamera> cams = ThreeYamlCameras();
-  cams[1].camera_matrix = YamlMatrix(3, 2, "70., 0., 0., 70., 0., 0.");
-  WriteYaml(cams);
-  const absl::Status s = ReadStatus();
-  EXPECT_EQ(s.code(), absl::StatusCode::kInvalidArgument);
-  EXPECT_THAT(Message(s), HasSubstr("calibration.yaml: cameras[1] (cam1).camera_matrix: "
-                                    "expected 3x3, got 3x2"));
-}
-
-TEST_F(BundleTest, MatrixDataCountDisagreeingWithShapeRejects) {
-  std::vector<YamlCamera> cams = ThreeYamlCameras();
-  cams[0].translation = YamlMatrix(3, 1, "0., 1.");
-  WriteYaml(cams);
-  const absl::Status s = ReadStatus();
-  EXPECT_EQ(s.code(), absl::StatusCode::kInvalidArgument);
-  EXPECT_THAT(Message(s), AllOf(HasSubstr("translation_camera_from_platform.data"),
-                                HasSubstr("expected 3 numbers")));
-}
-
-TEST_F(BundleTest, NonNumericMatrixEntryRejects) {
-  std::vector<YamlCamera> cams = ThreeYamlCameras();
-  cams[0].distortion = YamlMatrix(1, 5, "0., 0., zero, 0., 0.");
-  WriteYaml(cams);
-  const absl::Status s = ReadStatus();
-  EXPECT_EQ(s.code(), absl::StatusCode::kInvalidArgument);
-  EXPECT_THAT(Message(s), AllOf(HasSubstr("distortion_coefficients.data[2]"),
-                                HasSubstr("expected a number")));
-}
-
-TEST_F(BundleTest, PlainSequenceInsteadOfMatrixRejects) {
-  std::vector<YamlCamera> cams = ThreeYamlCameras();
-  cams[0].rotation = "[ 1., 0., 0., 0., 1., 0., 0., 0., 1. ]\n";
-  WriteYaml(cams);
-  const absl::Status s = ReadStatus();
-  EXPECT_EQ(s.code(), absl::StatusCode::kInvalidArgument);
-  EXPECT_THAT(Message(s), AllOf(HasSubstr("rotation_camera_from_platform"),
-                                HasSubstr("!!opencv-matrix"), HasSubstr("sequence")));
-}
-
-TEST_F(BundleTest, WrongFieldTypeRejects) {
-  std::vector<YamlCamera> cams = ThreeYamlCameras();
-  cams[1].width = "wide";
-  WriteYaml(cams);
-  const absl::Status s = ReadStatus();
-  EXPECT_EQ(s.code(), absl::StatusCode::kInvalidArgument);
-  EXPECT_THAT(Message(s), AllOf(HasSubstr("cameras[1] (cam1).image_width"),
-                                HasSubstr("expected an integer"), HasSubstr("a string")));
-}
-
-TEST_F(BundleTest, MissingFieldRejects) {
-  std::string yaml = YamlText(ThreeYamlCameras());
-  const size_t at = yaml.find("     image_height: 48\n");
-  ASSERT_NE(at, std::string::npos);
-  yaml.erase(at, std::string("     image_height: 48\n").size());
-  WriteText(BundleFile("calibration.yaml"), yaml);
-  const absl::Status s = ReadStatus();
-  EXPECT_EQ(s.code(), absl::StatusCode::kInvalidArgument);
-  EXPECT_THAT(Message(s), HasSubstr("cameras[0] (cam0).image_height: missing"));
-}
-
-TEST_F(BundleTest, DuplicateCalibrationNameRejects) {
-  std::vector<YamlCamera> cams = ThreeYamlCameras();
-  cams[2].name = "cam1";
-  WriteYaml(cams);
-  const absl::Status s = ReadStatus();
-  EXPECT_EQ(s.code(), absl::StatusCode::kInvalidArgument);
-  EXPECT_THAT(Message(s), AllOf(HasSubstr("calibration.yaml"), HasSubstr("duplicate")));
-}
-
-TEST_F(BundleTest, EmptyOrWrongTopLevelYamlRejects) {
-  for (const std::string& text : {std::string(""), std::string("%YAML:1.0\n---\nrig: 3\n"),
-                                 std::string("%YAML:1.0\n---\ncameras: 3\n"),
-                                 std::string("%YAML:1.0\n---\ncameras: []\n"),
-                                 std::string("%YAML:1.0\n---\ncameras: [ 1, 2 ]\n"),
-                                 std::string("[ 1, 2, 3 ]\n")}) {
-    SCOPED_TRACE(text);
-    WriteText(BundleFile("calibration.yaml"), text);
-    const absl::Status s = ReadStatus();
-    EXPECT_EQ(s.code(), absl::StatusCode::kInvalidArgument);
-    EXPECT_THAT(Message(s), HasSubstr("calibration.yaml"));
-  }
-}
-
 // Random damage to any file of the bundle yields OK or INVALID_ARGUMENT, never a crash.
 TEST_F(BundleTest, CorruptedFilesNeverCrash) {
   const std::string files[] = {"capture.json", "calibration.yaml", "cam0.png", "cam1.png"};
@@ -596,89 +313,6 @@ TEST_F(BundleFilesTest, WriteBundleCreatesNestedDirectories) {
   absl::StatusOr<CaptureBundle> read = ReadBundle(dir);
   ASSERT_TRUE(read.ok()) << read.status();
   EXPECT_EQ(read->images[0].data, b.images[0].data);
-}
-
-TEST_F(CalibrationYamlTest, RoundTripsAndAcceptsColumnDistortion) {
-  RigCalibration rig;
-  rig.cameras = {MakeCalibration("left", 0), MakeCalibration("right", 1)};
-  ASSERT_TRUE(WriteCalibrationYaml(Path("calibration.yaml"), rig).ok());
-  absl::StatusOr<RigCalibration> read = ReadCalibrationYaml(Path("calibration.yaml"));
-  ASSERT_TRUE(read.ok()) << read.status();
-  ASSERT_EQ(read->cameras.size(), 2u);
-  for (size_t i = 0; i < 2; ++i) ExpectSameCalibration(read->cameras[i], rig.cameras[i]);
-
-  YamlCamera cam;
-  cam.distortion = YamlMatrix(5, 1, "0.1, 0.2, 0.3, 0.4, 0.5");
-  WriteText(Path("column.yaml"), YamlText({cam}));
-  read = ReadCalibrationYaml(Path("column.yaml"));
-  ASSERT_TRUE(read.ok()) << read.status();
-  EXPECT_EQ(read->cameras[0].distortion[4], 0.5);
-}
-
-// The platform's fiducials travel in calibration.yaml; a file without them (every bundle written
-// before they existed, as the one above) reads with none.
-TEST_F(CalibrationYamlTest, RoundTripsFiducials) {
-  RigCalibration rig;
-  rig.cameras = {MakeCalibration("left", 0), MakeCalibration("right", 1)};
-  ASSERT_TRUE(WriteCalibrationYaml(Path("plain.yaml"), rig).ok());
-  absl::StatusOr<RigCalibration> read = ReadCalibrationYaml(Path("plain.yaml"));
-  ASSERT_TRUE(read.ok()) << read.status();
-  EXPECT_TRUE(read->fiducials.empty());
-
-  rig.fiducials = {{"fid0", Eigen::Vector3d(-0.9, 1.25, 0.3), 0.02},
-                   {"fid1", Eigen::Vector3d(1.1, 1.25, 1.75), 0.025}};
-  ASSERT_TRUE(WriteCalibrationYaml(Path("calibration.yaml"), rig).ok());
-  read = ReadCalibrationYaml(Path("calibration.yaml"));
-  ASSERT_TRUE(read.ok()) << read.status();
-  ASSERT_EQ(read->fiducials.size(), 2u);
-  for (size_t i = 0; i < 2; ++i) {
-    EXPECT_EQ(read->fiducials[i].name, rig.fiducials[i].name);
-    EXPECT_EQ(read->fiducials[i].position_in_platform, rig.fiducials[i].position_in_platform);
-    EXPECT_EQ(read->fiducials[i].radius_m, rig.fiducials[i].radius_m);
-  }
-}
-
-TEST_F(CalibrationYamlTest, ReadRejectsAFiducialWithoutRadius) {
-  WriteText(Path("bad.yaml"), YamlText({YamlCamera{}}) +
-                                  "fiducials:\n   - name: fid0\n     position_in_platform: " +
-                                  YamlMatrix(3, 1, "0., 1.25, 0.3"));
-  const absl::StatusOr<RigCalibration> read = ReadCalibrationYaml(Path("bad.yaml"));
-  ASSERT_FALSE(read.ok());
-  EXPECT_THAT(Message(read.status()), HasSubstr("fiducials[0] (fid0).radius_m"));
-}
-
-TEST_F(CalibrationYamlTest, ProjectsLikeTheCalibration) {
-  // The written file is the model of core/calibration.h: x_cam = R x_platform + t.
-  RigCalibration rig;
-  rig.cameras = {MakeCalibration("cam0", 1)};
-  ASSERT_TRUE(WriteCalibrationYaml(Path("c.yaml"), rig).ok());
-  cv::FileStorage fs(Path("c.yaml"), cv::FileStorage::READ);
-  cv::Mat r, t;
-  fs["cameras"][0]["rotation_camera_from_platform"] >> r;
-  fs["cameras"][0]["translation_camera_from_platform"] >> t;
-  ASSERT_EQ(r.rows, 3);
-  ASSERT_EQ(t.rows, 3);
-  const Eigen::Vector3d p(0.3, 1.2, 0.8);
-  const Eigen::Vector3d expected = rig.cameras[0].camera_from_platform() * p;
-  for (int i = 0; i < 3; ++i) {
-    const double got = r.at<double>(i, 0) * p.x() + r.at<double>(i, 1) * p.y() +
-                       r.at<double>(i, 2) * p.z() + t.at<double>(i, 0);
-    EXPECT_NEAR(got, expected[i], 1e-12);
-  }
-}
-
-TEST_F(CalibrationYamlTest, ReadOfMissingFileIsNotFound) {
-  EXPECT_EQ(ReadCalibrationYaml(Path("none.yaml")).status().code(), absl::StatusCode::kNotFound);
-}
-
-TEST_F(CalibrationYamlTest, WriteRejectsInvalidRig) {
-  RigCalibration rig;
-  rig.cameras = {MakeCalibration("cam0", 0)};
-  rig.cameras[0].translation_camera_from_platform.x() = std::nan("");
-  const absl::Status s = WriteCalibrationYaml(Path("c.yaml"), rig);
-  EXPECT_EQ(s.code(), absl::StatusCode::kInvalidArgument);
-  EXPECT_THAT(Message(s), HasSubstr("translation_camera_from_platform"));
-  EXPECT_FALSE(std::filesystem::exists(Path("c.yaml")));
 }
 
 // --- demosaicing ---
