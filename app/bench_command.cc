@@ -122,6 +122,8 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   std::vector<DecidedCutMetrics> cut_metrics;
   std::vector<reconstruct::StageTimings> timings;
   std::vector<double> render_s;
+  // Per vine: the pieces of left-out wood the model carries as obstacles, and their length.
+  std::vector<double> obstacles_per_vine, obstacle_length_per_vine_m;
   // Mean over cameras of the reprojection error (sim::ReprojectionRmsPx at 0.8 m) against the true
   // rig: of the reported calibration and of the rig the model was built with.
   std::vector<double> rig_error_reported_px, rig_error_used_px;
@@ -172,6 +174,10 @@ absl::Status RunBenchReconstruct(Flags& flags) {
       continue;
     }
     empty += result->model.canes.empty();
+    obstacles_per_vine.push_back(static_cast<double>(result->model.obstacles.size()));
+    obstacle_length_per_vine_m.push_back(0.0);
+    for (const WoodObstacle& o : result->model.obstacles)
+      obstacle_length_per_vine_m.back() += o.polyline.Length();
     {
       VB_ASSIGN_OR_RETURN(const capture::SimRig sim_rig,
                           capture::MakeSimRig(sim_options, seed * 1000003 + vine));
@@ -270,6 +276,15 @@ absl::Status RunBenchReconstruct(Flags& flags) {
                         {"stage_median_s", stage_median},
                         {"stage_p90_s", stage_p90},
                         {"render_median_s", Median(render_s)},
+                        {"obstacles_per_vine",
+                         {{"median", Median(obstacles_per_vine)},
+                          {"mean", MeanOf(obstacles_per_vine)},
+                          {"max", obstacles_per_vine.empty()
+                                      ? 0.0
+                                      : *std::max_element(obstacles_per_vine.begin(),
+                                                          obstacles_per_vine.end())},
+                          {"length_median_m", Median(obstacle_length_per_vine_m)},
+                          {"length_mean_m", MeanOf(obstacle_length_per_vine_m)}}},
                         {"fiducials", fiducials},
                         {"rig_error_px",
                          {{"reported_mean", MeanOf(rig_error_reported_px)},

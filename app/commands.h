@@ -55,8 +55,10 @@ absl::Status RunSimDecideLabels(Flags& flags);
 absl::Status RunTrainDecide(Flags& flags);
 
 // vinebot plan --model model.json --cuts cut_plan.json --out trajectory.json [--tool T]
-// [--checker C] [--deadline-s T]: plans the arm's motions to every cut (workers/plan); prints a
-// one-line JSON summary (planned cuts, unplanned cuts with reasons, duration).
+// [--checker C] [--calibration calibration.yaml] [--deadline-s T]: plans the arm's motions to
+// every cut (workers/plan), avoiding the model's left-out wood (its obstacles) and the cameras
+// where the stop's calibration puts them; prints a one-line JSON summary (planned cuts, unplanned
+// cuts with reasons, duration).
 absl::Status RunPlan(Flags& flags);
 
 // vinebot bench plan --vines N --seed-base S [--checkers a,b,c] [--verify]: plans N simulated

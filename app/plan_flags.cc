@@ -5,6 +5,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "core/status_macros.h"
+#include "workers/capture/bundle.h"
 #include "workers/plan/tool.h"
 
 namespace vb::app {
@@ -24,6 +25,7 @@ absl::StatusOr<PlanSetup> ParsePlanSetup(Flags& flags) {
   plan::CutMotionOptions& cut = o.cut_motion;
   VB_ASSIGN_OR_RETURN(const std::string tool, flags.String("tool", "secateur"));
   VB_ASSIGN_OR_RETURN(const std::string checker, flags.String("checker", "primitives"));
+  VB_ASSIGN_OR_RETURN(const std::string calibration, flags.String("calibration", ""));
   VB_ASSIGN_OR_RETURN(o.margins.max_margin_m, flags.Double("max-margin-m", o.margins.max_margin_m));
   VB_ASSIGN_OR_RETURN(o.path.time_limit_s, flags.Double("path-time-limit-s", o.path.time_limit_s));
   VB_ASSIGN_OR_RETURN(o.path.range_rad, flags.Double("path-range-rad", o.path.range_rad));
@@ -90,7 +92,20 @@ absl::StatusOr<PlanSetup> ParsePlanSetup(Flags& flags) {
   if (!(acceleration > 0) || !std::isfinite(acceleration))
     return absl::InvalidArgumentError("--joint-acceleration: must be finite and > 0 (rad/s^2)");
   setup.robot.limits.max_acceleration = plan::Joints::Constant(acceleration);
-  setup.platform = plan::DefaultPlatform();
+  // The cameras where the stop's calibration puts them; the default rig's without one.
+  if (calibration.empty()) {
+    setup.platform = plan::DefaultPlatform();
+  } else {
+    auto rig = capture::ReadCalibrationYaml(calibration);
+    if (!rig.ok())
+      return absl::Status(rig.status().code(),
+                          absl::StrCat("--calibration: ", rig.status().message()));
+    auto platform = plan::PlatformAroundRig(*rig);
+    if (!platform.ok())
+      return absl::InvalidArgumentError(
+          absl::StrCat("--calibration: ", calibration, ": ", platform.status().message()));
+    setup.platform = *std::move(platform);
+  }
   VB_ASSIGN_OR_RETURN(o.checker, ParseCheckerKind(checker));
   o.home = plan::DefaultHome();
   if (absl::Status s = o.Validate(); !s.ok())

@@ -17,7 +17,9 @@ struct PlanSetup {
 };
 
 // --tool secateur|mill_end (default secateur), --checker primitives|fcl_primitives|fcl_mesh
-// (default primitives), --max-margin-m M, --path-time-limit-s T, --path-range-rad R,
+// (default primitives), --calibration calibration.yaml (the stop's rig, capture bundle format:
+// the cameras' capsules where it puts them, plan::PlatformAroundRig; without it
+// plan::DefaultPlatform(), the simulator's default rig), --max-margin-m M, --path-time-limit-s T, --path-range-rad R,
 // --shortcut-rounds N, --sweep-m S, --max-slide-m M, --last-resort-max-slide-m M,
 // --max-tilt-deg D, --tilt-steps N,
 // --max-roll-deg D, --roll-steps N, --cut-alternatives N, --cut-min-clearance-m M,
@@ -29,7 +31,7 @@ struct PlanSetup {
 // default JointLimits', 5 as in UR's ROS 2 MoveIt config; for what-if runs).
 // --choose-motions-with-order true|false, --rolled-twins true|false, --undo-walled-in
 // true|false (PlanOptions').
-// INVALID_ARGUMENT naming the flag.
+// INVALID_ARGUMENT naming the flag (NOT_FOUND for a missing calibration file).
 absl::StatusOr<PlanSetup> ParsePlanSetup(Flags& flags);
 
 absl::StatusOr<plan::CheckerKind> ParseCheckerKind(const std::string& name);

@@ -18,6 +18,8 @@ nlohmann::json ReconstructReport(const reconstruct::ReconstructResult& result) {
     canes += c.kind == CaneKind::kCane;
     spurs += c.kind == CaneKind::kSpur;
   }
+  double obstacle_length_m = 0.0;
+  for (const WoodObstacle& o : result.model.obstacles) obstacle_length_m += o.polyline.Length();
   nlohmann::json report = {
       {"canes", canes},
       {"spurs", spurs},
@@ -28,6 +30,9 @@ nlohmann::json ReconstructReport(const reconstruct::ReconstructResult& result) {
       {"pieces", result.pieces},
       {"assembled_canes", result.assembled_canes},
       {"unattached_canes", result.connect.unattached},
+      // The seen wood the model leaves out, carried for the planner (left_out_wood.h).
+      {"obstacles", result.model.obstacles.size()},
+      {"obstacle_length_m", obstacle_length_m},
       {"rejected_canes", result.fit.rejected_outside + result.fit.rejected_background +
                              result.fit.removed_with_parent},
       {"timings", TimingsToJson(result.timings)}};

@@ -151,6 +151,9 @@ std::vector<std::string> ObstacleClasses(const CollisionScene& scene, const Vine
       case ObstacleKind::kPlatform:
         out.push_back("camera");
         continue;
+      case ObstacleKind::kLeftOutWood:
+        out.push_back("left_out_wood");
+        continue;
       case ObstacleKind::kCane:
         break;
     }

@@ -108,6 +108,12 @@ absl::Status VineModel::Validate() const {
       return absl::InvalidArgumentError(absl::StrCat(what, ".radius must be finite and > 0"));
     }
   }
+  for (size_t i = 0; i < obstacles.size(); ++i) {
+    if (absl::Status s = obstacles[i].polyline.Validate(absl::StrCat("obstacles[", i, "]"));
+        !s.ok()) {
+      return s;
+    }
+  }
   return absl::OkStatus();
 }
 

@@ -47,6 +47,13 @@ struct Post {
   double radius = 0.04;  // metres
 };
 
+// Wood the cameras saw that is in no cane of the model: canes the reconstruction left out (a
+// neighbour's canes, canes it could not connect to the vine). Not a cane: phenomics, decisions and
+// the accuracy metrics never see it; the planner avoids it as it avoids canes, and cuts none.
+struct WoodObstacle {
+  Polyline3 polyline;  // >= 2 points, one radius per point
+};
+
 // A cut closer than this to a cane's base removes the whole cane (the simulator's world and the
 // planner's view of the vine after cuts share the rule).
 inline constexpr double kMinCaneStubM = 0.001;
@@ -56,9 +63,11 @@ struct VineModel {
   HeadModel head;
   std::vector<Wire> wires;
   std::vector<Post> posts;
+  std::vector<WoodObstacle> obstacles;  // empty in ground truth and in older files
 
   // Checks the model is well formed: unique ids, every parent exists, no parent cycles, at most
-  // one trunk and only the trunk without a parent, finite geometry, one radius per point.
+  // one trunk and only the trunk without a parent, finite geometry, one radius per point (canes
+  // and obstacles alike).
   // INVALID_ARGUMENT naming the offending element (e.g. "canes[4] (id 9): parent_id 12 unknown").
   absl::Status Validate() const;
 

@@ -37,9 +37,21 @@ json VineModelToJson(const VineModel& model) {
                      {"top", Vec3ToJson(p.top)},
                      {"radius", p.radius}});
   }
-  return {{"format", kVineModelFormat}, {"frame", "platform"}, {"units", "m"},
-          {"canes", canes},            {"head", {{"spheres", spheres}}},
-          {"wires", wires},            {"posts", posts}};
+  json out = {{"format", kVineModelFormat}, {"frame", "platform"}, {"units", "m"},
+              {"canes", canes},            {"head", {{"spheres", spheres}}},
+              {"wires", wires},            {"posts", posts}};
+  // Optional: written only when there are some, so that models without (ground truth, older
+  // files) read and write exactly as before.
+  if (!model.obstacles.empty()) {
+    json obstacles = json::array();
+    for (const WoodObstacle& o : model.obstacles) {
+      json points = json::array();
+      for (const auto& p : o.polyline.points) points.push_back(Vec3ToJson(p));
+      obstacles.push_back({{"points", points}, {"radii", o.polyline.radii}});
+    }
+    out["obstacles"] = obstacles;
+  }
+  return out;
 }
 
 namespace {
@@ -63,6 +75,23 @@ absl::StatusOr<std::vector<Eigen::Vector3d>> ParsePoints(const json& object,
   return points;
 }
 
+// The "points" and "radii" of a cane or an obstacle (checked by VineModel::Validate after).
+absl::StatusOr<Polyline3> ParsePolyline(const json& j, const std::string& what) {
+  Polyline3 polyline;
+  VB_ASSIGN_OR_RETURN(polyline.points, ParsePoints(j, what));
+  auto radii = Field(j, "radii");
+  if (!radii.ok()) return Prefix(what, radii.status());
+  if (!(*radii)->is_array()) return absl::InvalidArgumentError(what + ".radii: not an array");
+  for (size_t k = 0; k < (*radii)->size(); ++k) {
+    const json& r = (**radii)[k];
+    if (!r.is_number()) {
+      return absl::InvalidArgumentError(absl::StrCat(what, ".radii[", k, "]: not a number"));
+    }
+    polyline.radii.push_back(r.get<double>());
+  }
+  return polyline;
+}
+
 absl::StatusOr<Cane> ParseCane(const json& j, const std::string& what) {
   Cane cane;
   auto id = IntField(j, "id");
@@ -81,17 +110,7 @@ absl::StatusOr<Cane> ParseCane(const json& j, const std::string& what) {
   auto kind = ParseCaneKind(*kind_name);
   if (!kind.ok()) return Prefix(what, kind.status());
   cane.kind = *kind;
-  VB_ASSIGN_OR_RETURN(cane.polyline.points, ParsePoints(j, what));
-  auto radii = Field(j, "radii");
-  if (!radii.ok()) return Prefix(what, radii.status());
-  if (!(*radii)->is_array()) return absl::InvalidArgumentError(what + ".radii: not an array");
-  for (size_t k = 0; k < (*radii)->size(); ++k) {
-    const json& r = (**radii)[k];
-    if (!r.is_number()) {
-      return absl::InvalidArgumentError(absl::StrCat(what, ".radii[", k, "]: not a number"));
-    }
-    cane.polyline.radii.push_back(r.get<double>());
-  }
+  VB_ASSIGN_OR_RETURN(cane.polyline, ParsePolyline(j, what));
   return cane;
 }
 
@@ -170,6 +189,15 @@ absl::StatusOr<VineModel> VineModelFromJson(const json& j) {
       if (!radius.ok()) return Prefix(what, radius.status());
       post.radius = *radius;
       model.posts.push_back(post);
+    }
+  }
+  if (j.contains("obstacles")) {
+    VB_ASSIGN_OR_RETURN(const json* obstacles, ArrayField(j, "obstacles"));
+    for (size_t i = 0; i < obstacles->size(); ++i) {
+      const std::string what = absl::StrCat("obstacles[", i, "]");
+      if (!(*obstacles)[i].is_object()) return absl::InvalidArgumentError(what + ": not an object");
+      VB_ASSIGN_OR_RETURN(Polyline3 polyline, ParsePolyline((*obstacles)[i], what));
+      model.obstacles.push_back(WoodObstacle{std::move(polyline)});
     }
   }
   VB_RETURN_IF_ERROR(model.Validate());

@@ -61,6 +61,40 @@ TEST(VineModelJson, RoundTripsExactly) {
   EXPECT_EQ(back->posts[0].radius, 0.04);
 }
 
+TEST(VineModelJson, ObstaclesRoundTripExactly) {
+  VineModel m = SmallVine();
+  WoodObstacle o;
+  o.polyline.points = {{0.45, 0.75, 1.1}, {0.62, 0.77, 1.13}, {0.8, 0.8, 1.2}};
+  o.polyline.radii = {0.0061, 0.005, 0.0042};
+  m.obstacles = {o};
+  ASSERT_TRUE(m.Validate().ok());
+  const json j = VineModelToJson(m);
+  ASSERT_TRUE(j.contains("obstacles"));
+  EXPECT_EQ(j["obstacles"].size(), 1u);
+  auto back = VineModelFromJson(json::parse(j.dump()));
+  ASSERT_TRUE(back.ok()) << back.status();
+  ASSERT_EQ(back->obstacles.size(), 1u);
+  EXPECT_EQ(back->obstacles[0].polyline.points, o.polyline.points);
+  EXPECT_EQ(back->obstacles[0].polyline.radii, o.polyline.radii);
+  EXPECT_EQ(back->canes.size(), m.canes.size());  // obstacles are no canes
+}
+
+// Models without obstacles (ground truth, files written before obstacles existed) are written
+// without the key, and a file without it reads as a model without obstacles.
+TEST(VineModelJson, ObstaclesAreOptional) {
+  const json j = VineModelToJson(SmallVine());
+  EXPECT_FALSE(j.contains("obstacles"));
+  auto back = VineModelFromJson(j);
+  ASSERT_TRUE(back.ok()) << back.status();
+  EXPECT_TRUE(back->obstacles.empty());
+  json empty = j;
+  empty["obstacles"] = json::array();
+  auto from_empty = VineModelFromJson(empty);
+  ASSERT_TRUE(from_empty.ok()) << from_empty.status();
+  EXPECT_TRUE(from_empty->obstacles.empty());
+  EXPECT_EQ(VineModelToJson(*from_empty), j);
+}
+
 TEST(VineModelJson, FileRoundTripAndMissingFile) {
   const std::string path = ::testing::TempDir() + "/vine_model_json_test_" +
                            std::to_string(getpid()) + ".json";
@@ -120,7 +154,30 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"wire with one point", [](json& j) { j["wires"][0]["points"].erase(1); },
                 "wires[0] (id 1).points"},
         BadCase{"post radius", [](json& j) { j["posts"][0]["radius"] = "big"; },
-                "posts[0].radius"}),
+                "posts[0].radius"},
+        BadCase{"obstacles not an array", [](json& j) { j["obstacles"] = json::object(); },
+                "obstacles: not an array"},
+        BadCase{"obstacle not an object", [](json& j) { j["obstacles"] = {1}; },
+                "obstacles[0]: not an object"},
+        BadCase{"obstacle with one point",
+                [](json& j) {
+                  j["obstacles"] = {{{"points", {{0, 0.8, 1}}}, {"radii", {0.004}}}};
+                },
+                "obstacles[0].points"},
+        BadCase{"obstacle radii mismatch",
+                [](json& j) {
+                  j["obstacles"] = {{{"points", {{0, 0.8, 1}, {0.1, 0.8, 1}}}, {"radii", {0.004}}}};
+                },
+                "obstacles[0].radii"},
+        BadCase{"obstacle without radii",
+                [](json& j) { j["obstacles"] = {{{"points", {{0, 0.8, 1}, {0.1, 0.8, 1}}}}}; },
+                "obstacles[0].radii"},
+        BadCase{"obstacle zero radius",
+                [](json& j) {
+                  j["obstacles"] = {
+                      {{"points", {{0, 0.8, 1}, {0.1, 0.8, 1}}}, {"radii", {0.004, 0.0}}}};
+                },
+                "obstacles[0].radii[1]"}),
     [](const ::testing::TestParamInfo<BadCase>& info) {
       std::string name = info.param.name;
       for (char& c : name) {

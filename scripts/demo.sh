@@ -22,6 +22,7 @@ for vine in 0 1 2; do
   "$vinebot" decide --model "$dir/model.json" --out "$dir/cut_plan.json" > "$dir/decide.json"
   "$vinebot" phenomics --model "$dir/model.json" --plan "$dir/cut_plan.json" > "$dir/phenomics.json"
   "$vinebot" plan --model "$dir/model.json" --cuts "$dir/cut_plan.json" \
+    --calibration "$dir/calibration.yaml" \
     --out "$dir/trajectory.json" > "$dir/plan.json" 2> "$dir/plan_notes.txt"
   "$vinebot" evaluate --model "$dir/model.json" --truth "$dir/ground_truth.json" > "$dir/metrics.json"
   echo "  vine $vine: $(tr -d ' \n' < "$dir/metrics.json" | cut -c1-160)"

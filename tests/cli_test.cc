@@ -186,6 +186,36 @@ TEST(VinebotCli, ReconstructAndEvaluateASimulatedStop) {
                           "\"cuts_on_kept_canes\""}) {
     EXPECT_NE(eval.output.find(key), std::string::npos) << key << " in " << eval.output;
   }
+  // The model's left-out wood (its obstacles) is for the planner: the metrics are the same with
+  // and without it, even with every true cane added as an obstacle.
+  auto with_wood = ReadJsonFile(dir + "/model.json");
+  ASSERT_TRUE(with_wood.ok()) << with_wood.status();
+  auto truth = ReadVineModel(dir + "/ground_truth.json");
+  ASSERT_TRUE(truth.ok()) << truth.status();
+  nlohmann::json without_wood = *with_wood;
+  without_wood.erase("obstacles");
+  std::ofstream(dir + "/without_wood.json") << without_wood.dump();
+  for (const Cane& cane : truth->canes) {
+    VineModel one;
+    one.obstacles.push_back(WoodObstacle{cane.polyline});
+    (*with_wood)["obstacles"].push_back(VineModelToJson(one)["obstacles"][0]);
+  }
+  std::ofstream(dir + "/with_wood.json") << with_wood->dump();
+  const RunResult eval_with =
+      Vinebot("evaluate --model " + dir + "/with_wood.json --truth " + dir + "/ground_truth.json");
+  const RunResult eval_without = Vinebot("evaluate --model " + dir + "/without_wood.json --truth " +
+                                         dir + "/ground_truth.json");
+  ASSERT_EQ(eval_with.exit_code, 0) << eval_with.output;
+  EXPECT_EQ(eval_with.output, eval_without.output);
+  EXPECT_EQ(eval_with.output, eval.output);
+  // The job's plan stage on the reconstruction: its obstacles and the stop's calibration.
+  ASSERT_EQ(Vinebot("decide --model " + dir + "/model.json --out " + dir + "/cuts.json").exit_code,
+            0);
+  const RunResult plan = Vinebot("plan --model " + dir + "/model.json --cuts " + dir +
+                                 "/cuts.json --calibration " + dir + "/calibration.yaml --out " +
+                                 dir + "/trajectory.json");
+  ASSERT_EQ(plan.exit_code, 0) << plan.output;
+  EXPECT_TRUE(ReadTrajectory(dir + "/trajectory.json").ok());
   const RunResult bench = Vinebot("bench reconstruct --vines 1 --seed-base 1014");
   ASSERT_EQ(bench.exit_code, 0) << bench.output;
   EXPECT_NE(bench.output.find("\"stage_median_s\""), std::string::npos) << bench.output;
@@ -411,6 +441,26 @@ TEST(VinebotCli, PlanWritesATrajectoryAccountingForEveryCut) {
                 "/t.json --tool chainsaw");
   EXPECT_EQ(bad.exit_code, 2) << bad.output;
   EXPECT_NE(bad.output.find("--tool"), std::string::npos) << bad.output;
+  bad = Vinebot("plan --model " + truth_path + " --cuts " + dir + "/cuts.json --out " + dir +
+                "/t.json --calibration " + dir + "/no_calibration.yaml");
+  EXPECT_NE(bad.exit_code, 0) << bad.output;
+  EXPECT_NE(bad.output.find("--calibration"), std::string::npos) << bad.output;
+  EXPECT_NE(bad.output.find("no_calibration.yaml"), std::string::npos) << bad.output;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/t.json"));
+  // With the rig's calibration (the simulator's default rig): planned as well.
+  auto rig = sim::MakeRig();
+  ASSERT_TRUE(rig.ok()) << rig.status();
+  ASSERT_TRUE(capture::WriteCalibrationYaml(dir + "/calibration.yaml", *rig).ok());
+  const RunResult calibrated = Vinebot("plan --model " + truth_path + " --cuts " + dir +
+                                       "/cuts.json --calibration " + dir +
+                                       "/calibration.yaml --out " + dir + "/calibrated.json");
+  ASSERT_EQ(calibrated.exit_code, 0) << calibrated.output;
+  const auto calibrated_trajectory = ReadTrajectory(dir + "/calibrated.json");
+  ASSERT_TRUE(calibrated_trajectory.ok()) << calibrated_trajectory.status();
+  size_t calibrated_cuts = 0;
+  for (const TrajectorySegment& s : calibrated_trajectory->segments)
+    calibrated_cuts += s.kind == SegmentKind::kCut;
+  EXPECT_EQ(calibrated_cuts + calibrated_trajectory->unplanned.size(), plan->cuts.size());
   std::filesystem::remove_all(dir);
 }
 

@@ -15,6 +15,7 @@
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
 #include "sim/vine_generator.h"
+#include "workers/decide/phenomics.h"
 
 namespace vb::decide {
 namespace {
@@ -72,6 +73,38 @@ TEST(Decide, KeepsWhatAPrunerWouldOnASimpleVine) {
   EXPECT_EQ(decision->scheme.keep, plan.keep);
   EXPECT_EQ(decision->stats.candidates, 6);
   EXPECT_GT(decision->stats.schemes_visited, 0);
+}
+
+// Left-out wood (VineModel::obstacles) is for the planner: lying across the head and along the
+// canes a pruner keeps, it changes neither the plan nor the phenomics.
+TEST(Decide, IgnoresLeftOutWood) {
+  const VineModel vine = SimpleVine();
+  VineModel with = vine;
+  for (const auto& [a, b] : {std::pair{Eigen::Vector3d(-0.3, 0.78, 0.9), Eigen::Vector3d(0.3, 0.82, 0.92)},
+                             std::pair{Eigen::Vector3d(0.2, 0.8, 0.93), Eigen::Vector3d(1.0, 0.8, 0.96)},
+                             std::pair{Eigen::Vector3d(-0.6, 0.7, 1.3), Eigen::Vector3d(-0.2, 0.8, 1.1)}}) {
+    WoodObstacle o;
+    o.polyline.points = {a, 0.5 * (a + b), b};
+    o.polyline.radii = {0.006, 0.005, 0.004};
+    with.obstacles.push_back(o);
+  }
+  ASSERT_TRUE(with.Validate().ok());
+  for (int spurs : {0, 1}) {
+    PruningPolicy policy;
+    policy.spurs = spurs;
+    auto without_wood = Decide(vine, policy);
+    auto with_wood = Decide(with, policy);
+    ASSERT_TRUE(without_wood.ok()) << without_wood.status();
+    ASSERT_TRUE(with_wood.ok()) << with_wood.status();
+    EXPECT_FALSE(with_wood->plan.cuts.empty());
+    EXPECT_EQ(CutPlanToJson(with_wood->plan), CutPlanToJson(without_wood->plan));
+    EXPECT_EQ(with_wood->notes, without_wood->notes);
+    auto p_without = ComputePhenomics(vine, &without_wood->plan);
+    auto p_with = ComputePhenomics(with, &with_wood->plan);
+    ASSERT_TRUE(p_without.ok()) << p_without.status();
+    ASSERT_TRUE(p_with.ok()) << p_with.status();
+    EXPECT_EQ(PhenomicsToJson(*p_with), PhenomicsToJson(*p_without));
+  }
 }
 
 TEST(Decide, TrunkWithoutCanesGivesAnEmptyPlanAndANote) {

@@ -31,9 +31,9 @@ namespace {
 // original polyline bends away from the chord. (The distance to a segment is convex and the radius
 // linear along each original piece, so enclosing the original vertices and the chord ends
 // encloses the whole cane.)
-void AppendCaneChords(const Cane& cane, const Eigen::Isometry3d& base_from_platform, double step,
-                      double margin, std::vector<Obstacle>* out) {
-  const Polyline3& original = cane.polyline;
+void AppendChords(const Polyline3& original, ObstacleKind kind, int64_t owner_id,
+                  const Eigen::Isometry3d& base_from_platform, double step, double margin,
+                  std::vector<Obstacle>* out) {
   const std::vector<double> arc = original.ArcLengths();
   const double length = arc.back();
   std::vector<double> grid;
@@ -49,10 +49,16 @@ void AppendCaneChords(const Cane& cane, const Eigen::Isometry3d& base_from_platf
     while (i < arc.size() && arc[i] <= grid[k]) ++i;
     for (size_t j = i; j < arc.size() && arc[j] < grid[k + 1]; ++j)
       radius = std::max(radius, PointSegmentDistance(original.points[j], a, b) + original.radii[j]);
-    out->push_back(Obstacle{ObstacleKind::kCane, cane.id.value,
+    out->push_back(Obstacle{kind, owner_id,
                             Capsule{base_from_platform * a, base_from_platform * b, radius},
                             margin});
   }
+}
+
+void AppendCaneChords(const Cane& cane, const Eigen::Isometry3d& base_from_platform, double step,
+                      double margin, std::vector<Obstacle>* out) {
+  AppendChords(cane.polyline, ObstacleKind::kCane, cane.id.value, base_from_platform, step, margin,
+               out);
 }
 
 bool SameObstacle(const Obstacle& x, const Obstacle& y) {
@@ -101,6 +107,12 @@ absl::StatusOr<CollisionScene> CollisionScene::Build(const VineModel& model,
   };
   for (const Cane& cane : model.canes)
     AppendCaneChords(cane, base_from_platform, options.cane_segment_m, margin, &scene.obstacles);
+  // The wood the model left out: avoided as canes are (chords on the same grid), cut nowhere.
+  for (size_t i = 0; i < model.obstacles.size(); ++i) {
+    AppendChords(model.obstacles[i].polyline, ObstacleKind::kLeftOutWood,
+                 static_cast<int64_t>(i) + 1, base_from_platform, options.cane_segment_m, margin,
+                 &scene.obstacles);
+  }
   for (const Sphere& s : model.head.spheres) add(ObstacleKind::kHead, 0, s.center, s.center, s.radius);
   for (const Wire& w : model.wires) {
     for (size_t k = 0; k + 1 < w.points.size(); ++k) {

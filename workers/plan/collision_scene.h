@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // What the arm must not touch at one stop, as primitives in the arm's base frame: canes (one
-// capsule per polyline segment), head spheres, wires, posts, and the platform (planes, fixed
-// spheres and fixed capsules such as the cameras). Each obstacle carries a safety margin that the
+// capsule per polyline segment), the wood the model left out (VineModel::obstacles, chords like
+// canes'), head spheres, wires, posts, and the platform (planes, fixed spheres and fixed capsules
+// such as the cameras). Each obstacle carries a safety margin that the
 // adaptive-margin step raises.
 // Plain value types; thread-compatible.
 #pragma once
@@ -20,12 +21,15 @@
 
 namespace vb::plan {
 
-enum class ObstacleKind { kCane, kHead, kWire, kPost, kPlatform };
+// kLeftOutWood: wood the cameras saw that is in no cane of the model (VineModel::obstacles), as
+// chords like a cane's; never the cut cane (IsCaneNear), so no cut motion may touch it.
+enum class ObstacleKind { kCane, kHead, kWire, kPost, kPlatform, kLeftOutWood };
 
 // A capsule (a sphere when a == b) in the arm base frame.
 struct Obstacle {
   ObstacleKind kind = ObstacleKind::kCane;
-  int64_t owner_id = 0;        // cane / wire / post id; 0 for head and platform
+  int64_t owner_id = 0;        // cane / wire / post id; 0 for head and platform; for
+                               // kLeftOutWood the index into VineModel::obstacles plus 1
   Capsule capsule;             // radius is the true radius
   double margin_m = 0.0;       // inflation used by collision checks (>= 0)
 };

@@ -244,12 +244,8 @@ absl::Status PlatformGeometry::Validate() const {
   return absl::OkStatus();
 }
 
-PlatformGeometry DefaultPlatform() {
-  // sim/rig.h's default trinocular rig, hard-coded because workers do not depend on sim: an
-  // equilateral triangle of side 0.29 m centred at (0, -0.12, 1.05), cam0 lower left, cam1 lower
-  // right, cam2 above the middle, each aimed at (0, 0.80, 1.15) on the vine plane.
-  constexpr double kSide = 0.29, kY = -0.12, kHeight = 1.05;
-  const Eigen::Vector3d aim(0.0, 0.80, 1.15);
+Capsule CameraBody(const Eigen::Vector3d& centre_in_platform,
+                   const Eigen::Vector3d& axis_in_platform) {
   // Each camera's body (docs/plan.md "Collision checking"): a machine-vision camera of 0.03 x
   // 0.03 x 0.06 m with a lens of 0.03 m diameter and 0.05 m length in front of it, its centre of
   // projection anywhere in the lens, so body and lens lie between 0.11 m behind the centre and
@@ -257,15 +253,38 @@ PlatformGeometry DefaultPlatform() {
   // capsule reaches back 0.13 m to the camera-side wall (the bracket and cable) and pads the
   // body's edges by 0.024 m (the lens by 0.03 m).
   constexpr double kBehindM = 0.13, kAheadM = 0.05, kRadiusM = 0.045;
+  const Eigen::Vector3d axis = axis_in_platform.normalized();
+  return {centre_in_platform - kBehindM * axis, centre_in_platform + kAheadM * axis, kRadiusM};
+}
+
+PlatformGeometry DefaultPlatform() {
+  // sim/rig.h's default trinocular rig, hard-coded because workers do not depend on sim: an
+  // equilateral triangle of side 0.29 m centred at (0, -0.12, 1.05), cam0 lower left, cam1 lower
+  // right, cam2 above the middle, each aimed at (0, 0.80, 1.15) on the vine plane.
+  constexpr double kSide = 0.29, kY = -0.12, kHeight = 1.05;
+  const Eigen::Vector3d aim(0.0, 0.80, 1.15);
   const double circum = kSide / std::sqrt(3.0);  // centroid to vertex
   const Eigen::Vector3d centres[] = {Eigen::Vector3d(-kSide / 2, kY, kHeight - circum / 2),
                                      Eigen::Vector3d(kSide / 2, kY, kHeight - circum / 2),
                                      Eigen::Vector3d(0, kY, kHeight + circum)};
   PlatformGeometry platform;
   for (const Eigen::Vector3d& centre : centres) {
-    const Eigen::Vector3d axis = (aim - centre).normalized();
+    platform.fixed_capsules.push_back(CameraBody(centre, aim - centre));
+  }
+  return platform;
+}
+
+absl::StatusOr<PlatformGeometry> PlatformAroundRig(const RigCalibration& rig) {
+  if (absl::Status s = rig.Validate(); !s.ok()) {
+    return absl::InvalidArgumentError(absl::StrCat("calibration: ", s.message()));
+  }
+  PlatformGeometry platform = DefaultPlatform();
+  platform.fixed_capsules.clear();
+  for (const CameraCalibration& camera : rig.cameras) {
+    // x_cam = R x_platform + t: the camera's z axis is R's last row in the platform frame.
     platform.fixed_capsules.push_back(
-        {centre - kBehindM * axis, centre + kAheadM * axis, kRadiusM});
+        CameraBody(camera.CentreInPlatform(),
+                   camera.rotation_camera_from_platform.row(2).transpose()));
   }
   return platform;
 }

@@ -9,6 +9,8 @@
 #include <vector>
 
 #include "absl/status/status.h"
+#include "absl/status/statusor.h"
+#include "core/calibration.h"
 #include "core/geometry.h"
 #include "core/trajectory.h"
 #include "Eigen/Geometry"
@@ -69,6 +71,21 @@ struct PlatformGeometry {
 // above and, for each of the three cameras, a capsule of radius 0.045 m along its optical axis
 // from 0.13 m behind its centre of projection (at the camera-side wall) to 0.05 m in front of it,
 // enclosing a 0.03 x 0.03 x 0.06 m camera body and a 0.03 x 0.05 m lens (docs/plan.md).
+// For tools without a calibration (benchmarks, tests); a stop's plan uses PlatformAroundRig.
 PlatformGeometry DefaultPlatform();
+
+// The capsule DefaultPlatform puts around a camera whose centre of projection is
+// `centre_in_platform` and whose optical axis points along `axis_in_platform` (normalised here):
+// radius 0.045 m, from 0.13 m behind the centre to 0.05 m in front of it.
+Capsule CameraBody(const Eigen::Vector3d& centre_in_platform,
+                   const Eigen::Vector3d& axis_in_platform);
+
+// The platform around a calibrated rig: DefaultPlatform's walls, ground and roof, and for each
+// camera of `rig`, in its order, CameraBody at its calibrated centre along its optical axis (the
+// camera's z axis), so that a rig mounted off nominal moves its capsules with it. For the
+// simulator's default rig (sim::MakeRig) the capsules are DefaultPlatform's.
+// INVALID_ARGUMENT naming the camera and field for an invalid calibration
+// (RigCalibration::Validate).
+absl::StatusOr<PlatformGeometry> PlatformAroundRig(const RigCalibration& rig);
 
 }  // namespace vb::plan

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "workers/plan/robot_model.h"
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -224,6 +225,79 @@ TEST(DefaultPlatform, CameraBodiesLieAlongTheDefaultRigsOpticalAxes) {
     EXPECT_LE((body.b - centre).dot(optical), 0.05 + 1e-9);
     EXPECT_GT(behind_a, 0.11);
   }
+}
+
+// The camera capsules built from the simulator's default calibration are DefaultPlatform's: the
+// plan of a stop with that rig sees the same platform as the tools without a calibration.
+TEST(PlatformAroundRig, TheDefaultRigsCalibrationGivesTheDefaultCapsules) {
+  const auto rig = sim::MakeRig();
+  ASSERT_TRUE(rig.ok()) << rig.status();
+  const auto platform = PlatformAroundRig(*rig);
+  ASSERT_TRUE(platform.ok()) << platform.status();
+  ASSERT_TRUE(platform->Validate().ok());
+  const PlatformGeometry nominal = DefaultPlatform();
+  EXPECT_EQ(platform->ground_z_m, nominal.ground_z_m);
+  EXPECT_EQ(platform->roof_z_m, nominal.roof_z_m);
+  EXPECT_EQ(platform->camera_side_wall_y_m, nominal.camera_side_wall_y_m);
+  EXPECT_EQ(platform->backdrop_y_m, nominal.backdrop_y_m);
+  EXPECT_EQ(platform->fixed_spheres.size(), nominal.fixed_spheres.size());
+  ASSERT_EQ(platform->fixed_capsules.size(), nominal.fixed_capsules.size());
+  for (size_t i = 0; i < nominal.fixed_capsules.size(); ++i) {
+    SCOPED_TRACE(rig->cameras[i].name);
+    EXPECT_LT((platform->fixed_capsules[i].a - nominal.fixed_capsules[i].a).norm(), 1e-9);
+    EXPECT_LT((platform->fixed_capsules[i].b - nominal.fixed_capsules[i].b).norm(), 1e-9);
+    EXPECT_EQ(platform->fixed_capsules[i].radius, nominal.fixed_capsules[i].radius);
+  }
+}
+
+// A camera mounted 3 cm off nominal and turned 5 degrees moves and turns its capsule with it; the
+// others stay put. (3 cm is more than the 2.4 cm the nominal capsule pads the body by.)
+TEST(PlatformAroundRig, AMovedCameraMovesItsCapsule) {
+  auto rig = sim::MakeRig();
+  ASSERT_TRUE(rig.ok()) << rig.status();
+  const PlatformGeometry nominal = DefaultPlatform();
+  CameraCalibration& cam = rig->cameras[1];
+  const Eigen::Vector3d shift(0.03, -0.01, 0.02);
+  const Eigen::Vector3d centre = cam.CentreInPlatform() + shift;
+  // Turned 5 degrees about platform z, about its own centre: R' = R Rz^T, t' = -R' centre'.
+  const Eigen::Matrix3d turn =
+      Eigen::AngleAxisd(5.0 * M_PI / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  cam.rotation_camera_from_platform = cam.rotation_camera_from_platform * turn.transpose();
+  cam.translation_camera_from_platform = -cam.rotation_camera_from_platform * centre;
+  const auto platform = PlatformAroundRig(*rig);
+  ASSERT_TRUE(platform.ok()) << platform.status();
+  ASSERT_EQ(platform->fixed_capsules.size(), 3u);
+  const Capsule& moved = platform->fixed_capsules[1];
+  const Capsule& before = nominal.fixed_capsules[1];
+  const Eigen::Vector3d before_axis = (before.b - before.a).normalized();
+  const Eigen::Vector3d after_axis = (moved.b - moved.a).normalized();
+  EXPECT_NEAR(after_axis.dot(turn * before_axis), 1.0, 1e-9);
+  // Nearly 5 degrees from where it was (the axis tilts a little out of the turn's plane).
+  EXPECT_GT(std::acos(std::clamp(after_axis.dot(before_axis), -1.0, 1.0)), 4.5 * M_PI / 180.0);
+  // The centre of projection lies on the new axis, 0.13 m from its back end, as before.
+  const auto [off_axis, behind] = AxisCoordinates(centre, moved.a, after_axis);
+  EXPECT_LT(off_axis, 1e-9);
+  EXPECT_NEAR(behind, 0.13, 1e-9);
+  EXPECT_EQ(moved.radius, before.radius);
+  // The nominal capsule no longer holds the camera's centre with the body's 2.1 cm half diagonal
+  // to spare: the shift alone exceeds its padding.
+  EXPECT_GT(PointSegmentDistance(moved.b, before.a, before.b), 0.02);
+  for (size_t i : {0u, 2u}) {
+    EXPECT_LT((platform->fixed_capsules[i].a - nominal.fixed_capsules[i].a).norm(), 1e-9);
+    EXPECT_LT((platform->fixed_capsules[i].b - nominal.fixed_capsules[i].b).norm(), 1e-9);
+  }
+}
+
+TEST(PlatformAroundRig, RejectsAnInvalidCalibrationNamingTheCamera) {
+  auto rig = sim::MakeRig();
+  ASSERT_TRUE(rig.ok()) << rig.status();
+  rig->cameras[2].rotation_camera_from_platform(0, 0) = 2.0;
+  const auto platform = PlatformAroundRig(*rig);
+  EXPECT_EQ(platform.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(platform.status().message().find("cam2"), std::string::npos) << platform.status();
+  EXPECT_NE(platform.status().message().find("rotation_camera_from_platform"), std::string::npos);
+  EXPECT_EQ(PlatformAroundRig(RigCalibration{}).status().code(),
+            absl::StatusCode::kInvalidArgument);
 }
 
 TEST(PlatformGeometry, ValidateRejectsBadPlanes) {

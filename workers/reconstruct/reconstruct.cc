@@ -120,6 +120,7 @@ absl::Status ReconstructOptions::Validate() const {
   VB_RETURN_IF_ERROR(connect.Validate());
   VB_RETURN_IF_ERROR(fit.Validate());
   VB_RETURN_IF_ERROR(trellis.Validate());
+  VB_RETURN_IF_ERROR(left_out_wood.Validate());
   VB_RETURN_IF_ERROR(fiducials.Validate());
   if (threads < 1) return absl::InvalidArgumentError("options.threads must be >= 1");
   return absl::OkStatus();
@@ -197,6 +198,11 @@ absl::StatusOr<ReconstructResult> ReconstructFromViews(const std::vector<View2D>
   result.model.wires = trellis.wires;
   result.model.posts = trellis.posts;
   result.timings.trellis_s = SecondsSince(t);
+
+  // Step 9: what connect was given and the model does not hold is wood the cameras saw and the
+  // arm must still avoid; the model's canes, and so every metric, stay as they are.
+  VB_ASSIGN_OR_RETURN(result.model.obstacles,
+                      LeftOutWood(canes, result.model, options.left_out_wood));
 
   if (result.model.canes.empty()) {
     result.empty_reason = pieces.empty() ? "no cane was matched across the views"

@@ -7,6 +7,8 @@
 //   3. correspondence across views, Gibbs sampling  6. connect canes into one tree (connect.h)
 //      and minimum expected loss (correspondence.h) 7. joint Ceres refinement (cane_fit.h)
 //   4. assemble 3D pieces into canes (cane_assembly.h) 8. wires and posts (trellis3d.h)
+//   9. the stretches of the canes given to step 6 that the model leaves out, as its obstacles
+//      (left_out_wood.h: avoided by the planner, no cane)
 // Between 3 and 4 the rig's rotations are refined on the confident matches and correspondence
 // runs again with the refined rig (rig_refine.h).
 // Steps 1-2 run per view on up to `threads` threads. Thread-safe (no shared state).
@@ -26,6 +28,7 @@
 #include "workers/reconstruct/correspondence.h"
 #include "workers/reconstruct/fiducials.h"
 #include "workers/reconstruct/head.h"
+#include "workers/reconstruct/left_out_wood.h"
 #include "workers/reconstruct/piece3d.h"
 #include "workers/reconstruct/rig_refine.h"
 #include "workers/reconstruct/segmenter.h"
@@ -43,6 +46,7 @@ struct ReconstructOptions {
   ConnectOptions connect;
   FitOptions fit;
   TrellisOptions trellis;
+  LeftOutWoodOptions left_out_wood;      // step 9: the seen wood the model leaves out
   RigRefineOptions rig_refine;           // step 3b: refine the rig on confident matches, re-match
   // Step 3's classifier for the first pass, with the rig as calibrated (correspondence.classifier
   // scores the second pass, with the refined rig).
