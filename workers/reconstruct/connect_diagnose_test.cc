@@ -10,8 +10,8 @@
 //  - With VB_CROSSING=1: per child of this vine, its likeliest join to a cane, right or wrong
 //    (LabelJoins), with its crossing evidence (MeasureCrossing: wood past the parent, miss).
 // Variants of the connect options (diagnosis only): VB_INSIDE, VB_KEEP_WITHIN,
-// VB_KEEP_MIN_LENGTH, VB_KEEP_TAPER, VB_MIN_JOIN, VB_MAX_ATTACH, VB_NO_MERGE, VB_CROSS_FACTOR,
-// VB_CROSS_SUPPORT, VB_CROSS_REACH, VB_CROSS_MISS.
+// VB_KEEP_MIN_LENGTH, VB_KEEP_TAPER, VB_MIN_JOIN, VB_MAX_ATTACH, VB_NO_MERGE, VB_NO_RESCUE,
+// VB_CROSS_FACTOR, VB_CROSS_SUPPORT, VB_CROSS_REACH, VB_CROSS_MISS.
 // Run with
 //   VB_INPUT=images VB_SEED=1300 VB_STOPS=12 [VB_VERBOSE=1] vb_reconstruct_test
 //     --gtest_also_run_disabled_tests --gtest_filter='ConnectLoss.DISABLED_*'
@@ -76,6 +76,7 @@ TEST(ConnectLoss, DISABLED_Report) {
     options.connect.min_join_probability = std::atof(v);
   if (const char* v = std::getenv("VB_MAX_ATTACH")) options.connect.max_attach_m = std::atof(v);
   if (std::getenv("VB_NO_MERGE")) options.connect.merge_continuations = false;
+  if (std::getenv("VB_NO_RESCUE")) options.connect.rescue_left_out = false;
   if (const char* v = std::getenv("VB_CROSS_FACTOR")) options.connect.crossing_factor = std::atof(v);
   if (const char* v = std::getenv("VB_CROSS_SUPPORT"))
     options.connect.crossing_min_support = std::atof(v);

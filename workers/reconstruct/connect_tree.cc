@@ -17,6 +17,49 @@ using connect_internal::Reverse;
 using connect_internal::EndOutward;
 using connect_internal::WhollyWithin;
 
+namespace {
+
+// Marks kept (1) every left-out cane (0) whose chosen parent is kept, until none changes: the
+// canes that hung on a cane now hung on the tree come with it. Returns how many.
+int FollowParents(const std::vector<int>& parent, std::vector<int>* kept) {
+  int count = 0;
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (size_t i = 0; i < parent.size(); ++i) {
+      if ((*kept)[i] != 0 || parent[i] < 0 || (*kept)[parent[i]] != 1) continue;
+      (*kept)[i] = 1;
+      ++count;
+      changed = true;
+    }
+  }
+  return count;
+}
+
+// Step 3b: while a left-out cane has a candidate join to the tree (a kept cane, the trunk or
+// the head) at least min_join_probability likely, the likeliest such join of all is taken, and
+// the canes that hung on that cane follow it (FollowParents).
+void RescueLeftOut(const std::vector<JoinCandidate>& joins, const std::vector<double>& probability,
+                   const ConnectOptions& options, std::vector<int>* kept, std::vector<int>* parent,
+                   std::vector<int>* join, ConnectSummary* sum) {
+  while (true) {
+    int best = -1;
+    for (size_t k = 0; k < joins.size(); ++k) {
+      const JoinCandidate& c = joins[k];
+      if ((*kept)[c.child] != 0 || (c.parent >= 0 && (*kept)[c.parent] != 1)) continue;
+      if (probability[k] < options.min_join_probability) continue;
+      if (best < 0 || probability[k] > probability[best]) best = static_cast<int>(k);
+    }
+    if (best < 0) return;
+    const int child = joins[best].child;
+    (*kept)[child] = 1;
+    (*parent)[child] = joins[best].parent;
+    (*join)[child] = best;
+    sum->rescued += 1 + FollowParents(*parent, kept);
+  }
+}
+
+}  // namespace
+
 absl::StatusOr<VineModel> BuildTree(const PreparedCanes& prepared_in,
                                     const std::vector<JoinCandidate>& joins,
                                     const HeadModel& head, const ConnectOptions& options,
@@ -91,6 +134,10 @@ absl::StatusOr<VineModel> BuildTree(const PreparedCanes& prepared_in,
     if (at >= 0 && kept[at] < 0) kept[at] = 0;
     for (int x : path) kept[x] = verdict;
   }
+  // The arborescence scores a join to a left-out cane as if that cane were in the tree: a cane
+  // may take a likely join to a cane left out over a less likely, still better-than-none one to
+  // the tree, and be lost with it. Hang such canes on the tree after all (step 3b).
+  if (options.rescue_left_out) RescueLeftOut(joins, probability, options, &kept, &parent, &join, &sum);
   // Canes left out but lying wholly near the vine's centre along the row are this vine's (a
   // neighbour's canes reach into the view from the sides): hang each on its likeliest join to
   // the tree, the likeliest of all first, so that a cane kept so can take others after it.
@@ -127,6 +174,7 @@ absl::StatusOr<VineModel> BuildTree(const PreparedCanes& prepared_in,
       parent[child] = joins[best].parent;
       join[child] = best;
       ++sum.kept_near;
+      if (options.rescue_left_out) sum.rescued += FollowParents(parent, &kept);
     }
   }
   // A leaf of the tree that reaches beyond keep_within_m and thickens away from the centre is a
