@@ -64,6 +64,13 @@ absl::Status ConnectOptions::Validate() const {
     return absl::InvalidArgumentError(
         "connect options: head_margin_m and spur_length_m must be >= 0");
   }
+  if (!std::isfinite(rescue_min_taper) || rescue_min_taper < 0) {
+    return absl::InvalidArgumentError("connect options: rescue_min_taper must be >= 0");
+  }
+  if (!(rescue_min_probability >= 0 && rescue_min_probability < 1)) {
+    return absl::InvalidArgumentError(
+        "connect options: rescue_min_probability must be 0 (off) or in (0, 1)");
+  }
   if (!(min_join_probability > 0 && min_join_probability < 1)) {
     return absl::InvalidArgumentError("connect options: min_join_probability must be in (0, 1)");
   }

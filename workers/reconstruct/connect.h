@@ -74,8 +74,12 @@ struct ConnectOptions {
                                          // this fraction of its length replaces its axis
   double sample_step_m = 0.01;       // spacing of samples along canes for distances
   double min_join_probability = 0.12; // a cane hangs on the tree only by a join this likely
-  bool rescue_left_out = true;       // step 3b: a cane left out though it has a join this likely
-                                     // to the tree hangs on it, and what hung on it follows
+  double rescue_min_probability = 0.12;  // step 3b: a cane left out though it has a join at
+                                     // least this likely to the tree hangs on it, and the canes
+                                     // hung on it follow; 0 turns this off; otherwise in (0, 1)
+  double rescue_min_taper = 1.0;     // ... a cane reaching beyond keep_within_m only if it is at
+                                     // least this much thicker at its end nearer the vine's
+                                     // centre (TaperTowardCentre); 0 turns this test off
   bool merge_continuations = true;   // append canes that continue their parent's tip to it
   double continuation_gap_m = 0.02;  // ... joining within this of the tip (arc length)
   double continuation_angle_deg = 35.0;  // ... with tangents within this angle
@@ -119,8 +123,9 @@ struct ConnectSummary {
   int kept_near = 0;      // of the attached: canes kept by step 6 (near the vine, no likely join)
   int inside_trunk_or_head = 0;  // canes dropped as duplicates of the trunk or head
   int dropped_thickening = 0;  // canes dropped as neighbours' (drop_thickening_ratio)
-  int rescued = 0;        // of the attached: canes hung on the tree by step 3b (rescue_left_out),
-                          // or following a cane kept so or by step 6
+  int rescued = 0;        // of the attached: canes hung on the tree by step 3b
+                          // (rescue_min_probability), or following a cane kept so or by
+                          // step 6
 };
 
 // Builds the model's canes: id 1 the trunk (from `trunk`, or if absent the thickest cane reaching

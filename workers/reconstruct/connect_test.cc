@@ -222,6 +222,14 @@ TEST(ConnectCanes, ACaneNearTheVineWithOnlyUnlikelyJoinsIsKept) {
   EXPECT_NE(std::string(rejected.status().message()).find("keep_within_m"), std::string::npos);
 }
 
+// A cane whose radius runs from r_a at a to r_b at b.
+Polyline3 TaperedLine(Eigen::Vector3d a, Eigen::Vector3d b, double r_a, double r_b) {
+  Polyline3 line = Line(a, b);
+  for (size_t i = 0; i < line.radii.size(); ++i)
+    line.radii[i] = r_a + (r_b - r_a) * static_cast<double>(i) / (line.radii.size() - 1);
+  return line;
+}
+
 // Step 3b: the arborescence would hang C on G (likelier than C's join to the head), but G has no
 // join to the tree and is left out: C, its join to the head better than none, hangs there after
 // all, and E, hung on C, comes with it. G stays out. Everything here reaches 0.6-0.9 m along the
@@ -248,7 +256,7 @@ TEST(ConnectCanes, ACaneHungOnALeftOutCaneTakesItsLikelyJoinToTheTree) {
                                       join(2, 0, 0.8, {0.6, 0.8, 1.2})};
   joins[0].base_is_last = true;  // C's base would be its end near G
   ConnectOptions off;
-  off.rescue_left_out = false;
+  off.rescue_min_probability = 0.0;
   ConnectSummary summary;
   auto model = BuildTree(prepared, joins, Head(), off, &summary);
   ASSERT_TRUE(model.ok()) << model.status();
@@ -279,14 +287,27 @@ TEST(ConnectCanes, ACaneHungOnALeftOutCaneTakesItsLikelyJoinToTheTree) {
   ASSERT_TRUE(model.ok()) << model.status();
   EXPECT_EQ(model->canes.size(), 1u);
   EXPECT_EQ(summary.rescued, 0);
-}
 
-// A cane whose radius runs from r_a at a to r_b at b.
-Polyline3 TaperedLine(Eigen::Vector3d a, Eigen::Vector3d b, double r_a, double r_b) {
-  Polyline3 line = Line(a, b);
-  for (size_t i = 0; i < line.radii.size(); ++i)
-    line.radii[i] = r_a + (r_b - r_a) * static_cast<double>(i) / (line.radii.size() - 1);
-  return line;
+  // A C thickening away from the vine's centre (a neighbour's cane, entering the view tip
+  // first) is not rescued, unless the taper test is off.
+  joins[1].probability = 0.3;
+  prepared.canes[0] = TaperedLine({0.06, 0.8, 1.05}, {0.6, 0.8, 1.2}, 0.003, 0.005);
+  model = BuildTree(prepared, joins, Head(), ConnectOptions(), &summary);
+  ASSERT_TRUE(model.ok()) << model.status();
+  EXPECT_EQ(model->canes.size(), 1u);
+  ConnectOptions any_taper;
+  any_taper.rescue_min_taper = 0.0;
+  model = BuildTree(prepared, joins, Head(), any_taper, &summary);
+  ASSERT_TRUE(model.ok()) << model.status();
+  EXPECT_EQ(model->canes.size(), 3u);
+  EXPECT_EQ(summary.rescued, 2);
+
+  ConnectOptions bad;
+  bad.rescue_min_probability = 1.0;
+  const auto rejected = BuildTree(prepared, joins, Head(), bad);
+  EXPECT_EQ(rejected.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(std::string(rejected.status().message()).find("rescue_min_probability"),
+            std::string::npos);
 }
 
 TEST(TaperTowardCentre, IsInnerOverOuterRadiusWhicheverWayTheCaneRuns) {

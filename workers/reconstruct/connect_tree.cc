@@ -36,17 +36,28 @@ int FollowParents(const std::vector<int>& parent, std::vector<int>* kept) {
 }
 
 // Step 3b: while a left-out cane has a candidate join to the tree (a kept cane, the trunk or
-// the head) at least min_join_probability likely, the likeliest such join of all is taken, and
-// the canes that hung on that cane follow it (FollowParents).
-void RescueLeftOut(const std::vector<JoinCandidate>& joins, const std::vector<double>& probability,
+// the head) at least rescue_min_probability likely, the likeliest such join of all is taken, and
+// the canes that hung on that cane follow it (FollowParents). A cane reaching beyond
+// keep_within_m must taper toward the vine's centre by at least rescue_min_taper.
+void RescueLeftOut(const std::vector<Polyline3>& canes, double centre_x,
+                   const std::vector<JoinCandidate>& joins, const std::vector<double>& probability,
                    const ConnectOptions& options, std::vector<int>* kept, std::vector<int>* parent,
                    std::vector<int>* join, ConnectSummary* sum) {
+  // A cane reaching beyond keep_within_m that thickens away from the vine's centre is more
+  // likely a neighbour's, entering the view tip first (step 6): it is not rescued.
+  std::vector<char> eligible(canes.size(), 1);
+  if (options.rescue_min_taper > 0.0 && options.keep_within_m > 0.0) {
+    for (size_t i = 0; i < canes.size(); ++i) {
+      eligible[i] = WhollyWithin(canes[i], centre_x, options.keep_within_m) ||
+                    TaperTowardCentre(canes[i], centre_x) >= options.rescue_min_taper;
+    }
+  }
   while (true) {
     int best = -1;
     for (size_t k = 0; k < joins.size(); ++k) {
       const JoinCandidate& c = joins[k];
       if ((*kept)[c.child] != 0 || (c.parent >= 0 && (*kept)[c.parent] != 1)) continue;
-      if (probability[k] < options.min_join_probability) continue;
+      if (!eligible[c.child] || probability[k] < options.rescue_min_probability) continue;
       if (best < 0 || probability[k] > probability[best]) best = static_cast<int>(k);
     }
     if (best < 0) return;
@@ -137,7 +148,9 @@ absl::StatusOr<VineModel> BuildTree(const PreparedCanes& prepared_in,
   // The arborescence scores a join to a left-out cane as if that cane were in the tree: a cane
   // may take a likely join to a cane left out over a less likely, still better-than-none one to
   // the tree, and be lost with it. Hang such canes on the tree after all (step 3b).
-  if (options.rescue_left_out) RescueLeftOut(joins, probability, options, &kept, &parent, &join, &sum);
+  if (options.rescue_min_probability > 0.0)
+    RescueLeftOut(canes, prepared->trunk->points.back().x(), joins, probability, options, &kept,
+                  &parent, &join, &sum);
   // Canes left out but lying wholly near the vine's centre along the row are this vine's (a
   // neighbour's canes reach into the view from the sides): hang each on its likeliest join to
   // the tree, the likeliest of all first, so that a cane kept so can take others after it.
@@ -174,7 +187,7 @@ absl::StatusOr<VineModel> BuildTree(const PreparedCanes& prepared_in,
       parent[child] = joins[best].parent;
       join[child] = best;
       ++sum.kept_near;
-      if (options.rescue_left_out) sum.rescued += FollowParents(parent, &kept);
+      if (options.rescue_min_probability > 0.0) sum.rescued += FollowParents(parent, &kept);
     }
   }
   // A leaf of the tree that reaches beyond keep_within_m and thickens away from the centre is a
