@@ -22,6 +22,14 @@
 //     GapSupportFn) is taken for a crossing, not a fork: its probability is multiplied by
 //     `crossing_factor`, but not below "none" if it was above it (a cane whose only likely join
 //     is a crossing keeps it rather than being lost).
+//  3b. Rescued (beyond the paper): the arborescence scores a join to a cane that is itself left
+//     out as if that cane were in the tree, so a cane may take a likely join to a left-out cane
+//     over a less likely one to the tree and be lost with it. While a left-out cane has a
+//     candidate join to the tree (a cane in it, the trunk or the head) at least
+//     `rescue_min_probability` likely, the likeliest such join of all is taken, and the canes
+//     that hung on the rescued cane by their chosen joins follow it (as they follow a cane kept
+//     by step 6). A cane reaching beyond `keep_within_m` is rescued only if it tapers toward
+//     the vine's centre by at least `rescue_min_taper` (a neighbour's cane thickens toward it).
 //  4. A cane that continues its parent from the parent's tip (a cane broken at a crossing or an
 //     occlusion) is appended to it, so that canes come out whole.
 //  5. A base near its join point (`max_bridge_m`) gets a first point there. So does a farther
@@ -43,7 +51,8 @@
 //     reaches beyond `keep_within_m` and is at least `drop_thickening_ratio` times as thick at
 //     its far third as at its third nearer the centre is a neighbour's cane hung by its tip on
 //     this vine's, and is left out (counted in ConnectSummary::dropped_thickening and unattached).
-// Thread-safe (pure).
+// Steps 1-2 are in connect.cc, 3-6 in connect_tree.cc (the arborescence in arborescence.h),
+// the geometry they share in connect_geometry.cc. Thread-safe (pure).
 #pragma once
 
 #include <functional>
