@@ -14,14 +14,23 @@
 //     the log-probabilities of the chosen joins is largest and the joins form a tree: a maximum
 //     spanning arborescence (Chu and Liu 1965; Edmonds 1967). "None" has probability
 //     `min_join_probability`; a cane with no parent, and every cane hanging on it, is left out
-//     (a neighbour's canes, ghosts). Left-out canes are not in the model at all: neither
-//     pruned nor avoided by the planner (like any cane the reconstruction misses).
+//     (a neighbour's canes, ghosts). Left-out canes are not among the model's canes (never
+//     pruned); reconstruct's step 9 (left_out_wood.h) carries the seen wood the model leaves out
+//     as its obstacles, which the planner avoids.
 //     Optionally (off by default: no gain on the bench, docs/reconstruction.md section 6), a
 //     join to a cane that the child visibly goes on across (beyond the paper: the images show
 //     wood along the child's line continued past the parent, MeasureCrossing, from the caller's
 //     GapSupportFn) is taken for a crossing, not a fork: its probability is multiplied by
 //     `crossing_factor`, but not below "none" if it was above it (a cane whose only likely join
 //     is a crossing keeps it rather than being lost).
+//  3b. Rescued (beyond the paper): the arborescence scores a join to a cane that is itself left
+//     out as if that cane were in the tree, so a cane may take a likely join to a left-out cane
+//     over a less likely one to the tree and be lost with it. While a left-out cane has a
+//     candidate join to the tree (a cane in it, the trunk or the head) at least
+//     `rescue_min_probability` likely, the likeliest such join of all is taken, and the canes
+//     that hung on the rescued cane by their chosen joins follow it (as they follow a cane kept
+//     by step 6). A cane reaching beyond `keep_within_m` is rescued only if it tapers toward
+//     the vine's centre by at least `rescue_min_taper` (a neighbour's cane thickens toward it).
 //  4. A cane that continues its parent from the parent's tip (a cane broken at a crossing or an
 //     occlusion) is appended to it, so that canes come out whole.
 //  5. A base near its join point (`max_bridge_m`) gets a first point there. So does a farther
@@ -43,7 +52,8 @@
 //     reaches beyond `keep_within_m` and is at least `drop_thickening_ratio` times as thick at
 //     its far third as at its third nearer the centre is a neighbour's cane hung by its tip on
 //     this vine's, and is left out (counted in ConnectSummary::dropped_thickening and unattached).
-// Thread-safe (pure).
+// Steps 1-2 are in connect.cc, 3-6 in connect_tree.cc (the arborescence in arborescence.h),
+// the geometry they share in connect_geometry.cc. Thread-safe (pure).
 #pragma once
 
 #include <functional>
@@ -74,6 +84,12 @@ struct ConnectOptions {
                                          // this fraction of its length replaces its axis
   double sample_step_m = 0.01;       // spacing of samples along canes for distances
   double min_join_probability = 0.12; // a cane hangs on the tree only by a join this likely
+  double rescue_min_probability = 0.12;  // step 3b: a cane left out though it has a join at
+                                     // least this likely to the tree hangs on it, and the canes
+                                     // hung on it follow; 0 turns this off; otherwise in (0, 1)
+  double rescue_min_taper = 1.0;     // ... a cane reaching beyond keep_within_m only if it is at
+                                     // least this much thicker at its end nearer the vine's
+                                     // centre (TaperTowardCentre); 0 turns this test off
   bool merge_continuations = true;   // append canes that continue their parent's tip to it
   double continuation_gap_m = 0.02;  // ... joining within this of the tip (arc length)
   double continuation_angle_deg = 35.0;  // ... with tangents within this angle
@@ -117,6 +133,9 @@ struct ConnectSummary {
   int kept_near = 0;      // of the attached: canes kept by step 6 (near the vine, no likely join)
   int inside_trunk_or_head = 0;  // canes dropped as duplicates of the trunk or head
   int dropped_thickening = 0;  // canes dropped as neighbours' (drop_thickening_ratio)
+  int rescued = 0;        // of the attached: canes hung on the tree by step 3b
+                          // (rescue_min_probability), or following a cane kept so or by
+                          // step 6
 };
 
 // Builds the model's canes: id 1 the trunk (from `trunk`, or if absent the thickest cane reaching

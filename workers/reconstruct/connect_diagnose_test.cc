@@ -10,8 +10,8 @@
 //  - With VB_CROSSING=1: per child of this vine, its likeliest join to a cane, right or wrong
 //    (LabelJoins), with its crossing evidence (MeasureCrossing: wood past the parent, miss).
 // Variants of the connect options (diagnosis only): VB_INSIDE, VB_KEEP_WITHIN,
-// VB_KEEP_MIN_LENGTH, VB_KEEP_TAPER, VB_MIN_JOIN, VB_MAX_ATTACH, VB_NO_MERGE, VB_CROSS_FACTOR,
-// VB_CROSS_SUPPORT, VB_CROSS_REACH, VB_CROSS_MISS.
+// VB_KEEP_MIN_LENGTH, VB_KEEP_TAPER, VB_MIN_JOIN, VB_MAX_ATTACH, VB_NO_MERGE, VB_RESCUE,
+// VB_RESCUE_TAPER, VB_CROSS_FACTOR, VB_CROSS_SUPPORT, VB_CROSS_REACH, VB_CROSS_MISS.
 // Run with
 //   VB_INPUT=images VB_SEED=1300 VB_STOPS=12 [VB_VERBOSE=1] vb_reconstruct_test
 //     --gtest_also_run_disabled_tests --gtest_filter='ConnectLoss.DISABLED_*'
@@ -76,6 +76,10 @@ TEST(ConnectLoss, DISABLED_Report) {
     options.connect.min_join_probability = std::atof(v);
   if (const char* v = std::getenv("VB_MAX_ATTACH")) options.connect.max_attach_m = std::atof(v);
   if (std::getenv("VB_NO_MERGE")) options.connect.merge_continuations = false;
+  if (const char* v = std::getenv("VB_RESCUE"))
+    options.connect.rescue_min_probability = std::atof(v);
+  if (const char* v = std::getenv("VB_RESCUE_TAPER"))
+    options.connect.rescue_min_taper = std::atof(v);
   if (const char* v = std::getenv("VB_CROSS_FACTOR")) options.connect.crossing_factor = std::atof(v);
   if (const char* v = std::getenv("VB_CROSS_SUPPORT"))
     options.connect.crossing_min_support = std::atof(v);
@@ -135,6 +139,26 @@ TEST(ConnectLoss, DISABLED_Report) {
       final_connectivity += m.connectivity / count;
     }
 
+    const double centre_x = prepared->trunk ? prepared->trunk->points.back().x() : 0.0;
+    // Canes that step 3b (rescue_min_probability) brings into the tree (VB_VERBOSE).
+    if (verbose && options.connect.rescue_min_probability > 0.0) {
+      ConnectOptions no_rescue = options.connect;
+      no_rescue.rescue_min_probability = 0.0;
+      const auto without = BuildTree(*prepared, joins, head->head, no_rescue, nullptr, gap_support);
+      ASSERT_TRUE(without.ok());
+      for (const Cane& m : model->canes) {
+        bool before = false;
+        for (const Cane& w : without->canes) before = before || SameLine(w.polyline, m.polyline);
+        if (before || m.kind == CaneKind::kTrunk) continue;
+        const Polyline3& c = m.polyline;
+        const int parent_index = static_cast<int>(*model->IndexOf(*m.parent_id));
+        std::printf("  rescued seed %llu: %.3f m, true %d, x %.2f..%.2f, taper %.2f, on %s (true %d)\n",
+                    static_cast<unsigned long long>(seed), c.Length(), MajorityCane(c, truth),
+                    c.points.front().x(), c.points.back().x(), TaperTowardCentre(c, centre_x),
+                    parent_index == 0 ? "root" : "cane",
+                    MajorityCane(model->canes[parent_index].polyline, truth));
+      }
+    }
     // Reason per assembled cane.
     std::vector<const Polyline3*> assembled;
     if (head->trunk) assembled.push_back(&*head->trunk);
@@ -146,7 +170,6 @@ TEST(ConnectLoss, DISABLED_Report) {
       has_join[j.child] = 1;
       best_p[j.child] = std::max(best_p[j.child], j.probability);
     }
-    const double centre_x = prepared->trunk ? prepared->trunk->points.back().x() : 0.0;
     for (size_t a = head->trunk ? 1 : 0; a < assembled.size(); ++a) {
       int p = -1;
       for (size_t i = 0; i < prepared->canes.size() && p < 0; ++i)

@@ -230,6 +230,86 @@ Polyline3 TaperedLine(Eigen::Vector3d a, Eigen::Vector3d b, double r_a, double r
   return line;
 }
 
+// Step 3b: the arborescence would hang C on G (likelier than C's join to the head), but G has no
+// join to the tree and is left out: C, its join to the head better than none, hangs there after
+// all, and E, hung on C, comes with it. G stays out. Everything here reaches 0.6-0.9 m along the
+// row, out of step 6's reach.
+TEST(ConnectCanes, ACaneHungOnALeftOutCaneTakesItsLikelyJoinToTheTree) {
+  const Polyline3 trunk = Line({0, 0.8, 0}, {0, 0.8, 0.95}, 0.025);
+  PreparedCanes prepared;
+  prepared.trunk = trunk;
+  prepared.canes = {Line({0.06, 0.8, 1.05}, {0.6, 0.8, 1.2}),  // C, from the head outward
+                    Line({0.62, 0.8, 1.25}, {0.9, 0.8, 1.5}),   // G, left out
+                    Line({0.6, 0.8, 1.18}, {0.8, 0.8, 1.0})};   // E, hung on C
+  auto join = [](int child, int parent, double p, Eigen::Vector3d at) {
+    JoinCandidate c;
+    c.child = child;
+    c.parent = parent;
+    c.target = parent < 0 ? JoinTarget::kHead : JoinTarget::kCane;
+    c.point = at;
+    c.probability = p;
+    return c;
+  };
+  std::vector<JoinCandidate> joins = {join(0, 1, 0.9, {0.62, 0.8, 1.25}),
+                                      join(0, -1, 0.3, {0.05, 0.8, 1.04}),
+                                      join(1, 0, 0.05, {0.6, 0.8, 1.2}),
+                                      join(2, 0, 0.8, {0.6, 0.8, 1.2})};
+  joins[0].base_is_last = true;  // C's base would be its end near G
+  ConnectOptions off;
+  off.rescue_min_probability = 0.0;
+  ConnectSummary summary;
+  auto model = BuildTree(prepared, joins, Head(), off, &summary);
+  ASSERT_TRUE(model.ok()) << model.status();
+  EXPECT_EQ(model->canes.size(), 1u);  // C on G, E on C, G on nothing: all out
+  EXPECT_EQ(summary.unattached, 3);
+
+  model = BuildTree(prepared, joins, Head(), ConnectOptions(), &summary);
+  ASSERT_TRUE(model.ok()) << model.status();
+  ASSERT_TRUE(model->Validate().ok()) << model->Validate();
+  EXPECT_EQ(summary.attached, 2);
+  EXPECT_EQ(summary.rescued, 2);
+  EXPECT_EQ(summary.unattached, 1);
+  const Cane* c = nullptr;
+  const Cane* e = nullptr;
+  for (const Cane& cane : model->canes) {
+    if (cane.polyline.points.back().isApprox(Eigen::Vector3d(0.6, 0.8, 1.2))) c = &cane;
+    if (cane.polyline.points.back().isApprox(Eigen::Vector3d(0.8, 0.8, 1.0))) e = &cane;
+    EXPECT_FALSE(cane.polyline.points.back().isApprox(Eigen::Vector3d(0.9, 0.8, 1.5)));
+  }
+  ASSERT_NE(c, nullptr);  // based at the head: the rescued join's orientation
+  ASSERT_NE(e, nullptr);
+  EXPECT_EQ(c->parent_id, CaneId(1));
+  EXPECT_EQ(e->parent_id, c->id);
+
+  // A join to the tree less likely than none does not rescue: all stay out.
+  joins[1].probability = 0.1;
+  model = BuildTree(prepared, joins, Head(), ConnectOptions(), &summary);
+  ASSERT_TRUE(model.ok()) << model.status();
+  EXPECT_EQ(model->canes.size(), 1u);
+  EXPECT_EQ(summary.rescued, 0);
+
+  // A C thickening away from the vine's centre (a neighbour's cane, entering the view tip
+  // first) is not rescued, unless the taper test is off.
+  joins[1].probability = 0.3;
+  prepared.canes[0] = TaperedLine({0.06, 0.8, 1.05}, {0.6, 0.8, 1.2}, 0.003, 0.005);
+  model = BuildTree(prepared, joins, Head(), ConnectOptions(), &summary);
+  ASSERT_TRUE(model.ok()) << model.status();
+  EXPECT_EQ(model->canes.size(), 1u);
+  ConnectOptions any_taper;
+  any_taper.rescue_min_taper = 0.0;
+  model = BuildTree(prepared, joins, Head(), any_taper, &summary);
+  ASSERT_TRUE(model.ok()) << model.status();
+  EXPECT_EQ(model->canes.size(), 3u);
+  EXPECT_EQ(summary.rescued, 2);
+
+  ConnectOptions bad;
+  bad.rescue_min_probability = 1.0;
+  const auto rejected = BuildTree(prepared, joins, Head(), bad);
+  EXPECT_EQ(rejected.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(std::string(rejected.status().message()).find("rescue_min_probability"),
+            std::string::npos);
+}
+
 TEST(TaperTowardCentre, IsInnerOverOuterRadiusWhicheverWayTheCaneRuns) {
   const Polyline3 outward = TaperedLine({0.4, 0.8, 1.3}, {0.9, 0.8, 1.3}, 0.005, 0.003);
   EXPECT_GT(TaperTowardCentre(outward, 0.0), 1.3);
