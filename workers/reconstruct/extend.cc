@@ -249,12 +249,13 @@ void SolveDepths(const CameraCalibration& camera, const std::vector<Eigen::Vecto
 absl::Status ExtendOptions::Validate() const {
   for (const auto& [value, field] :
        {std::pair{step_m, "step_m"}, {min_cane_length_m, "min_cane_length_m"},
-        {snap_px, "snap_px"}, {second_difference_sd_m, "second_difference_sd_m"},
+        {snap_px, "snap_px"},  {second_difference_sd_m, "second_difference_sd_m"},
         {plane_sd_m, "plane_sd_m"}, {max_depth_sd_m, "max_depth_sd_m"},
         {max_length_m, "max_length_m"}, {max_turn_rad, "max_turn_rad"}}) {
     if (absl::Status s = Positive(value, field); !s.ok()) return s;
   }
   for (const auto& [value, field] : {std::pair{min_length_m, "min_length_m"},
+                                     {anchor_span_m, "anchor_span_m"},
                                      {other_cane_px, "other_cane_px"},
                                      {background_px, "background_px"}}) {
     if (!std::isfinite(value) || value < 0) {
@@ -316,6 +317,34 @@ absl::Status ExtendCanes(const std::vector<View2D>& views, const RigCalibration&
     std::vector<Eigen::Vector3d> anchors;
     for (int k = options.anchor_points - 1; k >= 0; --k)
       anchors.push_back(cane.polyline.PointAt(std::max(0.0, length - k * options.step_m), arc));
+    if (options.anchor_span_m > 0) {
+      // A line through the last anchor_span_m of the cane: one noisy point near the tip would
+      // otherwise set the direction the depths continue in.
+      const double span = std::min(options.anchor_span_m, length);
+      const int m = std::max(3, static_cast<int>(span / 0.005) + 1);
+      Eigen::Vector3d mean_p = Eigen::Vector3d::Zero();
+      double mean_s = 0;
+      std::vector<std::pair<double, Eigen::Vector3d>> samples;
+      for (int i = 0; i < m; ++i) {
+        const double s_i = length - span * i / (m - 1);
+        samples.emplace_back(s_i, cane.polyline.PointAt(s_i, arc));
+        mean_p += samples.back().second;
+        mean_s += s_i;
+      }
+      mean_p /= m;
+      mean_s /= m;
+      Eigen::Vector3d slope = Eigen::Vector3d::Zero();
+      double var_s = 0;
+      for (const auto& [s_i, p_i] : samples) {
+        slope += (s_i - mean_s) * (p_i - mean_p);
+        var_s += (s_i - mean_s) * (s_i - mean_s);
+      }
+      slope /= var_s;
+      // Anchor the line at the tip as reconstructed (its projection continues into the 2D path).
+      const Eigen::Vector3d tip_point = cane.polyline.points.back();
+      for (int k = 0; k < options.anchor_points; ++k)
+        anchors[k] = tip_point - (options.anchor_points - 1 - k) * options.step_m * slope;
+    }
     const Eigen::Vector3d tip = anchors.back();
     const Eigen::Vector3d tangent = (tip - anchors[anchors.size() - 2]).normalized();
     const double tip_radius = cane.polyline.radii.back();

@@ -30,9 +30,11 @@ struct ExtendOptions {
   bool enabled = false;               // run the stage (off: the model is left as it is)
   double step_m = 0.005;              // 3D spacing of the continuation points (and anchors)
   int anchor_points = 4;              // the cane's last points (at step_m) that seed the depths
+  double anchor_span_m = 0.05;        // the anchors lie on a line fitted to this much of the cane
+                                      // before its tip (0: the cane's own points)
   double min_cane_length_m = 0.04;    // shorter canes are not extended (too little to continue)
   double snap_px = 3.0;               // the projected tip must lie this close to a skeleton path
-  double second_difference_sd_m = 0.0002;  // prior sd of a second difference (bending per step)
+  double second_difference_sd_m = 0.001;   // prior sd of a second difference (bending per step)
   double plane_sd_m = 0.1;            // prior sd of a point's distance to the vine plane (y)
   double max_depth_sd_m = 0.006;      // stop where a depth's predicted sd passes this
   double max_length_m = 0.3;          // longest extension of one tip
@@ -40,7 +42,7 @@ struct ExtendOptions {
   double max_turn_rad = 0.6;          // the largest turn of the 2D path at a junction
   double other_cane_px = 2.0;         // stop within this (plus its projected radius) of another
                                       // model cane's projection
-  double background_px = 2.0;         // a view contradicts a point if no wood lies within this
+  double background_px = 0.0;         // a view contradicts a point if no wood lies within this
                                       // (plus the projected radius) of its projection
   int image_margin_px = 3;            // a view must see a point this far inside to contradict it
 

@@ -54,7 +54,7 @@ std::vector<double> ListFromEnv(const char* name, std::vector<double> fallback) 
 TEST(Extend, DISABLED_Report) {
   const auto [first, count, images, fiducials] = ReportStopsFromEnv(1300, 10, true);
   const std::vector<double> sds = ListFromEnv("VB_EXT_SD", {0.004, 0.006, 0.010});
-  const std::vector<double> dds = ListFromEnv("VB_EXT_DD", {0.0002});
+  const std::vector<double> dds = ListFromEnv("VB_EXT_DD", {ExtendOptions{}.second_difference_sd_m});
   const std::vector<double> lens = ListFromEnv("VB_EXT_LEN", {0.3});
   double total = 0, one = 0, one_recalled = 0, one_continuing = 0, one_in_volume = 0;
   double trunk_below = 0, trunk_below_recalled = 0;
@@ -62,6 +62,10 @@ TEST(Extend, DISABLED_Report) {
     ExtendOptions options;
     std::vector<double> d_recall, d_precision;
     double added = 0, added_right = 0, recall = 0, precision = 0, time = 0;
+    // Wrong added length: on a ray that passes within 10 mm of the true vine in some camera
+    // (the 2D path was right, the depth wrong), or not; and added length inside one image.
+    double wrong_depth = 0, wrong_path = 0, added_one_view = 0, right_one_view = 0;
+    double added_wrong_tip = 0, right_wrong_tip = 0;  // added to a cane whose tip misses the vine
     int extended = 0, contradicted = 0, uncertain = 0;
   };
   std::vector<Arm> arms;
@@ -73,6 +77,10 @@ TEST(Extend, DISABLED_Report) {
         arm.options.max_depth_sd_m = sd;
         arm.options.second_difference_sd_m = dd;
         arm.options.max_length_m = len;
+        if (const char* span = std::getenv("VB_EXT_SPAN")) arm.options.anchor_span_m = std::atof(span);
+        if (const char* turn = std::getenv("VB_EXT_TURN")) arm.options.max_turn_rad = std::atof(turn);
+        if (const char* other = std::getenv("VB_EXT_OTHER")) arm.options.other_cane_px = std::atof(other);
+        if (const char* bg = std::getenv("VB_EXT_BACKGROUND")) arm.options.background_px = std::atof(bg);
         arms.push_back(arm);
       }
   double base_recall = 0, base_precision = 0;
@@ -142,10 +150,55 @@ TEST(Extend, DISABLED_Report) {
       for (size_t c = 0; c < extended.canes.size(); ++c) {
         const std::vector<Eigen::Vector3d>& pts = extended.canes[c].polyline.points;
         const size_t old = model.canes[c].polyline.points.size();
+        const bool tip_right = DistanceToModel(pts[old - 1], truth.canes) <= 0.010;
+        if (std::getenv("VB_VERBOSE") != nullptr && pts.size() > old && &arm == &arms.front()) {
+          const Cane& cane = model.canes[c];
+          int fg = 0, inside = 0;
+          for (size_t v = 0; v < stop.views.size(); ++v) {
+            const auto uv = result->rig.cameras[v].Project(pts[old - 1]);
+            if (!uv || !result->rig.cameras[v].InImage(*uv)) continue;
+            ++inside;
+            fg += ForegroundWithin(stop.views[v], int(std::lround(uv->x())), int(std::lround(uv->y())), 2);
+          }
+          bool parent_trunk = false, children = false;
+          for (const Cane& other : model.canes) {
+            parent_trunk |= cane.parent_id && other.id == *cane.parent_id && other.kind == CaneKind::kTrunk;
+            children |= other.parent_id && *other.parent_id == cane.id;
+          }
+          double right_len = 0, len = 0;
+          for (const Eigen::Vector3d& q : cane.polyline.Sample(0.005)) {
+            len += 0.005;
+            right_len += 0.005 * (DistanceToModel(q, truth.canes) <= 0.010);
+          }
+          const Eigen::Vector3d d = (pts[old - 1] - cane.polyline.PointAt(std::max(0.0, cane.polyline.Length() - 0.03))).normalized();
+          std::printf("TIP stop %llu right %d len %.3f cane_right %.2f x %.3f y %.3f z %.3f dir %.2f %.2f %.2f "
+                      "parent_trunk %d children %d inside %d fg %d radius %.4f added %zu\n",
+                      static_cast<unsigned long long>(first + k), tip_right, len, right_len / len,
+                      pts[old - 1].x(), pts[old - 1].y(), pts[old - 1].z(), d.x(), d.y(), d.z(),
+                      parent_trunk, children, inside, fg, cane.polyline.radii.back(), pts.size() - old);
+        }
         for (size_t i = old; i < pts.size(); ++i) {
           const double step = (pts[i] - pts[i - 1]).norm();
           arm.added += step;
-          arm.added_right += step * (DistanceToModel(pts[i], truth.canes) <= 0.010);
+          const bool right = DistanceToModel(pts[i], truth.canes) <= 0.010;
+          arm.added_right += step * right;
+          if (!tip_right) arm.added_wrong_tip += step, arm.right_wrong_tip += step * right;
+          int seen = 0;
+          for (const CameraCalibration& camera : stop.true_rig.cameras) {
+            const auto uv = camera.Project(pts[i]);
+            seen += uv && camera.InImage(*uv);
+          }
+          if (seen == 1) arm.added_one_view += step, arm.right_one_view += step * right;
+          if (right) continue;
+          bool on_ray = false;
+          for (const CameraCalibration& camera : stop.true_rig.cameras) {
+            const Eigen::Vector3d c = camera.CentreInPlatform();
+            const Eigen::Vector3d dir = (pts[i] - c).normalized();
+            for (const Cane& t : truth.canes)
+              for (const Eigen::Vector3d& q : t.polyline.Sample(0.005))
+                on_ray |= ((q - c) - (q - c).dot(dir) * dir).norm() <= 0.010;
+          }
+          (on_ray ? arm.wrong_depth : arm.wrong_path) += step;
         }
       }
     }
@@ -172,11 +225,15 @@ TEST(Extend, DISABLED_Report) {
     const auto [dp, dp_se] = mean_se(arm.d_precision);
     std::printf("sd %.4f dd %.5f len %.2f: recall %.4f (%+.4f +- %.4f) precision %.4f (%+.4f +- "
                 "%.4f); added %.2f m/stop, %.2f right; tips %d, contradicted %d, uncertain %d; "
-                "%.1f ms/stop\n",
+                "%.1f ms/stop\n    wrong: depth %.3f m/stop, path %.3f m/stop; inside one image %.3f m/stop, %.2f right; from wrong tips %.3f m/stop, %.2f right\n",
                 arm.options.max_depth_sd_m, arm.options.second_difference_sd_m,
                 arm.options.max_length_m, arm.recall / count, dr, dr_se, arm.precision / count,
                 dp, dp_se, arm.added / count, arm.added > 0 ? arm.added_right / arm.added : 0.0,
-                arm.extended, arm.contradicted, arm.uncertain, 1000 * arm.time / count);
+                arm.extended, arm.contradicted, arm.uncertain, 1000 * arm.time / count,
+                arm.wrong_depth / count, arm.wrong_path / count, arm.added_one_view / count,
+                arm.added_one_view > 0 ? arm.right_one_view / arm.added_one_view : 0.0,
+                arm.added_wrong_tip / count,
+                arm.added_wrong_tip > 0 ? arm.right_wrong_tip / arm.added_wrong_tip : 0.0);
   }
 }
 

@@ -98,11 +98,25 @@ TEST(ExtendCanes, ExtendsATipSeenByOneCameraWithinTolerance) {
   // into the part only one camera sees.
   for (size_t i = last_two + 1; i < extended.points.size(); ++i)
     EXPECT_LT(DistanceToLine(extended.points[i], cane.polyline), 0.010) << i;
-  EXPECT_GT((extended.points.back() - old_tip).norm(), 0.04);
+  EXPECT_GT((extended.points.back() - old_tip).norm(), 0.02);
   EXPECT_EQ(ImagesSeeing(rig, extended.points.back()), 1);
   EXPECT_NEAR(summary.added_length_m, extended.Length() - old_length, 1e-9);
   // The trunk is not extended.
   EXPECT_EQ(model.canes[0].polyline.points.size(), 2u);
+
+  // A looser depth cap follows the cane further; its depth drifts with distance from the tip
+  // (what the cap is for), but stays within tolerance over the first 4 cm.
+  ExtendOptions loose = On();
+  loose.max_depth_sd_m = 0.05;
+  loose.second_difference_sd_m = 0.0003;
+  VineModel far = VineWith(Truncated(cane, last_two + 1));
+  ASSERT_TRUE(ExtendCanes(views, rig, volume, loose, &far).ok());
+  const Polyline3& further = far.canes[1].polyline;
+  EXPECT_GT((further.points.back() - old_tip).norm(), 0.08);
+  for (size_t i = last_two + 1; i < further.points.size(); ++i) {
+    if ((further.points[i] - old_tip).norm() > 0.04) break;
+    EXPECT_LT(DistanceToLine(further.points[i], cane.polyline), 0.010) << i;
+  }
 }
 
 TEST(ExtendCanes, RejectsAnExtensionAnotherViewContradicts) {
