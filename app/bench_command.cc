@@ -96,7 +96,7 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   // --fiducials: the platform carries fiducials (sim/fiducials.h), drawn in the images and listed
   // in the calibration; the rig refinement uses them unless --rig-refine off.
   VB_ASSIGN_OR_RETURN(const bool fiducials, flags.Bool("fiducials", capture::SimCaptureOptions{}.fiducials));
-  // --extend on|off: the single-view extension of cane tips (step 7b); default as ExtendOptions.
+  // --extend on|off: the single-view extension of cane tips (step 4c); default as ExtendOptions.
   VB_ASSIGN_OR_RETURN(const bool extend,
                       flags.Bool("extend", reconstruct::ExtendOptions{}.enabled));
   if (rig_refine != "off" && rig_refine != "canes" && rig_refine != "trellis")

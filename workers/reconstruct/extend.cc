@@ -15,8 +15,8 @@ namespace {
 
 absl::Status Positive(double value, const char* field) {
   if (!std::isfinite(value) || value <= 0) {
-    return absl::InvalidArgumentError(absl::StrCat("extend.", field, " must be finite and > 0, is ",
-                                                   value));
+    return absl::InvalidArgumentError(
+        absl::StrCat("extend.", field, " must be finite and > 0, is ", value));
   }
   return absl::OkStatus();
 }
@@ -121,8 +121,8 @@ Eigen::Vector2d PathDirection(const std::vector<Eigen::Vector2d>& pts, bool from
       break;
     }
   }
-  const Eigen::Vector2d d = from_front ? Eigen::Vector2d(other - anchor)
-                                       : Eigen::Vector2d(anchor - other);
+  const Eigen::Vector2d d =
+      from_front ? Eigen::Vector2d(other - anchor) : Eigen::Vector2d(anchor - other);
   return d.norm() > 0 ? Eigen::Vector2d(d.normalized()) : Eigen::Vector2d::Zero();
 }
 
@@ -247,11 +247,14 @@ void SolveDepths(const CameraCalibration& camera, const std::vector<Eigen::Vecto
 }  // namespace
 
 absl::Status ExtendOptions::Validate() const {
-  for (const auto& [value, field] :
-       {std::pair{step_m, "step_m"}, {min_cane_length_m, "min_cane_length_m"},
-        {snap_px, "snap_px"},  {second_difference_sd_m, "second_difference_sd_m"},
-        {plane_sd_m, "plane_sd_m"}, {max_depth_sd_m, "max_depth_sd_m"},
-        {max_length_m, "max_length_m"}, {max_turn_rad, "max_turn_rad"}}) {
+  for (const auto& [value, field] : {std::pair{step_m, "step_m"},
+                                     {min_cane_length_m, "min_cane_length_m"},
+                                     {snap_px, "snap_px"},
+                                     {second_difference_sd_m, "second_difference_sd_m"},
+                                     {plane_sd_m, "plane_sd_m"},
+                                     {max_depth_sd_m, "max_depth_sd_m"},
+                                     {max_length_m, "max_length_m"},
+                                     {max_turn_rad, "max_turn_rad"}}) {
     if (absl::Status s = Positive(value, field); !s.ok()) return s;
   }
   for (const auto& [value, field] : {std::pair{min_length_m, "min_length_m"},
@@ -279,8 +282,8 @@ absl::Status ExtendCanes(const std::vector<View2D>& views, const RigCalibration&
                          VineModel* model, ExtendSummary* summary) {
   if (absl::Status s = options.Validate(); !s.ok()) return s;
   if (views.size() != rig.cameras.size()) {
-    return absl::InvalidArgumentError(absl::StrCat("views: ", views.size(), " for ",
-                                                   rig.cameras.size(), " cameras"));
+    return absl::InvalidArgumentError(
+        absl::StrCat("views: ", views.size(), " for ", rig.cameras.size(), " cameras"));
   }
   ExtendSummary local;
   ExtendSummary& sum = summary != nullptr ? *summary : local;
@@ -353,7 +356,8 @@ absl::Status ExtendCanes(const std::vector<View2D>& views, const RigCalibration&
     for (int v = 0; v < nv; ++v) {
       const CameraCalibration& camera = rig.cameras[v];
       const std::optional<Eigen::Vector2d> uv_tip = camera.Project(tip);
-      const std::optional<Eigen::Vector2d> uv_ahead = camera.Project(tip + options.step_m * tangent);
+      const std::optional<Eigen::Vector2d> uv_ahead =
+          camera.Project(tip + options.step_m * tangent);
       if (!uv_tip || !uv_ahead || !camera.InImage(*uv_tip)) continue;
       const Eigen::Vector2d ahead = *uv_ahead - *uv_tip;
       const double step_px = ahead.norm();
@@ -364,8 +368,7 @@ absl::Status ExtendCanes(const std::vector<View2D>& views, const RigCalibration&
       const std::vector<Eigen::Vector2d>& seg = views[v].segments[s].points;
       // Walk the way the cane points.
       const int n = static_cast<int>(seg.size());
-      const Eigen::Vector2d local =
-          seg[std::min(n - 1, k + 2)] - seg[std::max(0, k - 2)];
+      const Eigen::Vector2d local = seg[std::min(n - 1, k + 2)] - seg[std::max(0, k - 2)];
       const bool forward = local.dot(ahead) >= 0;
       const double max_px = step_px * (options.max_length_m / options.step_m + 2);
       const std::vector<Eigen::Vector2d> path =
@@ -403,8 +406,8 @@ absl::Status ExtendCanes(const std::vector<View2D>& views, const RigCalibration&
             continue;
           const double depth = (other.camera_from_platform() * points[i]).z();
           const double r_px = tip_radius * other.camera_matrix(0, 0) / std::max(depth, 0.05);
-          contradicted = !WoodNear(views[w], *uv,
-                                   static_cast<int>(std::ceil(options.background_px + r_px)));
+          contradicted =
+              !WoodNear(views[w], *uv, static_cast<int>(std::ceil(options.background_px + r_px)));
         }
         if (contradicted) {
           ext.contradicted = true;

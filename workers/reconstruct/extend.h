@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-// Single-view extension (docs/reconstruction.md, step 7b; beyond the paper): every stage before
+// Single-view extension (docs/reconstruction.md, step 4c; beyond the paper): every stage before
 // this one needs a cane in two views, so a cane whose tip runs out of all images but one (along
 // the row beyond the two-view strip, or hidden from the other cameras) ends where the second view
 // lost it. This stage follows each cane tip's 2D continuation along the skeleton of a view that
@@ -27,34 +27,36 @@
 namespace vb::reconstruct {
 
 struct ExtendOptions {
-  bool enabled = false;               // run the stage (off: the model is left as it is)
-  double step_m = 0.005;              // 3D spacing of the continuation points (and anchors)
-  int anchor_points = 4;              // the cane's last points (at step_m) that seed the depths
-  double anchor_span_m = 0.05;        // the anchors lie on a line fitted to this much of the cane
-                                      // before its tip (0: the cane's own points)
-  double min_cane_length_m = 0.04;    // shorter canes are not extended (too little to continue)
-  double snap_px = 3.0;               // the projected tip must lie this close to a skeleton path
-  double second_difference_sd_m = 0.001;   // prior sd of a second difference (bending per step)
-  double plane_sd_m = 0.1;            // prior sd of a point's distance to the vine plane (y)
-  double max_depth_sd_m = 0.006;      // stop where a depth's predicted sd passes this
-  double max_length_m = 0.3;          // longest extension of one tip
-  double min_length_m = 0.015;        // shorter extensions are dropped
-  double max_turn_rad = 0.6;          // the largest turn of the 2D path at a junction
-  double other_cane_px = 2.0;         // stop within this (plus its projected radius) of another
-                                      // model cane's projection
-  double background_px = 0.0;         // a view contradicts a point if no wood lies within this
-                                      // (plus the projected radius) of its projection
-  int image_margin_px = 3;            // a view must see a point this far inside to contradict it
+  // Run the stage. Off by default: on tuning stops it adds recall but costs precision
+  // (docs/reconstruction.md, step 4c); off, the model is left as it is.
+  bool enabled = false;
+  double step_m = 0.005;            // 3D spacing of the continuation points (and anchors)
+  int anchor_points = 4;            // the cane's last points (at step_m) that seed the depths
+  double anchor_span_m = 0.05;      // the anchors lie on a line fitted to this much of the cane
+                                    // before its tip (0: the cane's own points)
+  double min_cane_length_m = 0.04;  // shorter canes are not extended (too little to continue)
+  double snap_px = 3.0;             // the projected tip must lie this close to a skeleton path
+  double second_difference_sd_m = 0.001;  // prior sd of a second difference (bending per step)
+  double plane_sd_m = 0.1;                // prior sd of a point's distance to the vine plane (y)
+  double max_depth_sd_m = 0.006;          // stop where a depth's predicted sd passes this
+  double max_length_m = 0.3;              // longest extension of one tip
+  double min_length_m = 0.015;            // shorter extensions are dropped
+  double max_turn_rad = 0.6;              // the largest turn of the 2D path at a junction
+  double other_cane_px = 2.0;             // stop within this (plus its projected radius) of another
+                                          // model cane's projection
+  double background_px = 0.0;             // a view contradicts a point if no wood lies within this
+                                          // (plus the projected radius) of its projection
+  int image_margin_px = 3;  // a view must see a point this far inside to contradict it
 
   // INVALID_ARGUMENT naming the field for non-finite or out-of-range values.
   absl::Status Validate() const;
 };
 
 struct ExtendSummary {
-  int tips_tried = 0;        // cane tips looked at
-  int tips_extended = 0;     // tips given an extension
-  int contradicted = 0;      // extensions cut short by another view's background
-  int uncertain = 0;         // extensions cut short by the depth's predicted sd
+  int tips_tried = 0;     // cane tips looked at
+  int tips_extended = 0;  // tips given an extension
+  int contradicted = 0;   // extensions cut short by another view's background
+  int uncertain = 0;      // extensions cut short by the depth's predicted sd
   double added_length_m = 0.0;
 };
 

@@ -50,11 +50,16 @@ std::vector<double> ListFromEnv(const char* name, std::vector<double> fallback) 
 // fewer than two images and its recall; (b) for each max_depth_sd_m in VB_EXT_SD (comma list)
 // and second_difference_sd_m in VB_EXT_DD, ExtendCanes on a copy of the model: mean recall and
 // precision over the stops, their change (mean +- standard error), the added length and its
-// share within 10 mm of the true vine. VB_EXT_LEN: max_length_m.
+// share within 10 mm of the true vine; the wrong added length split by cause (a ray through the
+// true vine in some camera: wrong depth; else a wrong 2D path), inside one image, and added to
+// tips already more than 10 mm from the true vine. VB_EXT_LEN: max_length_m; VB_EXT_SPAN,
+// VB_EXT_TURN, VB_EXT_OTHER, VB_EXT_BACKGROUND: the ExtendOptions fields of like names;
+// VB_VERBOSE: one line per extended tip of the first setting (its features, right or not).
 TEST(Extend, DISABLED_Report) {
   const auto [first, count, images, fiducials] = ReportStopsFromEnv(1300, 10, true);
   const std::vector<double> sds = ListFromEnv("VB_EXT_SD", {0.004, 0.006, 0.010});
-  const std::vector<double> dds = ListFromEnv("VB_EXT_DD", {ExtendOptions{}.second_difference_sd_m});
+  const std::vector<double> dds =
+      ListFromEnv("VB_EXT_DD", {ExtendOptions{}.second_difference_sd_m});
   const std::vector<double> lens = ListFromEnv("VB_EXT_LEN", {0.3});
   double total = 0, one = 0, one_recalled = 0, one_continuing = 0, one_in_volume = 0;
   double trunk_below = 0, trunk_below_recalled = 0;
@@ -77,10 +82,14 @@ TEST(Extend, DISABLED_Report) {
         arm.options.max_depth_sd_m = sd;
         arm.options.second_difference_sd_m = dd;
         arm.options.max_length_m = len;
-        if (const char* span = std::getenv("VB_EXT_SPAN")) arm.options.anchor_span_m = std::atof(span);
-        if (const char* turn = std::getenv("VB_EXT_TURN")) arm.options.max_turn_rad = std::atof(turn);
-        if (const char* other = std::getenv("VB_EXT_OTHER")) arm.options.other_cane_px = std::atof(other);
-        if (const char* bg = std::getenv("VB_EXT_BACKGROUND")) arm.options.background_px = std::atof(bg);
+        if (const char* span = std::getenv("VB_EXT_SPAN"))
+          arm.options.anchor_span_m = std::atof(span);
+        if (const char* turn = std::getenv("VB_EXT_TURN"))
+          arm.options.max_turn_rad = std::atof(turn);
+        if (const char* other = std::getenv("VB_EXT_OTHER"))
+          arm.options.other_cane_px = std::atof(other);
+        if (const char* bg = std::getenv("VB_EXT_BACKGROUND"))
+          arm.options.background_px = std::atof(bg);
         arms.push_back(arm);
       }
   double base_recall = 0, base_precision = 0;
@@ -135,8 +144,9 @@ TEST(Extend, DISABLED_Report) {
       VineModel extended = model;
       ExtendSummary summary;
       const auto t0 = std::chrono::steady_clock::now();
-      ASSERT_TRUE(ExtendCanes(stop.views, result->rig, options.volume, arm.options, &extended,
-                              &summary).ok());
+      ASSERT_TRUE(
+          ExtendCanes(stop.views, result->rig, options.volume, arm.options, &extended, &summary)
+              .ok());
       arm.time += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       const auto after = EvaluateReconstruction(extended, truth);
       ASSERT_TRUE(after.ok());
@@ -158,11 +168,13 @@ TEST(Extend, DISABLED_Report) {
             const auto uv = result->rig.cameras[v].Project(pts[old - 1]);
             if (!uv || !result->rig.cameras[v].InImage(*uv)) continue;
             ++inside;
-            fg += ForegroundWithin(stop.views[v], int(std::lround(uv->x())), int(std::lround(uv->y())), 2);
+            fg += ForegroundWithin(stop.views[v], int(std::lround(uv->x())),
+                                   int(std::lround(uv->y())), 2);
           }
           bool parent_trunk = false, children = false;
           for (const Cane& other : model.canes) {
-            parent_trunk |= cane.parent_id && other.id == *cane.parent_id && other.kind == CaneKind::kTrunk;
+            parent_trunk |=
+                cane.parent_id && other.id == *cane.parent_id && other.kind == CaneKind::kTrunk;
             children |= other.parent_id && *other.parent_id == cane.id;
           }
           double right_len = 0, len = 0;
@@ -170,12 +182,16 @@ TEST(Extend, DISABLED_Report) {
             len += 0.005;
             right_len += 0.005 * (DistanceToModel(q, truth.canes) <= 0.010);
           }
-          const Eigen::Vector3d d = (pts[old - 1] - cane.polyline.PointAt(std::max(0.0, cane.polyline.Length() - 0.03))).normalized();
-          std::printf("TIP stop %llu right %d len %.3f cane_right %.2f x %.3f y %.3f z %.3f dir %.2f %.2f %.2f "
-                      "parent_trunk %d children %d inside %d fg %d radius %.4f added %zu\n",
-                      static_cast<unsigned long long>(first + k), tip_right, len, right_len / len,
-                      pts[old - 1].x(), pts[old - 1].y(), pts[old - 1].z(), d.x(), d.y(), d.z(),
-                      parent_trunk, children, inside, fg, cane.polyline.radii.back(), pts.size() - old);
+          const Eigen::Vector3d d =
+              (pts[old - 1] - cane.polyline.PointAt(std::max(0.0, cane.polyline.Length() - 0.03)))
+                  .normalized();
+          std::printf(
+              "TIP stop %llu right %d len %.3f cane_right %.2f x %.3f y %.3f z %.3f dir %.2f %.2f "
+              "%.2f "
+              "parent_trunk %d children %d inside %d fg %d radius %.4f added %zu\n",
+              static_cast<unsigned long long>(first + k), tip_right, len, right_len / len,
+              pts[old - 1].x(), pts[old - 1].y(), pts[old - 1].z(), d.x(), d.y(), d.z(),
+              parent_trunk, children, inside, fg, cane.polyline.radii.back(), pts.size() - old);
         }
         for (size_t i = old; i < pts.size(); ++i) {
           const double step = (pts[i] - pts[i - 1]).norm();
@@ -206,9 +222,10 @@ TEST(Extend, DISABLED_Report) {
   auto share = [&](double x) { return total > 0 ? x / total : 0.0; };
   std::printf("stops %llu-%llu (%s)\n", static_cast<unsigned long long>(first),
               static_cast<unsigned long long>(first + count - 1), images ? "images" : "labels");
-  std::printf("true length inside exactly one image: %.4f (recalled %.4f; not recalled, in the "
-              "working volume %.4f; on a recalled cane, reachable from a recalled sample %.4f)\n",
-              share(one), share(one_recalled), share(one_in_volume), share(one_continuing));
+  std::printf(
+      "true length inside exactly one image: %.4f (recalled %.4f; not recalled, in the "
+      "working volume %.4f; on a recalled cane, reachable from a recalled sample %.4f)\n",
+      share(one), share(one_recalled), share(one_in_volume), share(one_continuing));
   std::printf("trunk inside fewer than two images: %.4f (recalled %.4f)\n", share(trunk_below),
               share(trunk_below_recalled));
   std::printf("without extension: recall %.4f precision %.4f\n", base_recall / count,
@@ -223,17 +240,19 @@ TEST(Extend, DISABLED_Report) {
   for (const Arm& arm : arms) {
     const auto [dr, dr_se] = mean_se(arm.d_recall);
     const auto [dp, dp_se] = mean_se(arm.d_precision);
-    std::printf("sd %.4f dd %.5f len %.2f: recall %.4f (%+.4f +- %.4f) precision %.4f (%+.4f +- "
-                "%.4f); added %.2f m/stop, %.2f right; tips %d, contradicted %d, uncertain %d; "
-                "%.1f ms/stop\n    wrong: depth %.3f m/stop, path %.3f m/stop; inside one image %.3f m/stop, %.2f right; from wrong tips %.3f m/stop, %.2f right\n",
-                arm.options.max_depth_sd_m, arm.options.second_difference_sd_m,
-                arm.options.max_length_m, arm.recall / count, dr, dr_se, arm.precision / count,
-                dp, dp_se, arm.added / count, arm.added > 0 ? arm.added_right / arm.added : 0.0,
-                arm.extended, arm.contradicted, arm.uncertain, 1000 * arm.time / count,
-                arm.wrong_depth / count, arm.wrong_path / count, arm.added_one_view / count,
-                arm.added_one_view > 0 ? arm.right_one_view / arm.added_one_view : 0.0,
-                arm.added_wrong_tip / count,
-                arm.added_wrong_tip > 0 ? arm.right_wrong_tip / arm.added_wrong_tip : 0.0);
+    std::printf(
+        "sd %.4f dd %.5f len %.2f: recall %.4f (%+.4f +- %.4f) precision %.4f (%+.4f +- "
+        "%.4f); added %.2f m/stop, %.2f right; tips %d, contradicted %d, uncertain %d; "
+        "%.1f ms/stop\n    wrong: depth %.3f m/stop, path %.3f m/stop; inside one image %.3f "
+        "m/stop, %.2f right; from wrong tips %.3f m/stop, %.2f right\n",
+        arm.options.max_depth_sd_m, arm.options.second_difference_sd_m, arm.options.max_length_m,
+        arm.recall / count, dr, dr_se, arm.precision / count, dp, dp_se, arm.added / count,
+        arm.added > 0 ? arm.added_right / arm.added : 0.0, arm.extended, arm.contradicted,
+        arm.uncertain, 1000 * arm.time / count, arm.wrong_depth / count, arm.wrong_path / count,
+        arm.added_one_view / count,
+        arm.added_one_view > 0 ? arm.right_one_view / arm.added_one_view : 0.0,
+        arm.added_wrong_tip / count,
+        arm.added_wrong_tip > 0 ? arm.right_wrong_tip / arm.added_wrong_tip : 0.0);
   }
 }
 

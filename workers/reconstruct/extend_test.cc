@@ -131,8 +131,8 @@ TEST(ExtendCanes, RejectsAnExtensionAnotherViewContradicts) {
   {
     VineModel model = cut;
     ExtendSummary summary;
-    ASSERT_TRUE(ExtendCanes(SyntheticViews(truth, rig), rig, WorkingVolume{}, On(), &model,
-                            &summary).ok());
+    ASSERT_TRUE(
+        ExtendCanes(SyntheticViews(truth, rig), rig, WorkingVolume{}, On(), &model, &summary).ok());
     EXPECT_EQ(summary.tips_extended, 1);
     EXPECT_GT(model.canes[1].polyline.points.size(), 21u);
   }
@@ -156,8 +156,9 @@ TEST(ExtendCanes, LeavesTheModelWhenDisabled) {
   const VineModel truth = VineWith(cane);
   VineModel model = VineWith(Truncated(cane, 21));
   ExtendSummary summary;
-  ASSERT_TRUE(ExtendCanes(SyntheticViews(truth, rig), rig, WorkingVolume{}, ExtendOptions{},
-                          &model, &summary).ok());
+  ASSERT_TRUE(ExtendCanes(SyntheticViews(truth, rig), rig, WorkingVolume{}, ExtendOptions{}, &model,
+                          &summary)
+                  .ok());
   EXPECT_EQ(model.canes[1].polyline.points.size(), 21u);
   EXPECT_EQ(summary.tips_tried, 0);
 }

@@ -191,7 +191,8 @@ absl::StatusOr<ReconstructResult> ReconstructFromViews(const std::vector<View2D>
     result.timings.refine_s = SecondsSince(t);
   }
   t = std::chrono::steady_clock::now();
-  VB_RETURN_IF_ERROR(ExtendCanes(views, rig, options.volume, options.extend, &result.model, &result.extend));
+  VB_RETURN_IF_ERROR(
+      ExtendCanes(views, rig, options.volume, options.extend, &result.model, &result.extend));
   result.timings.extend_s = SecondsSince(t);
 
   t = std::chrono::steady_clock::now();

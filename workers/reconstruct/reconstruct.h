@@ -43,7 +43,7 @@ struct ReconstructOptions {
   HeadOptions head;
   ConnectOptions connect;
   FitOptions fit;
-  ExtendOptions extend;                  // step 7b: cane tips continued in one view (extend.h)
+  ExtendOptions extend;                  // step 4c: cane tips continued in one view (extend.h)
   TrellisOptions trellis;
   RigRefineOptions rig_refine;           // step 3b: refine the rig on confident matches, re-match
   // Step 3's classifier for the first pass, with the rig as calibrated (correspondence.classifier
