@@ -96,6 +96,9 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   // --fiducials: the platform carries fiducials (sim/fiducials.h), drawn in the images and listed
   // in the calibration; the rig refinement uses them unless --rig-refine off.
   VB_ASSIGN_OR_RETURN(const bool fiducials, flags.Bool("fiducials", capture::SimCaptureOptions{}.fiducials));
+  // --extend on|off: the single-view extension of cane tips (step 4c); default as ExtendOptions.
+  VB_ASSIGN_OR_RETURN(const bool extend,
+                      flags.Bool("extend", reconstruct::ExtendOptions{}.enabled));
   if (rig_refine != "off" && rig_refine != "canes" && rig_refine != "trellis")
     return absl::InvalidArgumentError("--rig-refine must be off, canes or trellis");
   if (input != "images" && input != "labels" && input != "truth")
@@ -115,6 +118,7 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   options.threads = static_cast<int>(threads);
   options.rig_refine.enabled = rig_refine != "off";
   options.rig_refine.use_trellis = rig_refine == "trellis";
+  options.extend.enabled = extend;
   const reconstruct::SegmenterModel& segmenter = reconstruct::BuiltinSegmenterModel();
 
   std::vector<ReconstructionMetrics> metrics;
@@ -258,6 +262,7 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   stage("head_s", &reconstruct::StageTimings::head_s);
   stage("connect_s", &reconstruct::StageTimings::connect_s);
   stage("refine_s", &reconstruct::StageTimings::refine_s);
+  stage("extend_s", &reconstruct::StageTimings::extend_s);
   stage("trellis_s", &reconstruct::StageTimings::trellis_s);
   stage("total_s", &reconstruct::StageTimings::total_s);
 

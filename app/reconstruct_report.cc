@@ -8,7 +8,8 @@ nlohmann::json TimingsToJson(const reconstruct::StageTimings& t) {
           {"correspondence_s", t.correspondence_s}, {"rig_refine_s", t.rig_refine_s},
           {"assembly_s", t.assembly_s},
           {"head_s", t.head_s},             {"connect_s", t.connect_s},
-          {"refine_s", t.refine_s},         {"trellis_s", t.trellis_s},
+          {"refine_s", t.refine_s},         {"extend_s", t.extend_s},
+          {"trellis_s", t.trellis_s},
           {"total_s", t.total_s}};
 }
 

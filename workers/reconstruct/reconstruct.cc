@@ -119,6 +119,7 @@ absl::Status ReconstructOptions::Validate() const {
   VB_RETURN_IF_ERROR(head.Validate());
   VB_RETURN_IF_ERROR(connect.Validate());
   VB_RETURN_IF_ERROR(fit.Validate());
+  VB_RETURN_IF_ERROR(extend.Validate());
   VB_RETURN_IF_ERROR(trellis.Validate());
   VB_RETURN_IF_ERROR(left_out_wood.Validate());
   VB_RETURN_IF_ERROR(fiducials.Validate());
@@ -190,6 +191,10 @@ absl::StatusOr<ReconstructResult> ReconstructFromViews(const std::vector<View2D>
         RefineModel(&result.model, views, rig, options.fit, deadline, &result.fit));
     result.timings.refine_s = SecondsSince(t);
   }
+  t = std::chrono::steady_clock::now();
+  VB_RETURN_IF_ERROR(
+      ExtendCanes(views, rig, options.volume, options.extend, &result.model, &result.extend));
+  result.timings.extend_s = SecondsSince(t);
 
   t = std::chrono::steady_clock::now();
   VB_ASSIGN_OR_RETURN(const Trellis trellis,

@@ -26,6 +26,7 @@
 #include "workers/reconstruct/cane_fit.h"
 #include "workers/reconstruct/connect.h"
 #include "workers/reconstruct/correspondence.h"
+#include "workers/reconstruct/extend.h"
 #include "workers/reconstruct/fiducials.h"
 #include "workers/reconstruct/head.h"
 #include "workers/reconstruct/left_out_wood.h"
@@ -45,6 +46,7 @@ struct ReconstructOptions {
   HeadOptions head;
   ConnectOptions connect;
   FitOptions fit;
+  ExtendOptions extend;                  // step 4c: cane tips continued in one view (extend.h)
   TrellisOptions trellis;
   LeftOutWoodOptions left_out_wood;      // step 9: the seen wood the model leaves out
   RigRefineOptions rig_refine;           // step 3b: refine the rig on confident matches, re-match
@@ -61,7 +63,7 @@ struct ReconstructOptions {
 // Wall-clock seconds per step (per-view steps: the wall time of all views together).
 struct StageTimings {
   double segment_s = 0, structure_s = 0, correspondence_s = 0, assembly_s = 0, head_s = 0,
-         connect_s = 0, refine_s = 0, rig_refine_s = 0, trellis_s = 0, total_s = 0;
+         connect_s = 0, refine_s = 0, extend_s = 0, rig_refine_s = 0, trellis_s = 0, total_s = 0;
 };
 
 struct ReconstructResult {
@@ -72,6 +74,7 @@ struct ReconstructResult {
   int assembled_canes = 0;       // canes after assembly
   ConnectSummary connect;
   FitSummary fit;
+  ExtendSummary extend;
   RigRefineSummary rig_refine;
   // Per camera: the platform's fiducials looked for and found (none when the rig lists none, or
   // fiducial detection or rig refinement is off).

@@ -1,0 +1,71 @@
+// SPDX-License-Identifier: Apache-2.0
+// Single-view extension (docs/reconstruction.md, step 4c; beyond the paper): every stage before
+// this one needs a cane in two views, so a cane whose tip runs out of all images but one (along
+// the row beyond the two-view strip, or hidden from the other cameras) ends where the second view
+// lost it. This stage follows each cane tip's 2D continuation along the skeleton of a view that
+// shows wood beyond the projected tip, and puts each continuation point on its camera ray at the
+// depth that continues the 3D cane most smoothly: least squares on the depths t_i of
+// X_i = C + t_i r_i, minimising the second differences of the sequence (the cane's last 3D
+// points, then X_1..X_n) with a weak pull toward the vine plane. The problem is linear in the
+// depths; its covariance gives each depth's standard deviation, and the extension stops where
+// that passes `max_depth_sd_m` (the extrapolation grows uncertain with distance from the tip).
+// It also stops where another camera that should see the point shows background around it (a
+// contradiction), where the path runs onto another model cane, leaves the working volume, or
+// turns sharply at a junction.
+// Extended stretches are appended to the canes' polylines; vine_model.v1 has no field to mark
+// them, so ExtendSummary counts them. Thread-safe (pure function of its inputs).
+#pragma once
+
+#include <vector>
+
+#include "absl/status/status.h"
+#include "core/calibration.h"
+#include "core/vine_model.h"
+#include "workers/reconstruct/piece3d.h"
+#include "workers/reconstruct/view2d.h"
+
+namespace vb::reconstruct {
+
+struct ExtendOptions {
+  // Run the stage. Off by default: on tuning stops it adds recall but costs precision
+  // (docs/reconstruction.md, step 4c); off, the model is left as it is.
+  bool enabled = false;
+  double step_m = 0.005;            // 3D spacing of the continuation points (and anchors)
+  int anchor_points = 4;            // the cane's last points (at step_m) that seed the depths
+  double anchor_span_m = 0.05;      // the anchors lie on a line fitted to this much of the cane
+                                    // before its tip (0: the cane's own points)
+  double min_cane_length_m = 0.04;  // shorter canes are not extended (too little to continue)
+  double snap_px = 3.0;             // the projected tip must lie this close to a skeleton path
+  double second_difference_sd_m = 0.001;  // prior sd of a second difference (bending per step)
+  double plane_sd_m = 0.1;                // prior sd of a point's distance to the vine plane (y)
+  double max_depth_sd_m = 0.006;          // stop where a depth's predicted sd passes this
+  double max_length_m = 0.3;              // longest extension of one tip
+  double min_length_m = 0.015;            // shorter extensions are dropped
+  double max_turn_rad = 0.6;              // the largest turn of the 2D path at a junction
+  double other_cane_px = 2.0;             // stop within this (plus its projected radius) of another
+                                          // model cane's projection
+  double background_px = 0.0;             // a view contradicts a point if no wood lies within this
+                                          // (plus the projected radius) of its projection
+  int image_margin_px = 3;  // a view must see a point this far inside to contradict it
+
+  // INVALID_ARGUMENT naming the field for non-finite or out-of-range values.
+  absl::Status Validate() const;
+};
+
+struct ExtendSummary {
+  int tips_tried = 0;     // cane tips looked at
+  int tips_extended = 0;  // tips given an extension
+  int contradicted = 0;   // extensions cut short by another view's background
+  int uncertain = 0;      // extensions cut short by the depth's predicted sd
+  double added_length_m = 0.0;
+};
+
+// Extends the tips of the canes (kind kCane) of `model` in place, as described above. views[i]
+// was seen by rig.cameras[i]; the vine plane is the median y of the model's cane points.
+// Points are added only inside `volume`. INVALID_ARGUMENT naming "views" if their count differs
+// from the rig's cameras, or the option's field if options are invalid.
+absl::Status ExtendCanes(const std::vector<View2D>& views, const RigCalibration& rig,
+                         const WorkingVolume& volume, const ExtendOptions& options,
+                         VineModel* model, ExtendSummary* summary = nullptr);
+
+}  // namespace vb::reconstruct

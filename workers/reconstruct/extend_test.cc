@@ -1,0 +1,185 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "workers/reconstruct/extend.h"
+
+#include <cmath>
+
+#include "core/geometry.h"
+#include "gmock/gmock.h"
+#include "gtest/gtest.h"
+#include "sim/rig.h"
+#include "workers/reconstruct/synthetic_views.h"
+
+namespace vb::reconstruct {
+namespace {
+
+// A smooth cane in the vine plane region (y ~ 0.8 m) from x0 to x1 along the row, rising and
+// bending a little out of the plane, every 1 cm.
+Cane CurvedCane(double x0, double x1) {
+  Cane cane;
+  cane.id = CaneId(2);
+  cane.parent_id = CaneId(1);
+  cane.kind = CaneKind::kCane;
+  for (double x = x0; x <= x1 + 1e-9; x += 0.01) {
+    const double u = x - x0;
+    cane.polyline.points.emplace_back(x, 0.8 + 0.03 * u * u, 1.05 + 0.12 * u - 0.05 * u * u);
+    cane.polyline.radii.push_back(0.005);
+  }
+  return cane;
+}
+
+VineModel VineWith(const Cane& cane) {
+  VineModel model;
+  Cane trunk;
+  trunk.id = CaneId(1);
+  trunk.kind = CaneKind::kTrunk;
+  trunk.polyline.points = {{0.0, 0.8, 0.5}, {0.0, 0.8, 1.0}};
+  trunk.polyline.radii = {0.015, 0.015};
+  model.canes.push_back(trunk);
+  model.canes.push_back(cane);
+  return model;
+}
+
+int ImagesSeeing(const RigCalibration& rig, const Eigen::Vector3d& p) {
+  int n = 0;
+  for (const CameraCalibration& camera : rig.cameras) {
+    const auto uv = camera.Project(p);
+    n += uv && camera.InImage(*uv);
+  }
+  return n;
+}
+
+double DistanceToLine(const Eigen::Vector3d& p, const Polyline3& line) {
+  double best = 1e9;
+  for (size_t i = 0; i + 1 < line.points.size(); ++i) {
+    double t = 0;
+    best = std::min(best, PointSegmentDistance(p, line.points[i], line.points[i + 1], &t));
+  }
+  return best;
+}
+
+// The first `n` points of the cane.
+Cane Truncated(const Cane& cane, size_t n) {
+  Cane out = cane;
+  out.polyline.points.resize(n);
+  out.polyline.radii.resize(n);
+  return out;
+}
+
+ExtendOptions On() {
+  ExtendOptions options;
+  options.enabled = true;
+  return options;
+}
+
+TEST(ExtendCanes, ExtendsATipSeenByOneCameraWithinTolerance) {
+  const RigCalibration rig = sim::MakeRig().value();
+  const Cane cane = CurvedCane(0.4, 1.5);
+  // The cane leaves the two-view strip along the row: cut the model where it does.
+  size_t last_two = 0;
+  for (size_t i = 0; i < cane.polyline.points.size(); ++i)
+    if (ImagesSeeing(rig, cane.polyline.points[i]) >= 2) last_two = i;
+  ASSERT_GT(last_two, 20u);
+  ASSERT_LT(last_two + 10, cane.polyline.points.size());
+  for (size_t i = last_two + 1; i < last_two + 8; ++i)
+    ASSERT_EQ(ImagesSeeing(rig, cane.polyline.points[i]), 1) << i;
+  const VineModel truth = VineWith(cane);
+  const std::vector<View2D> views = SyntheticViews(truth, rig);
+  VineModel model = VineWith(Truncated(cane, last_two + 1));
+  const Eigen::Vector3d old_tip = model.canes[1].polyline.points.back();
+  const double old_length = model.canes[1].polyline.Length();
+  WorkingVolume volume;
+  volume.box.max().x() = 1.6;  // the cane runs beyond the default volume's 1.1 m
+  ExtendSummary summary;
+  ASSERT_TRUE(ExtendCanes(views, rig, volume, On(), &model, &summary).ok());
+  EXPECT_EQ(summary.tips_extended, 1);
+  const Polyline3& extended = model.canes[1].polyline;
+  ASSERT_GT(extended.points.size(), last_two + 1);
+  // Every added point lies within the metrics' 10 mm of the true cane, and the extension reaches
+  // into the part only one camera sees.
+  for (size_t i = last_two + 1; i < extended.points.size(); ++i)
+    EXPECT_LT(DistanceToLine(extended.points[i], cane.polyline), 0.010) << i;
+  EXPECT_GT((extended.points.back() - old_tip).norm(), 0.02);
+  EXPECT_EQ(ImagesSeeing(rig, extended.points.back()), 1);
+  EXPECT_NEAR(summary.added_length_m, extended.Length() - old_length, 1e-9);
+  // The trunk is not extended.
+  EXPECT_EQ(model.canes[0].polyline.points.size(), 2u);
+
+  // A looser depth cap follows the cane further; its depth drifts with distance from the tip
+  // (what the cap is for), but stays within tolerance over the first 4 cm.
+  ExtendOptions loose = On();
+  loose.max_depth_sd_m = 0.05;
+  loose.second_difference_sd_m = 0.0003;
+  VineModel far = VineWith(Truncated(cane, last_two + 1));
+  ASSERT_TRUE(ExtendCanes(views, rig, volume, loose, &far).ok());
+  const Polyline3& further = far.canes[1].polyline;
+  EXPECT_GT((further.points.back() - old_tip).norm(), 0.08);
+  for (size_t i = last_two + 1; i < further.points.size(); ++i) {
+    if ((further.points[i] - old_tip).norm() > 0.04) break;
+    EXPECT_LT(DistanceToLine(further.points[i], cane.polyline), 0.010) << i;
+  }
+}
+
+TEST(ExtendCanes, RejectsAnExtensionAnotherViewContradicts) {
+  const RigCalibration rig = sim::MakeRig().value();
+  // A cane in the middle of the view, cut at 0.25 m: every camera sees where it would continue.
+  const Cane cane = CurvedCane(0.05, 0.6);
+  const VineModel truth = VineWith(cane);
+  const VineModel cut = VineWith(Truncated(cane, 21));
+  ASSERT_EQ(ImagesSeeing(rig, cane.polyline.points[30]), 3);
+
+  // All views show the continuation: it is followed (the control).
+  {
+    VineModel model = cut;
+    ExtendSummary summary;
+    ASSERT_TRUE(
+        ExtendCanes(SyntheticViews(truth, rig), rig, WorkingVolume{}, On(), &model, &summary).ok());
+    EXPECT_EQ(summary.tips_extended, 1);
+    EXPECT_GT(model.canes[1].polyline.points.size(), 21u);
+  }
+  // Only camera 0 shows wood beyond the tip; the others show background where the extension
+  // would project: rejected.
+  {
+    std::vector<View2D> views = SyntheticViews(cut, rig);
+    views[0] = SyntheticViews(truth, rig)[0];
+    VineModel model = cut;
+    ExtendSummary summary;
+    ASSERT_TRUE(ExtendCanes(views, rig, WorkingVolume{}, On(), &model, &summary).ok());
+    EXPECT_EQ(summary.tips_extended, 0);
+    EXPECT_GE(summary.contradicted, 1);
+    EXPECT_EQ(model.canes[1].polyline.points.size(), 21u);
+  }
+}
+
+TEST(ExtendCanes, LeavesTheModelWhenDisabled) {
+  const RigCalibration rig = sim::MakeRig().value();
+  const Cane cane = CurvedCane(0.05, 0.6);
+  const VineModel truth = VineWith(cane);
+  VineModel model = VineWith(Truncated(cane, 21));
+  ExtendSummary summary;
+  ASSERT_TRUE(ExtendCanes(SyntheticViews(truth, rig), rig, WorkingVolume{}, ExtendOptions{}, &model,
+                          &summary)
+                  .ok());
+  EXPECT_EQ(model.canes[1].polyline.points.size(), 21u);
+  EXPECT_EQ(summary.tips_tried, 0);
+}
+
+TEST(ExtendCanes, RejectsBadOptionsNamingTheField) {
+  const RigCalibration rig = sim::MakeRig().value();
+  VineModel model = VineWith(CurvedCane(0.05, 0.3));
+  const std::vector<View2D> views = SyntheticViews(model, rig);
+  ExtendOptions options = On();
+  options.max_depth_sd_m = -1;
+  absl::Status status = ExtendCanes(views, rig, WorkingVolume{}, options, &model);
+  EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(status.message(), testing::HasSubstr("max_depth_sd_m"));
+  options = On();
+  options.anchor_points = 1;
+  status = ExtendCanes(views, rig, WorkingVolume{}, options, &model);
+  EXPECT_THAT(status.message(), testing::HasSubstr("anchor_points"));
+  status = ExtendCanes({views[0]}, rig, WorkingVolume{}, On(), &model);
+  EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(status.message(), testing::HasSubstr("views"));
+}
+
+}  // namespace
+}  // namespace vb::reconstruct
