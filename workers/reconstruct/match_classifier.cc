@@ -36,9 +36,53 @@ MatchClassifier CalibratedRigMatchClassifier() {
   return c;
 }
 
+namespace {
+
+// Mean over views of in_image * centreline_px / 10 px: feature 13 of ComputeMatchFeatures.
+double WeightedCentreline(const std::vector<ViewSupport>& supports) {
+  double centreline = 0.0;
+  for (const ViewSupport& s : supports) centreline += s.in_image * s.centreline_px;
+  return supports.empty() ? 0.0 : centreline / static_cast<double>(supports.size()) / 10.0;
+}
+
+}  // namespace
+
+RefinementAgreement MeasureRefinement(const MatchCandidate& candidate, const PolylineFit& fit,
+                                      const CameraCalibration& camera_a,
+                                      const CameraCalibration& camera_b,
+                                      const std::vector<OtherView>& others,
+                                      const std::vector<const View2D*>& other_images,
+                                      const std::vector<ViewSupport>& before,
+                                      const PolylineFitOptions& fit_options,
+                                      const OtherViewFitOptions& other_options) {
+  RefinementAgreement out;
+  if (others.empty() || other_options.rounds <= 0 || other_images.size() != others.size() ||
+      before.size() != others.size()) {
+    return out;
+  }
+  PolylineFit refined = fit;
+  if (RefineInOtherViews(candidate, camera_a, camera_b, others, fit_options, other_options,
+                         &refined) <= 0) {
+    return out;
+  }
+  out.kept = true;
+  const size_t n = std::min(fit.points.size(), refined.points.size());
+  for (size_t i = 0; i < n; ++i) out.mean_shift_m += (refined.points[i] - fit.points[i]).norm();
+  out.mean_shift_m /= std::max<size_t>(1, n);
+  std::vector<ViewSupport> after;
+  after.reserve(others.size());
+  for (size_t v = 0; v < others.size(); ++v) {
+    after.push_back(CheckInView(refined.points, *other_images[v], *others[v].samples,
+                                *others[v].camera));
+  }
+  out.centreline_gain = WeightedCentreline(before) - WeightedCentreline(after);
+  return out;
+}
+
 MatchFeatures ComputeMatchFeatures(const MatchCandidate& candidate, const PolylineFit& fit,
                                    const std::vector<ViewSupport>& others,
-                                   const WorkingVolume& volume) {
+                                   const WorkingVolume& volume,
+                                   const RefinementAgreement& refinement) {
   MatchFeatures f{};
   const auto& hits = candidate.hits;
   const double n = std::max<double>(1.0, hits.size());
@@ -85,6 +129,11 @@ MatchFeatures ComputeMatchFeatures(const MatchCandidate& candidate, const Polyli
   const double offset = (mean_y - 0.5 * (volume.box.min().y() + volume.box.max().y())) / half_y;
   f[18] = offset * offset;
   f[15] = std::log(std::max(radius / std::max<size_t>(1, fit.hit_radii.size()), 1e-4) / 0.005);
+  if (refinement.kept) {
+    f[19] = 1.0;
+    f[20] = std::log1p(refinement.mean_shift_m / 0.005);
+    f[21] = refinement.centreline_gain;
+  }
   for (double& v : f) {
     if (!std::isfinite(v)) v = 0.0;
   }
