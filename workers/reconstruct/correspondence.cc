@@ -219,6 +219,10 @@ absl::StatusOr<std::vector<ScoredCandidate>> ScoreCandidates(
           FindCandidates(a, samples[a], rig.cameras[a], b, samples[b], rig.cameras[b],
                          candidate_options);
       const std::vector<OtherView> other_views = OtherViewsOf(a, b, views, samples, rig);
+      std::vector<const View2D*> other_images;  // the views other_views samples, in order
+      for (int c = 0; c < n; ++c) {
+        if (c != a && c != b && !IsEmptyView(views[c])) other_images.push_back(&views[c]);
+      }
       for (size_t i = 0; i < candidates.size(); ++i) {
         if (i % 64 == 0) VB_RETURN_IF_ERROR(deadline.Check("correspondence"));
         ScoredCandidate s;
@@ -241,7 +245,14 @@ absl::StatusOr<std::vector<ScoredCandidate>> ScoreCandidates(
           others.push_back(CheckInView(s.fit.points, views[c], samples[c], rig.cameras[c]));
         }
         s.multi_view = !others.empty();
-        s.features = s.multi_view ? ComputeMatchFeatures(s.candidate, s.fit, others, options.volume)
+        // How the selected pieces' refinement would move it (match_classifier.h).
+        const RefinementAgreement refinement =
+            s.refined ? RefinementAgreement{}
+                      : MeasureRefinement(s.candidate, s.fit, rig.cameras[a], rig.cameras[b],
+                                          other_views, other_images, others, options.fit,
+                                          options.other_views);
+        s.features = s.multi_view ? ComputeMatchFeatures(s.candidate, s.fit, others,
+                                                         options.volume, refinement)
                                   : s.two_view_features;
         s.probability = MatchProbability(
             s.features, s.multi_view ? options.classifier.multi_view : options.classifier.two_view);

@@ -69,8 +69,10 @@ struct CorrespondenceOptions {
   // from segmented images (2 gave 0.59 / 0.87 and 0.56 / 0.85; 16 gave 0.66 / 0.84): cane
   // assembly still drops most ghosts, but cannot recover missed canes. 4 since the selected
   // pieces are refined in the other views (other_views): with 5 that gained recall and
-  // connectivity but lost a little precision (docs/reconstruction.md, section 3).
-  double alpha = 4.0;
+  // connectivity but lost a little precision (docs/reconstruction.md, section 3). 3.5 since the
+  // classifier's refinement features (match_classifier.h) and the weights retrained with them on
+  // the rig of 2026-11-22: with the committed weights 5 gained recall but lost precision.
+  double alpha = 3.5;
 
   // INVALID_ARGUMENT naming the field for non-finite or out-of-range values (sample_step_px
   // outside [0.5, 50], min_epipolar_sin outside [0, 1), min_hits < 2, max_gap_samples < 0,

@@ -324,9 +324,12 @@ TEST(MatchSegments, RefiningInTheOtherViewsRaisesPrecision) {
   const RigCalibration truth_rig = Rig(3);
   const RigCalibration rig = sim::PerturbCalibration(truth_rig, 1.0, seed);
   const std::vector<View2D> views = SyntheticViews(scene.vine, truth_rig);
-  CorrespondenceOptions off;
+  // The refinement features (match_classifier.h) off in both, so that both select alike.
+  CorrespondenceOptions on;
+  for (int i : {19, 20, 21}) on.classifier.multi_view[i] = 0.0;
+  CorrespondenceOptions off = on;
   off.other_views.rounds = 0;
-  const auto refined = MatchSegments(views, rig, {}, Deadline::Infinite());
+  const auto refined = MatchSegments(views, rig, on, Deadline::Infinite());
   const auto two_view = MatchSegments(views, rig, off, Deadline::Infinite());
   ASSERT_TRUE(refined.ok()) << refined.status();
   ASSERT_TRUE(two_view.ok()) << two_view.status();

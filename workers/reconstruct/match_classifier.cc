@@ -15,12 +15,12 @@ MatchClassifier DefaultMatchClassifier() {
   // VB_TRAIN_INPUT=labels,images, VB_TRAIN_PASS=second, the default) on candidates of the
   // pipeline's second pass (after MatchWithRigRefinement) on rendered stops with the platform's
   // fiducials, seeds 1000-1099, vine 1, calibration 1 px off: once on the renderer's label images
-  // and once on the segmenter's output: 180511 candidates, 28573 right; training AUC 0.986
-  // (multi-view), 0.975 (two-view). Tuning seeds 1100-1139
-  // re-checked CorrespondenceOptions::alpha (docs/reconstruction.md, section 3).
+  // and once on the segmenter's output, the default rig of 2026-11-22, with the refinement
+  // features 19-21: 181348 candidates, 29516 right; training AUC 0.986 (multi-view), 0.972
+  // (two-view) (VB_DEV_STOPS=0).
   MatchClassifier c;
-  c.multi_view = {-2.9260, -0.1533, -0.2538, 0.1044, 0.0183, -9.4352, -0.3405, 0.2780, 3.2980, 1.0806, 0.8505, -3.8335, 5.9451, -11.2383, -1.0794, -1.4102, -1.5526, 1.9249, -15.7478};
-  c.two_view = {-4.7004, -0.2249, -1.1877, -0.1828, 0.7095, -11.2540, -0.2152, 0.7455, 4.0569, 1.1602, 1.1105, 0.0000, 0.0000, 0.0000, 0.0000, -1.6248, 0.0000, 0.0000, -26.8994};
+  c.multi_view = {-2.3742, -0.2758, -0.2329, 0.1134, -0.0223, -8.1053, -0.2816, -1.2012, 3.7284, 1.0856, 0.8379, -6.5119, 5.7752, -7.4007, 0.2930, -1.4455, -0.4452, 1.6496, -16.7099, 1.1531, -2.6993, -2.5107};
+  c.two_view = {-5.3968, -0.2740, -1.2360, -0.1466, 0.7152, -9.8974, -0.1747, 0.7356, 4.6802, 1.1054, 1.1247, 0.0000, 0.0000, 0.0000, 0.0000, -1.5798, 0.0000, 0.0000, -27.5482, 0.0000, 0.0000, 0.0000};
   return c;
 }
 
@@ -36,9 +36,53 @@ MatchClassifier CalibratedRigMatchClassifier() {
   return c;
 }
 
+namespace {
+
+// Mean over views of in_image * centreline_px / 10 px: feature 13 of ComputeMatchFeatures.
+double WeightedCentreline(const std::vector<ViewSupport>& supports) {
+  double centreline = 0.0;
+  for (const ViewSupport& s : supports) centreline += s.in_image * s.centreline_px;
+  return supports.empty() ? 0.0 : centreline / static_cast<double>(supports.size()) / 10.0;
+}
+
+}  // namespace
+
+RefinementAgreement MeasureRefinement(const MatchCandidate& candidate, const PolylineFit& fit,
+                                      const CameraCalibration& camera_a,
+                                      const CameraCalibration& camera_b,
+                                      const std::vector<OtherView>& others,
+                                      const std::vector<const View2D*>& other_images,
+                                      const std::vector<ViewSupport>& before,
+                                      const PolylineFitOptions& fit_options,
+                                      const OtherViewFitOptions& other_options) {
+  RefinementAgreement out;
+  if (others.empty() || other_options.rounds <= 0 || other_images.size() != others.size() ||
+      before.size() != others.size()) {
+    return out;
+  }
+  PolylineFit refined = fit;
+  if (RefineInOtherViews(candidate, camera_a, camera_b, others, fit_options, other_options,
+                         &refined) <= 0) {
+    return out;
+  }
+  out.kept = true;
+  const size_t n = std::min(fit.points.size(), refined.points.size());
+  for (size_t i = 0; i < n; ++i) out.mean_shift_m += (refined.points[i] - fit.points[i]).norm();
+  out.mean_shift_m /= std::max<size_t>(1, n);
+  std::vector<ViewSupport> after;
+  after.reserve(others.size());
+  for (size_t v = 0; v < others.size(); ++v) {
+    after.push_back(CheckInView(refined.points, *other_images[v], *others[v].samples,
+                                *others[v].camera));
+  }
+  out.centreline_gain = WeightedCentreline(before) - WeightedCentreline(after);
+  return out;
+}
+
 MatchFeatures ComputeMatchFeatures(const MatchCandidate& candidate, const PolylineFit& fit,
                                    const std::vector<ViewSupport>& others,
-                                   const WorkingVolume& volume) {
+                                   const WorkingVolume& volume,
+                                   const RefinementAgreement& refinement) {
   MatchFeatures f{};
   const auto& hits = candidate.hits;
   const double n = std::max<double>(1.0, hits.size());
@@ -85,6 +129,11 @@ MatchFeatures ComputeMatchFeatures(const MatchCandidate& candidate, const Polyli
   const double offset = (mean_y - 0.5 * (volume.box.min().y() + volume.box.max().y())) / half_y;
   f[18] = offset * offset;
   f[15] = std::log(std::max(radius / std::max<size_t>(1, fit.hit_radii.size()), 1e-4) / 0.005);
+  if (refinement.kept) {
+    f[19] = 1.0;
+    f[20] = std::log1p(refinement.mean_shift_m / 0.005);
+    f[21] = refinement.centreline_gain;
+  }
   for (double& v : f) {
     if (!std::isfinite(v)) v = 0.0;
   }

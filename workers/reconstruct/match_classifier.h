@@ -16,7 +16,7 @@
 namespace vb::reconstruct {
 
 // Feature vector of a candidate; index 0 is the constant 1 (bias). See ComputeMatchFeatures.
-inline constexpr int kMatchFeatureCount = 19;
+inline constexpr int kMatchFeatureCount = 22;
 using MatchFeatures = std::array<double, kMatchFeatureCount>;
 
 // Weights of the logistic model: P(right) = 1 / (1 + exp(-w . features)). Two models: one for
@@ -34,6 +34,34 @@ MatchClassifier DefaultMatchClassifier();
 // confident pieces refine the rig): trained on such candidates.
 MatchClassifier CalibratedRigMatchClassifier();
 
+// What refining a candidate in the views outside its pair (RefineInOtherViews) does to it. A
+// right match whose pair fixes depth poorly lies 1-2 cm deep, and the other view sees it offset
+// across its cane: the refinement moves it onto that cane, and the other view agrees afterwards.
+// A wrong one is refused (the curve cannot bring the residuals down) or stays where the other
+// view shows no skeleton along it.
+struct RefinementAgreement {
+  bool kept = false;          // RefineInOtherViews kept a refined fit (returned > 0)
+  double mean_shift_m = 0.0;  // mean distance between each hit's point before and after
+  // Over the other views, the in-image-weighted mean distance of the points to a centreline
+  // (ViewSupport::centreline_px, / 10 px as feature 13) before the refinement minus after it;
+  // 0 when not kept.
+  double centreline_gain = 0.0;
+};
+
+// Refines a copy of `fit` (FitPolyline of `candidate` with camera_a, camera_b) in `others`
+// (RefineInOtherViews with `fit_options`, `other_options`) and measures the change.
+// `other_images[i]` is the view that others[i] samples; `before[i]` its CheckInView of the
+// unrefined fit. Nothing is measured (all 0) when the sizes differ, others is empty or
+// other_options.rounds is 0. Thread-safe.
+RefinementAgreement MeasureRefinement(const MatchCandidate& candidate, const PolylineFit& fit,
+                                      const CameraCalibration& camera_a,
+                                      const CameraCalibration& camera_b,
+                                      const std::vector<OtherView>& others,
+                                      const std::vector<const View2D*>& other_images,
+                                      const std::vector<ViewSupport>& before,
+                                      const PolylineFitOptions& fit_options,
+                                      const OtherViewFitOptions& other_options);
+
 // Features: 1, log(length / 0.1 m), log(0.25 + RMS reprojection error in a, px), the same in b,
 // log(0.25 + max residual px), mean |log| radius ratio between the views, log(1 + turning per
 // metre), min over the views of the mean |sin| epipolar angle, hit density (hits per sample
@@ -42,10 +70,13 @@ MatchClassifier CalibratedRigMatchClassifier();
 // fraction, mean centreline distance / 10 px and tangent agreement; log(mean radius / 5 mm);
 // from the other views again, fraction inside times the near and aligned fractions; and the
 // squared offset of the piece's mean y (across the row) from the middle of `volume`, in units of
-// its half-depth (canes cluster about the trellis plane; wrong matches scatter in depth).
+// its half-depth (canes cluster about the trellis plane; wrong matches scatter in depth); from
+// `refinement` (all 0 by default: not measured): 1 if the refined fit was kept, log(1 + mean
+// shift / 5 mm) if kept, and the centreline distance's gain.
 MatchFeatures ComputeMatchFeatures(const MatchCandidate& candidate, const PolylineFit& fit,
                                    const std::vector<ViewSupport>& others,
-                                   const WorkingVolume& volume);
+                                   const WorkingVolume& volume,
+                                   const RefinementAgreement& refinement = {});
 
 // 1 / (1 + exp(-weights . features)), clamped against overflow.
 double MatchProbability(const MatchFeatures& features, const MatchFeatures& weights);

@@ -9,9 +9,11 @@
 #include <vector>
 
 #include "gtest/gtest.h"
+#include "sim/rig.h"
 #include "workers/reconstruct/correspondence.h"
 #include "workers/reconstruct/correspondence_test_util.h"
 #include "workers/reconstruct/reconstruct.h"
+#include "workers/reconstruct/synthetic_views.h"
 
 namespace vb::reconstruct {
 namespace {
@@ -102,6 +104,74 @@ TEST(MatchClassifier, DefaultWeightsAreFinite) {
     EXPECT_TRUE(std::isfinite(c.multi_view[i]));
     EXPECT_TRUE(std::isfinite(c.two_view[i]));
   }
+}
+
+// One cane 14 degrees from the horizontal pair's epipolar lines, view 1's skeleton moved
+// `shift_px` across itself (as near a junction), so that the pair (0, 1) puts it ~1 cm deep; and,
+// when `other_cane_in_view_2`, view 2 shows only a different cane 3 cm higher.
+std::vector<View2D> IllConditionedViews(const RigCalibration& rig, double shift_px,
+                                        bool other_cane_in_view_2) {
+  const auto one_cane = [](double z0, double z1) {
+    VineModel model;
+    Cane cane;
+    cane.id = CaneId(1);
+    cane.kind = CaneKind::kTrunk;
+    cane.polyline.points = {{-0.12, 0.80, z0}, {0.12, 0.80, z1}};
+    cane.polyline.radii = {0.004, 0.004};
+    model.canes.push_back(cane);
+    return model;
+  };
+  std::vector<View2D> views = SyntheticViews(one_cane(1.00, 1.06), rig);
+  Segment2D& shifted = views[1].segments.at(0);
+  const Eigen::Vector2d along = (shifted.points.back() - shifted.points.front()).normalized();
+  for (Eigen::Vector2d& q : shifted.points) q += shift_px * Eigen::Vector2d(-along.y(), along.x());
+  if (other_cane_in_view_2) views[2] = SyntheticViews(one_cane(1.03, 1.09), rig)[2];
+  return views;
+}
+
+// The features of the longest candidate of pair (0, 1) scored with `options`.
+MatchFeatures LongestOfPair01(const std::vector<View2D>& views, const RigCalibration& rig,
+                              const CorrespondenceOptions& options) {
+  const auto scored = ScoreCandidates(views, rig, options, Deadline::Infinite());
+  EXPECT_TRUE(scored.ok()) << scored.status();
+  const ScoredCandidate* best = nullptr;
+  for (const ScoredCandidate& c : scored.value()) {
+    if (c.candidate.view_a != 0 || c.candidate.view_b != 1) continue;
+    if (!best || c.candidate.hits.size() > best->candidate.hits.size()) best = &c;
+  }
+  EXPECT_NE(best, nullptr);
+  return best ? best->features : MatchFeatures{};
+}
+
+// Features 19-21 say how the refinement in the other view moves a candidate: a right match of
+// an ill-conditioned pair is moved ~1 cm onto its cane, and is nearer the third view's
+// centreline after it; where the third view shows another cane nothing is refined, and the first pass (no
+// refinement) measures nothing.
+TEST(MatchClassifier, RefinementFeaturesTellWhetherTheThirdViewAgrees) {
+  const RigCalibration rig = sim::MakeRig(sim::RigOptions{}).value();
+  CorrespondenceOptions options;
+  const MatchFeatures moved = LongestOfPair01(IllConditionedViews(rig, 0.75, false), rig, options);
+  std::printf("[ refinement ] kept %.0f, shift %.1f mm, centreline distance %.2f px closer\n",
+              moved[19], 5.0 * std::expm1(moved[20]), 10.0 * moved[21]);
+  EXPECT_EQ(moved[19], 1.0);
+  EXPECT_GT(moved[20], std::log1p(0.004 / 0.005));  // moved by more than 4 mm
+  EXPECT_GT(moved[21], 0.1);  // 1 px nearer view 2's centreline
+  // Without the shift the pair is right already: kept, hardly moved.
+  const MatchFeatures right = LongestOfPair01(IllConditionedViews(rig, 0.0, false), rig, options);
+  EXPECT_EQ(right[19], 1.0);
+  EXPECT_LT(right[20], std::log1p(0.002 / 0.005));
+  EXPECT_LT(std::abs(right[21]), 0.1);
+  // View 2 shows another cane: nothing associated, nothing kept.
+  const MatchFeatures other = LongestOfPair01(IllConditionedViews(rig, 0.75, true), rig, options);
+  EXPECT_EQ(other[19], 0.0);
+  EXPECT_EQ(other[20], 0.0);
+  EXPECT_EQ(other[21], 0.0);
+  // The first pass does not refine, so nothing is measured.
+  options.other_views.rounds = 0;
+  const MatchFeatures first = LongestOfPair01(IllConditionedViews(rig, 0.75, false), rig, options);
+  EXPECT_EQ(first[19], 0.0);
+  EXPECT_EQ(first[20], 0.0);
+  EXPECT_EQ(first[21], 0.0);
 }
 
 TEST(MatchClassifier, TrainingRecoversASeparatingDirection) {
