@@ -162,12 +162,6 @@ absl::Status CorrespondenceOptions::Validate() const {
       !std::isfinite(other_views.max_residual_growth_px)) {
     return Invalid("other_views.max_residual_growth_px", "must be >= 0 and finite");
   }
-  if (!(other_views.end_px >= 0.0) || !std::isfinite(other_views.end_px)) {
-    return Invalid("other_views.end_px", "must be >= 0 and finite");
-  }
-  if (other_views.min_end_kept_hits < 2) {
-    return Invalid("other_views.min_end_kept_hits", "must be >= 2");
-  }
   for (int i = 0; i < kMatchFeatureCount; ++i) {
     if (!std::isfinite(classifier.multi_view[i]) || !std::isfinite(classifier.two_view[i])) {
       return Invalid("classifier", absl::StrCat("weight ", i, " not finite"));
@@ -319,8 +313,6 @@ absl::StatusOr<std::vector<Piece3D>> MatchSegments(const std::vector<View2D>& vi
   for (int i : kept) {
     ScoredCandidate& c = candidates[i];
     if (options.other_views.rounds > 0 && !c.refined) {
-      RelaxEnds(c.candidate, rig.cameras[c.candidate.view_a], rig.cameras[c.candidate.view_b],
-                options.fit, options.other_views, &c.fit);
       RefineInOtherViews(c.candidate, rig.cameras[c.candidate.view_a],
                          rig.cameras[c.candidate.view_b],
                          OtherViewsOf(c.candidate.view_a, c.candidate.view_b, views, samples, rig),

@@ -35,7 +35,6 @@ struct Problem {
   int k_count = 2;
   double smooth_scale = 0.0;  // smoothness weight in pixels per metre
   std::vector<OtherViewResidual> others;  // RefineInOtherViews only
-  std::vector<char> no_b;  // per hit: its residual in view b is left out (RelaxEnds); empty: none
 
   // Cost (sum of squares); if h/g are given also the Gauss-Newton normal equations.
   double Evaluate(const Eigen::MatrixXd& p, Eigen::MatrixXd* h, Eigen::VectorXd* g) const {
@@ -76,7 +75,7 @@ struct Problem {
         if (view == 0) {
           const Eigen::Vector2d res = f * (pi - hits[j].xa);
           add(jx, res, k, w);
-        } else if (no_b.empty() || !no_b[j]) {
+        } else {
           const Eigen::Vector2d& n = hits[j].normal_b;
           const Eigen::Matrix<double, 1, 1> res(f * n.dot(pi - hits[j].xb));
           const Eigen::Matrix<double, 1, 3> jn = n.transpose() * jx;
@@ -179,27 +178,6 @@ Eigen::Vector3d CurvePoint(const Eigen::MatrixXd& p, double t) {
   double w;
   Basis(t, static_cast<int>(p.rows()), &k, &w);
   return (1.0 - w) * p.row(k).transpose() + w * p.row(k + 1).transpose();
-}
-
-// Marks the hits within end_px (arc length, pixels) of an end of segment a or of segment b:
-// their residual across segment b is left out of the fit. Returns how many are marked; marks
-// none (and returns 0) if fewer than min_kept hits would keep theirs.
-int MarkEndHits(double end_px, int min_kept, Problem* problem) {
-  problem->no_b.clear();
-  if (!(end_px > 0.0)) return 0;
-  const MatchCandidate& c = problem->candidate;
-  std::vector<char> marks(c.hits.size(), 0);
-  int marked = 0;
-  for (size_t j = 0; j < c.hits.size(); ++j) {
-    const EpipolarHit& h = c.hits[j];
-    const bool near_end = h.arc_a_px < end_px || h.arc_a_px > c.length_a_px - end_px ||
-                          h.arc_b_px < end_px || h.arc_b_px > c.length_b_px - end_px;
-    marks[j] = near_end ? 1 : 0;
-    marked += near_end ? 1 : 0;
-  }
-  if (marked == 0 || static_cast<int>(c.hits.size()) - marked < min_kept) return 0;
-  problem->no_b = std::move(marks);
-  return marked;
 }
 
 }  // namespace
@@ -329,10 +307,6 @@ void ResidualRms(const Problem& problem, const Eigen::MatrixXd& p, double* two_v
     const Eigen::Vector3d x = CurvePoint(p, problem.t[j]);
     const double fa = problem.a.camera_matrix(0, 0), fb = problem.b.camera_matrix(0, 0);
     sum += (fa * (project(problem.a, x) - hits[j].xa)).squaredNorm();
-    if (!problem.no_b.empty() && problem.no_b[j]) {
-      ++count;
-      continue;
-    }
     const double rb = fb * hits[j].normal_b.dot(project(problem.b, x) - hits[j].xb);
     sum += rb * rb;
     ++count;
@@ -346,28 +320,6 @@ void ResidualRms(const Problem& problem, const Eigen::MatrixXd& p, double* two_v
   *other_px = problem.others.empty() ? 0.0 : std::sqrt(other_sum / problem.others.size());
 }
 
-int RelaxEnds(const MatchCandidate& candidate, const CameraCalibration& camera_a,
-              const CameraCalibration& camera_b, const PolylineFitOptions& options,
-              const OtherViewFitOptions& other_options, PolylineFit* fit) {
-  if (!fit->ok || !(other_options.end_px > 0.0) || fit->control_points.size() < 2) return 0;
-  Problem problem{candidate, camera_a, camera_b, {}, {}, 2, 0.0, {}};
-  if (!SetUp(options, &problem)) return 0;
-  const int marked = MarkEndHits(other_options.end_px, other_options.min_end_kept_hits, &problem);
-  if (marked == 0) return 0;
-  problem.k_count = static_cast<int>(fit->control_points.size());
-  Eigen::MatrixXd p(problem.k_count, 3);
-  for (int k = 0; k < problem.k_count; ++k) p.row(k) = fit->control_points[k].transpose();
-  // The depth of a span whose hits are all marked is held only by the smoothness term, which the
-  // damping of the first iterations holds back: more iterations than a fit.
-  const double cost = Minimise(problem, 3 * options.max_iterations, &p);
-  if (!std::isfinite(cost) || !p.allFinite()) return 0;
-  for (int k = 0; k < problem.k_count; ++k) fit->control_points[k] = p.row(k).transpose();
-  for (size_t j = 0; j < fit->points.size() && j < problem.t.size(); ++j) {
-    fit->points[j] = CurvePoint(p, problem.t[j]);
-  }
-  return marked;
-}
-
 int RefineInOtherViews(const MatchCandidate& candidate, const CameraCalibration& camera_a,
                        const CameraCalibration& camera_b, const std::vector<OtherView>& others,
                        const PolylineFitOptions& options, const OtherViewFitOptions& other_options,
@@ -378,7 +330,6 @@ int RefineInOtherViews(const MatchCandidate& candidate, const CameraCalibration&
   }
   Problem problem{candidate, camera_a, camera_b, {}, {}, 2, 0.0, {}};
   if (!SetUp(options, &problem)) return 0;
-  MarkEndHits(other_options.end_px, other_options.min_end_kept_hits, &problem);
   problem.k_count = static_cast<int>(fit->control_points.size());
   Eigen::MatrixXd p(problem.k_count, 3);
   for (int k = 0; k < problem.k_count; ++k) p.row(k) = fit->control_points[k].transpose();

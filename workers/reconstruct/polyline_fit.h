@@ -58,12 +58,6 @@ struct OtherViewFitOptions {
   // The refined fit is kept only if the two views' RMS residual grew by at most this and the
   // other views' RMS is at most this + 1 px (0: always kept).
   double max_residual_growth_px = 0.5;
-  // Hits within this arc length (pixels) of an end of either matched segment lose their residual
-  // across segment b in RelaxEnds and in the refinement: at a junction or a gap the skeleton
-  // bends, and a crossing of the bent end puts the pair's point 1-2 cm deep even when the pair is
-  // well conditioned; the curve carries the depth of the interior there (0: off).
-  double end_px = 0.0;
-  int min_end_kept_hits = 5;  // fewer hits away from the ends: the ends keep their residuals
 };
 
 // Refines a fit (FitPolyline of the same candidate and cameras) with the views that took no
@@ -82,16 +76,6 @@ int RefineInOtherViews(const MatchCandidate& candidate, const CameraCalibration&
                        const CameraCalibration& camera_b, const std::vector<OtherView>& others,
                        const PolylineFitOptions& options, const OtherViewFitOptions& other_options,
                        PolylineFit* fit);
-
-// Refits a fit (FitPolyline of the same candidate and cameras) with the residuals across
-// segment b of the hits within other_options.end_px of an end of segment a or b left out
-// (their residuals in view a stay), from the current control points: the depth there follows
-// the curve through the interior hits. Updates control_points and points only, like
-// RefineInOtherViews. Returns how many hits lost their residual (0: the fit is unchanged: end_px
-// 0, no hit near an end, fewer than min_end_kept_hits left, or a non-finite result).
-int RelaxEnds(const MatchCandidate& candidate, const CameraCalibration& camera_a,
-              const CameraCalibration& camera_b, const PolylineFitOptions& options,
-              const OtherViewFitOptions& other_options, PolylineFit* fit);
 
 // Evidence for a reconstructed piece in another view.
 struct ViewSupport {
