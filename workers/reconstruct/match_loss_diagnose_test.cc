@@ -100,12 +100,8 @@ TEST(MatchLoss, DISABLED_Report) {
     std::vector<ViewSamples> samples;
     for (int v = 0; v < n; ++v)
       samples.emplace_back(stop.views[v], rig.cameras[v], options.correspondence.sample_step_px);
-    CandidateOptions co;
-    co.volume = options.correspondence.volume;
-    co.min_epipolar_sin = options.correspondence.min_epipolar_sin;
-    co.min_hits = options.correspondence.min_hits;
-    co.max_gap_samples = options.correspondence.max_gap_samples;
-    co.max_ill_conditioned_gap_samples = options.correspondence.max_ill_conditioned_gap_samples;
+    // As the second pass searches each pair (a view outside it shows anything in a 3-camera rig).
+    const CandidateOptions co = CandidateOptionsFor(options.correspondence, n > 2);
     std::set<std::tuple<int, int, int, int>> raw_pairs;
     for (int a = 0; a < n; ++a)
       for (int b = a + 1; b < n; ++b)
@@ -200,7 +196,7 @@ TEST(MatchLoss, DISABLED_Report) {
             if (!e || !tt) continue;
             const Eigen::Vector2d de = (*e - px[a]).normalized(), dt = (*tt - px[a]).normalized();
             const double sin = std::abs(de.x() * dt.y() - de.y() * dt.x());
-            if (sin >= options.correspondence.min_epipolar_sin) conditioned = true;
+            if (sin >= co.min_epipolar_sin) conditioned = true;
             if (raw_pairs.count({a, seg[a], b, seg[b]})) same_pair_elsewhere = true;
           }
         Stage stage = kKept;
@@ -314,7 +310,7 @@ namespace {
 //   (in samples) then tell apart "a segment is too short" from "the run broke",
 //   a crossing of the pair within 10 mm, in a run of min_hits or more whose other hits are far
 //   (cannot happen: that run is a raw candidate; counted as a check).
-// Also: the same with the depth tolerance doubled, and with the 1 px calibration error absent
+// Also: the same with the depth tolerance doubled, min_epipolar_sin 0.05, and with the 1 px calibration error absent
 // (the true rig), to size the share due to the remaining calibration error.
 // Run as the report above with --gtest_filter='MatchLoss.DISABLED_RawCandidates'.
 TEST(MatchLoss, DISABLED_RawCandidates) {
@@ -337,12 +333,8 @@ TEST(MatchLoss, DISABLED_RawCandidates) {
     const int n = static_cast<int>(stop.views.size());
     const std::vector<View2D>& views =
         matched->refined_views.empty() ? stop.views : matched->refined_views;
-    CandidateOptions co;
-    co.volume = options.correspondence.volume;
-    co.min_epipolar_sin = options.correspondence.min_epipolar_sin;
-    co.min_hits = options.correspondence.min_hits;
-    co.max_gap_samples = options.correspondence.max_gap_samples;
-    co.max_ill_conditioned_gap_samples = options.correspondence.max_ill_conditioned_gap_samples;
+    // As the second pass searches each pair (a view outside it shows anything in a 3-camera rig).
+    const CandidateOptions co = CandidateOptionsFor(options.correspondence, n > 2);
     // Raw candidates of a rig and options, as a grid; with `runs`, every run's hits keyed by
     // (a, segment_a, b, segment_b) with the run's length.
     using PairKey = std::tuple<int, int, int, int>;
@@ -380,7 +372,7 @@ TEST(MatchLoss, DISABLED_RawCandidates) {
     tol.max_depth_slope *= 2.0;
     raw(matched->rig, tol, &grid_tol, nullptr);
     CandidateOptions sin = co;
-    sin.min_epipolar_sin = 0.1;
+    sin.min_epipolar_sin = 0.05;
     raw(matched->rig, sin, &grid_sin, nullptr);
     PointGrid fitted;
     const auto scored =
@@ -489,7 +481,7 @@ TEST(MatchLoss, DISABLED_RawCandidates) {
               "10-20 mm and in a run of min_hits or more %.3f\n",
               no_crossing[6] / total, no_crossing[7] / total);
   std::printf("  recovered with the true rig %.3f, doubled depth tolerance %.3f, min_epipolar_sin "
-              "0.1 %.3f\n", with_true_rig / total, with_double_tol / total, with_sin / total);
+              "0.05 %.3f\n", with_true_rig / total, with_double_tol / total, with_sin / total);
 }
 
 }  // namespace
@@ -517,7 +509,10 @@ TEST(MatchLoss, DISABLED_RawCandidatePairs) {
   double by_views[4] = {};
   std::map<std::string, double> by_pair_sin, by_nearest, by_depth_share;
   double near_end = 0, near_end_all = 0, skel2_all = 0;
-  double piece_near[3] = {};  // a selected piece within 10 mm, 10-20 mm, neither
+  double piece_near[3] = {};
+  // Samples with skeleton in 3 views: the worst-conditioned pair (the one that does not share a
+  // view a crossing or junction may have bent), its |sin| and its nearest hit.
+  std::map<std::string, double> worst_pair;  // a selected piece within 10 mm, 10-20 mm, neither
   auto sin_bucket = [](double s) {
     return s < 0.2 ? "<0.2" : s < 0.4 ? "0.2-0.4" : s < 0.7 ? "0.4-0.7" : ">=0.7";
   };
@@ -531,12 +526,8 @@ TEST(MatchLoss, DISABLED_RawCandidatePairs) {
     const std::vector<View2D>& views =
         matched->refined_views.empty() ? stop.views : matched->refined_views;
     const RigCalibration& rig = matched->rig;
-    CandidateOptions co;
-    co.volume = options.correspondence.volume;
-    co.min_epipolar_sin = options.correspondence.min_epipolar_sin;
-    co.min_hits = options.correspondence.min_hits;
-    co.max_gap_samples = options.correspondence.max_gap_samples;
-    co.max_ill_conditioned_gap_samples = options.correspondence.max_ill_conditioned_gap_samples;
+    // As the second pass searches each pair (a view outside it shows anything in a 3-camera rig).
+    const CandidateOptions co = CandidateOptionsFor(options.correspondence, n > 2);
     using PairKey = std::tuple<int, int, int, int>;
     std::map<PairKey, std::vector<Eigen::Vector3d>> runs;
     PointGrid grid, piece10;
@@ -606,8 +597,8 @@ TEST(MatchLoss, DISABLED_RawCandidatePairs) {
         near_end += end_near;
         piece_near[piece10.MaxNear(p) >= 0 ? 0 : piece10.MaxNear(p, 0.02) >= 0 ? 1 : 2] += 1;
         by_views[std::min(skel, 3)] += 1;
-        int best_a = -1, best_b = -1;
-        double best_sin = -1;
+        int best_a = -1, best_b = -1, worst_a = -1, worst_b = -1;
+        double best_sin = -1, worst_sin = 2;
         for (int a = 0; a < n; ++a)
           for (int b = a + 1; b < n; ++b) {
             if (seg[a] < 0 || seg[b] < 0) continue;
@@ -619,8 +610,21 @@ TEST(MatchLoss, DISABLED_RawCandidatePairs) {
             const Eigen::Vector2d de = (*e - px[a]).normalized(), dt = (*tt - px[a]).normalized();
             const double sin = std::abs(de.x() * dt.y() - de.y() * dt.x());
             if (sin > best_sin) best_sin = sin, best_a = a, best_b = b;
+            if (sin < worst_sin) worst_sin = sin, worst_a = a, worst_b = b;
           }
         if (best_a < 0) continue;
+        if (skel >= 3 && worst_a >= 0) {
+          double nearest_worst = INFINITY;
+          const auto w = runs.find({worst_a, seg[worst_a], worst_b, seg[worst_b]});
+          if (w != runs.end())
+            for (const Eigen::Vector3d& q : w->second)
+              nearest_worst = std::min(nearest_worst, (q - p).norm());
+          worst_pair[absl::StrCat("|sin| ", sin_bucket(worst_sin), ", nearest hit ",
+                                  nearest_worst <= 0.01   ? "<=10 mm"
+                                  : nearest_worst <= 0.02 ? "10-20 mm"
+                                  : std::isfinite(nearest_worst) ? ">20 mm"
+                                                                 : "none")] += 1;
+        }
         by_pair_sin[absl::StrCat("pair ", best_a, "-", best_b, " |sin| ", sin_bucket(best_sin),
                                  skel >= 3 ? ", 3 views" : ", 2 views")] += 1;
         double nearest = INFINITY;
@@ -657,6 +661,8 @@ TEST(MatchLoss, DISABLED_RawCandidatePairs) {
               piece_near[0] / total, piece_near[1] / total, piece_near[2] / total);
   std::printf("  best-conditioned pair (cameras, |sin| to its epipolar line in view a):\n");
   for (const auto& [key, v] : by_pair_sin) std::printf("    %-40s %.4f\n", key.c_str(), v / total);
+  std::printf("  skeleton in 3 views: the worst-conditioned pair, its |sin| and nearest hit:\n");
+  for (const auto& [key, v] : worst_pair) std::printf("    %-40s %.4f\n", key.c_str(), v / total);
   std::printf("  that pair's nearest hit (any run):\n");
   for (const auto& [key, v] : by_nearest) std::printf("    %-40s %.4f\n", key.c_str(), v / total);
   std::printf("  of nearest 10-50 mm, the share of the offset along view a's ray:\n");
