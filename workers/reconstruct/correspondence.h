@@ -6,7 +6,10 @@
 //     intersected, along their epipolar segments restricted to the working volume's depth range,
 //     with b's segments; runs of crossings of one segment of b at consistent depths are candidate
 //     matches (match_candidates.h). Samples whose segment runs nearly along the epipolar line
-//     are skipped: that pair is ill-conditioned there, and a triangle rig always has a better one.
+//     are skipped: that pair is ill-conditioned there, and a triangle rig always has a better one
+//     (min_epipolar_sin; when the selected pieces are refined in the other views, only those
+//     nearer, min_epipolar_sin_refined: the better pairs share a view, and where its skeleton
+//     breaks the ill-conditioned pair is the only one left, its depth fixed by that view).
 //     A run may continue across such a stretch (max_ill_conditioned_gap_samples; off by default).
 //  2. each candidate is triangulated and refined by a Levenberg-Marquardt fit of a 3D polyline
 //     minimising reprojection error in a and b, then checked in the other views
