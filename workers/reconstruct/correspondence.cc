@@ -133,6 +133,10 @@ absl::Status CorrespondenceOptions::Validate() const {
   if (!(min_epipolar_sin >= 0.0 && min_epipolar_sin < 1.0)) {
     return Invalid("min_epipolar_sin", absl::StrCat("must be in [0, 1), got ", min_epipolar_sin));
   }
+  if (!(min_epipolar_sin_refined >= 0.0 && min_epipolar_sin_refined < 1.0)) {
+    return Invalid("min_epipolar_sin_refined",
+                   absl::StrCat("must be in [0, 1), got ", min_epipolar_sin_refined));
+  }
   if (min_hits < 2) return Invalid("min_hits", absl::StrCat("must be >= 2, got ", min_hits));
   if (max_gap_samples < 0) {
     return Invalid("max_gap_samples", absl::StrCat("must be >= 0, got ", max_gap_samples));
@@ -180,6 +184,20 @@ absl::Status CorrespondenceOptions::Validate() const {
   return absl::OkStatus();
 }
 
+CandidateOptions CandidateOptionsFor(const CorrespondenceOptions& options,
+                                     bool other_view_shows_anything) {
+  CandidateOptions candidate_options;
+  candidate_options.volume = options.volume;
+  candidate_options.min_epipolar_sin =
+      options.other_views.rounds > 0 && other_view_shows_anything
+          ? std::min(options.min_epipolar_sin, options.min_epipolar_sin_refined)
+          : options.min_epipolar_sin;
+  candidate_options.min_hits = options.min_hits;
+  candidate_options.max_gap_samples = options.max_gap_samples;
+  candidate_options.max_ill_conditioned_gap_samples = options.max_ill_conditioned_gap_samples;
+  return candidate_options;
+}
+
 absl::StatusOr<std::vector<ScoredCandidate>> ScoreCandidates(
     const std::vector<View2D>& views, const RigCalibration& rig,
     const CorrespondenceOptions& options, const Deadline& deadline) {
@@ -200,12 +218,6 @@ absl::StatusOr<std::vector<ScoredCandidate>> ScoreCandidates(
   for (size_t v = 0; v < views.size(); ++v) {
     samples.emplace_back(views[v], rig.cameras[v], options.sample_step_px);
   }
-  CandidateOptions candidate_options;
-  candidate_options.volume = options.volume;
-  candidate_options.min_epipolar_sin = options.min_epipolar_sin;
-  candidate_options.min_hits = options.min_hits;
-  candidate_options.max_gap_samples = options.max_gap_samples;
-  candidate_options.max_ill_conditioned_gap_samples = options.max_ill_conditioned_gap_samples;
   Eigen::AlignedBox3d margin_box = options.volume.box;
   margin_box.min().array() -= 0.05;
   margin_box.max().array() += 0.05;
@@ -215,10 +227,10 @@ absl::StatusOr<std::vector<ScoredCandidate>> ScoreCandidates(
   for (int a = 0; a < n; ++a) {
     for (int b = a + 1; b < n; ++b) {
       VB_RETURN_IF_ERROR(deadline.Check("correspondence"));
+      const std::vector<OtherView> other_views = OtherViewsOf(a, b, views, samples, rig);
       std::vector<MatchCandidate> candidates =
           FindCandidates(a, samples[a], rig.cameras[a], b, samples[b], rig.cameras[b],
-                         candidate_options);
-      const std::vector<OtherView> other_views = OtherViewsOf(a, b, views, samples, rig);
+                         CandidateOptionsFor(options, !other_views.empty()));
       std::vector<const View2D*> other_images;  // the views other_views samples, in order
       for (int c = 0; c < n; ++c) {
         if (c != a && c != b && !IsEmptyView(views[c])) other_images.push_back(&views[c]);

@@ -6,7 +6,10 @@
 //     intersected, along their epipolar segments restricted to the working volume's depth range,
 //     with b's segments; runs of crossings of one segment of b at consistent depths are candidate
 //     matches (match_candidates.h). Samples whose segment runs nearly along the epipolar line
-//     are skipped: that pair is ill-conditioned there, and a triangle rig always has a better one.
+//     are skipped: that pair is ill-conditioned there, and a triangle rig always has a better one
+//     (min_epipolar_sin; when the selected pieces are refined in the other views, only those
+//     nearer, min_epipolar_sin_refined: the better pairs share a view, and where its skeleton
+//     breaks the ill-conditioned pair is the only one left, its depth fixed by that view).
 //     A run may continue across such a stretch (max_ill_conditioned_gap_samples; off by default).
 //  2. each candidate is triangulated and refined by a Levenberg-Marquardt fit of a 3D polyline
 //     minimising reprojection error in a and b, then checked in the other views
@@ -40,6 +43,15 @@ struct CorrespondenceOptions {
   WorkingVolume volume;                 // pieces must lie in it; bounds the epipolar search
   double sample_step_px = 4.0;          // spacing of samples along segments
   double min_epipolar_sin = 0.2;        // skip samples within ~12 deg of the epipolar line
+  // The same for a pair when the selected pieces are refined in the other views
+  // (other_views.rounds > 0) and a view outside the pair shows anything: samples are searched
+  // down to this |sin| (~9 deg), since that view fixes the depth the pair leaves loose. Where
+  // the two pairs with a third view both lose a stretch (its skeleton breaks there at a
+  // crossing or junction), the pair without it is the only one left, and a cane laid along the
+  // wires often runs within 12 deg of its epipolar lines (docs/reconstruction.md, section 3).
+  // The first pass (rounds 0) keeps min_epipolar_sin, so the rig refinement is unchanged. 0.1
+  // gained more recall on tuning seeds but lost precision.
+  double min_epipolar_sin_refined = 0.15;
   int min_hits = 5;                     // shortest candidate, in samples
   int max_gap_samples = 3;              // samples a candidate may skip
   // Samples not searched for min_epipolar_sin that a candidate may skip on top of
@@ -75,11 +87,18 @@ struct CorrespondenceOptions {
   double alpha = 3.5;
 
   // INVALID_ARGUMENT naming the field for non-finite or out-of-range values (sample_step_px
-  // outside [0.5, 50], min_epipolar_sin outside [0, 1), min_hits < 2, max_gap_samples < 0,
+  // outside [0.5, 50], min_epipolar_sin or min_epipolar_sin_refined outside [0, 1), min_hits < 2, max_gap_samples < 0,
   // max_ill_conditioned_gap_samples < 0, other_views out of range,
   // empty volume, alpha <= 0 or NaN, non-finite classifier weights, invalid gibbs options...).
   absl::Status Validate() const;
 };
+
+// The candidate search options of one view pair (FindCandidates): min_epipolar_sin, or the lower
+// of it and min_epipolar_sin_refined when other_views.rounds > 0 and
+// `other_view_shows_anything` (a view outside the pair is not empty). For ScoreCandidates and
+// the diagnosis tools.
+CandidateOptions CandidateOptionsFor(const CorrespondenceOptions& options,
+                                     bool other_view_shows_anything);
 
 // A candidate with its fit, features and classifier probability.
 struct ScoredCandidate {

@@ -147,6 +147,13 @@ TEST(MatchSegments, BadInputRejects) {
   EXPECT_NE(std::string(gap.status().message()).find("max_ill_conditioned_gap_samples"),
             std::string::npos)
       << gap.status();
+  bad_options = {};
+  bad_options.min_epipolar_sin_refined = 1.0;
+  const auto sin_refined = MatchSegments(views, rig, bad_options, inf);
+  EXPECT_EQ(code(sin_refined), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(std::string(sin_refined.status().message()).find("min_epipolar_sin_refined"),
+            std::string::npos)
+      << sin_refined.status();
   const char* const fields[] = {"other_views.gate_px", "other_views.min_cos",
                                 "other_views.max_residual_growth_px", "other_views.rounds",
                                 "other_views.min_associations"};
@@ -278,6 +285,60 @@ TEST(RefineInOtherViews, ThirdViewFixesDepthOfAnIllConditionedPair) {
             0);
 }
 
+// A cane 10 degrees from the horizontal pair's epipolar lines, in three views; the upper camera's
+// skeleton is broken for 40 px in the middle (a crossing or junction there). The two pairs with
+// the upper camera stop at the break; the horizontal pair is the only one that sees the middle,
+// and only below min_epipolar_sin 0.2. Searched down to min_epipolar_sin_refined 0.15 (the
+// selected pieces are refined in the other views), its piece spans the break, and the upper
+// camera's skeleton on either side fixes its depth (RefineInOtherViews).
+TEST(MatchSegments, ANearlyEpipolarStretchOnlyOnePairSeesIsReconstructedWithin10mm) {
+  VineModel model;
+  model.canes.push_back(MakeCane(1, {-0.15, 0.80, 1.00}, {0.15, 0.80, 1.053}, 0.004));
+  const RigCalibration rig = Rig(3);
+  std::vector<View2D> views = SyntheticViews(model, rig);
+  ASSERT_EQ(views[2].segments.size(), 1u);
+  {
+    // Break the upper camera's segment for 40 px about its middle.
+    const Segment2D whole = views[2].segments[0];
+    const Eigen::Vector2d mid = 0.5 * (whole.points.front() + whole.points.back());
+    Segment2D left, right;
+    for (size_t i = 0; i < whole.points.size(); ++i) {
+      const double along = (whole.points[i] - mid).dot(
+          (whole.points.back() - whole.points.front()).normalized());
+      if (std::abs(along) < 20.0) continue;
+      Segment2D& side = along < 0 ? left : right;
+      side.points.push_back(whole.points[i]);
+      side.widths_px.push_back(whole.widths_px[i]);
+    }
+    views[2].segments = {left, right};
+  }
+  // The true middle 4 cm, and the share of it within 10 mm of a piece.
+  Polyline3 middle;
+  middle.points = {{-0.02, 0.80, 1.0 + 0.053 * 0.13 / 0.30}, {0.02, 0.80, 1.0 + 0.053 * 0.17 / 0.30}};
+  middle.radii = {0.004, 0.004};
+  CorrespondenceOptions options;
+  options.min_epipolar_sin_refined = 0.2;  // as before 2026-11-22
+  const auto before = MatchSegments(views, rig, options, Deadline::Infinite());
+  ASSERT_TRUE(before.ok()) << before.status();
+  const auto after = MatchSegments(views, rig, {}, Deadline::Infinite());  // 0.15
+  ASSERT_TRUE(after.ok()) << after.status();
+  // The first pass (no refinement in the other views) keeps min_epipolar_sin.
+  options = {};
+  options.other_views.rounds = 0;
+  const auto unrefined = MatchSegments(views, rig, options, Deadline::Infinite());
+  ASSERT_TRUE(unrefined.ok()) << unrefined.status();
+  EXPECT_LT(Coverage(middle, *unrefined, 0.01), 0.5);
+  ASSERT_TRUE(after.ok()) << after.status();
+  const double covered_before = Coverage(middle, *before, 0.01);
+  const double covered_after = Coverage(middle, *after, 0.01);
+  std::printf("[ near-epipolar ] middle within 10 mm: %.2f with min_epipolar_sin_refined 0.2, "
+              "%.2f with 0.15\n", covered_before, covered_after);
+  EXPECT_LT(covered_before, 0.5);
+  EXPECT_GT(covered_after, 0.9);
+  // Every piece within 10 mm of the cane.
+  for (const Piece3D& piece : *after) EXPECT_LT(MaxDistance(piece, model.canes[0].polyline), 0.01);
+}
+
 TEST(MatchSegments, ExpiredDeadlineFails) {
   VineModel model;
   model.canes.push_back(MakeCane(1, {-0.15, 0.78, 0.9}, {0.1, 0.85, 1.25}, 0.004));
@@ -329,6 +390,7 @@ TEST(MatchSegments, RefiningInTheOtherViewsRaisesPrecision) {
   for (int i : {19, 20, 21}) on.classifier.multi_view[i] = 0.0;
   CorrespondenceOptions off = on;
   off.other_views.rounds = 0;
+  off.min_epipolar_sin = off.min_epipolar_sin_refined;  // the same candidates as with refinement
   const auto refined = MatchSegments(views, rig, on, Deadline::Infinite());
   const auto two_view = MatchSegments(views, rig, off, Deadline::Infinite());
   ASSERT_TRUE(refined.ok()) << refined.status();
