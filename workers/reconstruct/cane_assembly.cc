@@ -413,11 +413,7 @@ class Assembler {
   bool IsGhost(const Track& t) const {
     const double length = ArcLengths(t.points).back();
     if (length < options_.min_cane_length_m) return true;
-    if (t.pieces == 1 && length < options_.min_isolated_length_m) {
-      // One piece: all its samples carry the piece's probability * support.
-      const bool sure = !t.weights.empty() && t.weights.front() >= options_.sure_isolated_weight;
-      if (!sure || length < options_.min_sure_isolated_length_m) return true;
-    }
+    if (t.pieces == 1 && length < options_.min_isolated_length_m) return true;
     return t.Evidence(options_.step_m) < options_.min_evidence_m;
   }
 
@@ -485,7 +481,6 @@ absl::Status AssemblyOptions::Validate() const {
   }
   const std::pair<const char*, double> non_negative[] = {
       {"min_isolated_length_m", min_isolated_length_m},
-      {"min_sure_isolated_length_m", min_sure_isolated_length_m},
       {"min_cane_length_m", min_cane_length_m},
       {"min_evidence_m", min_evidence_m}};
   for (const auto& [name, value] : non_negative) {
@@ -502,10 +497,6 @@ absl::Status AssemblyOptions::Validate() const {
   if (!(max_radius_ratio >= 1.0 && std::isfinite(max_radius_ratio))) {
     return absl::InvalidArgumentError(
         absl::StrCat("max_radius_ratio: must be finite and >= 1, is ", max_radius_ratio));
-  }
-  if (!(sure_isolated_weight >= 0.0 && sure_isolated_weight <= 1.0)) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        "sure_isolated_weight: must be in [0, 1], is ", sure_isolated_weight));
   }
   if (!(min_piece_probability >= 0.0 && min_piece_probability <= 1.0)) {
     return absl::InvalidArgumentError(absl::StrCat(

@@ -16,10 +16,9 @@
 //  3. Chaining: track ends are joined, best pair first, when the gap is <= `max_gap_m`, the end
 //     tangents and the gap direction agree within `max_chain_angle_deg` and the end radii within
 //     a factor `max_radius_ratio`; each end joins at most once. Steps 2-3 repeat until stable.
-//  4. Ghosts: a track made of one piece shorter than `min_isolated_length_m` (or, if its piece's
-//     probability * support is at least `sure_isolated_weight`, shorter than
-//     `min_sure_isolated_length_m`), or any track shorter than `min_cane_length_m` or with less
-//     weighted evidence than `min_evidence_m`, is dropped.
+//  4. Ghosts: a track made of one piece shorter than `min_isolated_length_m`, or any track
+//     shorter than `min_cane_length_m` or with less weighted evidence than `min_evidence_m`, is
+//     dropped.
 //  5. Output: each track resampled at ~`step_m`, points lightly smoothed, radii smoothed along
 //     the cane over `radius_smoothing_m` (weighted mean).
 // Output polylines have no topology (a later step roots them on the trunk), arbitrary
@@ -49,16 +48,13 @@ struct AssemblyOptions {
   double max_radius_ratio = 2.0;        // chaining: max ratio of the end radii (larger / smaller)
   double tangent_baseline_m = 0.03;     // chord length over which tangents and end radii are taken
   double min_piece_probability = 0.05;  // pieces less likely than this are ignored
-  double min_isolated_length_m = 0.12;  // a track of one piece shorter than this is a ghost,
-  double min_sure_isolated_length_m = 0.12;  // ... unless at least this long and its piece's
-  double sure_isolated_weight = 0.9;         // probability * support is at least this
+  double min_isolated_length_m = 0.12;  // a track of one piece shorter than this is a ghost
   double min_cane_length_m = 0.04;      // any track shorter than this is dropped
   double min_evidence_m = 0.02;         // min sum over samples of probability*support*step
   double radius_smoothing_m = 0.05;     // half-width of the weighted mean of radii along a cane
 
   // INVALID_ARGUMENT naming the field: non-finite or non-positive lengths and ratios, angles
-  // outside (0, 90], max_radius_ratio < 1, min_piece_probability or sure_isolated_weight
-  // outside [0, 1].
+  // outside (0, 90], max_radius_ratio < 1, min_piece_probability outside [0, 1].
   absl::Status Validate() const;
 };
 

@@ -250,42 +250,6 @@ TEST(AssembleCanes, ChainsAcrossAGapButNotAcrossACorner) {
   EXPECT_EQ(canes->size(), 2u);
 }
 
-TEST(AssembleCanes, KeepsAShortIsolatedPieceOnlyWhenSure) {
-  // One 8 cm piece alone: a ghost by min_isolated_length_m unless its probability * support
-  // reaches sure_isolated_weight and it is at least min_sure_isolated_length_m long.
-  Piece3D piece;
-  for (int i = 0; i <= 8; ++i) {
-    piece.polyline.points.push_back({0.01 * i, 0.8, 1.0});
-    piece.polyline.radii.push_back(0.004);
-  }
-  piece.probability = 0.95;
-  piece.support = 1.0;
-  AssemblyOptions options;
-  options.min_isolated_length_m = 0.12;
-  options.min_sure_isolated_length_m = 0.06;
-  options.sure_isolated_weight = 0.9;
-  auto canes = AssembleCanes({piece}, options, Deadline::Infinite());
-  ASSERT_TRUE(canes.ok()) << canes.status();
-  ASSERT_EQ(canes->size(), 1u);
-  EXPECT_NEAR((*canes)[0].Length(), 0.08, 0.005);
-  // Less sure (0.95 * 0.9 < 0.9): dropped.
-  Piece3D unsure = piece;
-  unsure.support = 0.9;
-  canes = AssembleCanes({unsure}, options, Deadline::Infinite());
-  ASSERT_TRUE(canes.ok());
-  EXPECT_TRUE(canes->empty());
-  // Sure but shorter than min_sure_isolated_length_m: dropped.
-  options.min_sure_isolated_length_m = 0.10;
-  canes = AssembleCanes({piece}, options, Deadline::Infinite());
-  ASSERT_TRUE(canes.ok());
-  EXPECT_TRUE(canes->empty());
-  // Long enough for min_isolated_length_m: kept however unsure.
-  options.min_isolated_length_m = 0.06;
-  canes = AssembleCanes({unsure}, options, Deadline::Infinite());
-  ASSERT_TRUE(canes.ok());
-  EXPECT_EQ(canes->size(), 1u);
-}
-
 TEST(AssembleCanes, EmptyInputGivesNoCanes) {
   const auto canes = AssembleCanes({}, AssemblyOptions(), Deadline::Infinite());
   ASSERT_TRUE(canes.ok());
@@ -318,14 +282,6 @@ TEST(AssembleCanes, InvalidOptionsRejects) {
   options = AssemblyOptions();
   options.merge_angle_deg = std::nan("");
   EXPECT_EQ(options.Validate().code(), absl::StatusCode::kInvalidArgument);
-  options = AssemblyOptions();
-  options.sure_isolated_weight = 1.5;
-  EXPECT_NE(std::string(options.Validate().message()).find("sure_isolated_weight"),
-            std::string::npos);
-  options = AssemblyOptions();
-  options.min_sure_isolated_length_m = -0.1;
-  EXPECT_NE(std::string(options.Validate().message()).find("min_sure_isolated_length_m"),
-            std::string::npos);
 }
 
 TEST(AssembleCanes, ExpiredDeadlineFails) {
