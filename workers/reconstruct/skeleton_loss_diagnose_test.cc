@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // A diagnosis tool, not a test: why true cane length with foreground in two views has no
 // skeleton segment near it in two views (the "skeleton in fewer than 2 views" row of
-// MatchLoss.DISABLED_Report), and why matched pieces are lost in assembly. Run with
+// MatchLoss.DISABLED_Report), what hides the true cane where the foreground row loses it, and
+// why matched pieces are lost in assembly. Run with
 //   VB_INPUT=images VB_SEED=1300 VB_STOPS=10 vb_reconstruct_test
 //     --gtest_also_run_disabled_tests --gtest_filter='SkeletonLoss.DISABLED_*'
 // Tuning seeds only (1100-1999; docs/reconstruction.md "Seeds").
