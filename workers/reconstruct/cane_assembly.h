@@ -48,7 +48,7 @@ struct AssemblyOptions {
   double max_gap_m = 0.10;              // chaining: max distance between the joined ends
   double max_chain_angle_deg = 30.0;    // chaining: max angle between end tangents and the gap
   double max_long_gap_m = 0.15;         // chaining: gaps from max_gap_m up to this are joined
-  double max_long_gap_angle_deg = 12.0;  // ... only within this angle (a post hides ~10-15 cm)
+  double max_long_gap_angle_deg = 12.0;  // ... only within this angle (a cane behind a post)
   double max_radius_ratio = 2.0;        // chaining: max ratio of the end radii (larger / smaller)
   double tangent_baseline_m = 0.03;     // chord length over which tangents and end radii are taken
   double min_piece_probability = 0.05;  // pieces less likely than this are ignored
