@@ -73,7 +73,9 @@ class Assembler {
                                                             options.step_m)))),
         cos_merge_(std::cos(options.merge_angle_deg * kPi / 180.0)),
         cos_chain_(std::cos(options.max_chain_angle_deg * kPi / 180.0)),
-        tan_chain_(std::tan(options.max_chain_angle_deg * kPi / 180.0)) {}
+        tan_chain_(std::tan(options.max_chain_angle_deg * kPi / 180.0)),
+        cos_long_chain_(std::cos(options.max_long_gap_angle_deg * kPi / 180.0)),
+        tan_long_chain_(std::tan(options.max_long_gap_angle_deg * kPi / 180.0)) {}
 
   // Resamples a piece into a one-piece track; nullopt-like empty track if degenerate.
   Track FromPiece(const Piece3D& piece) const {
@@ -309,18 +311,23 @@ class Assembler {
 
   // How far, along a's end tangent, b's end lies; nullopt if they do not continue each other.
   std::optional<double> ChainGap(const End& a, const End& b) const {
-    if (-a.outward.dot(b.outward) < cos_chain_) return std::nullopt;
+    const Eigen::Vector3d gap = b.point - a.point;
+    const double length = gap.norm();
+    if (length > options_.max_long_gap_m) return std::nullopt;
+    // Beyond max_gap_m only nearly straight continuations (a cane hidden behind a post).
+    const bool long_gap = length > options_.max_gap_m;
+    const double cos_max = long_gap ? cos_long_chain_ : cos_chain_;
+    const double tan_max = long_gap ? tan_long_chain_ : tan_chain_;
+    if (-a.outward.dot(b.outward) < cos_max) return std::nullopt;
     const double ratio = std::max(a.radius, b.radius) / std::min(a.radius, b.radius);
     if (!(ratio <= options_.max_radius_ratio)) return std::nullopt;
-    const Eigen::Vector3d gap = b.point - a.point;
-    if (gap.norm() > options_.max_gap_m) return std::nullopt;
     const std::pair<Eigen::Vector3d, Eigen::Vector3d> sides[] = {{a.outward, gap},
                                                                  {b.outward, -gap}};
     for (const auto& [dir, g] : sides) {
       const double along = g.dot(dir);
       const double lateral = (g - along * dir).norm();
       if (along < -options_.min_overlap_m) return std::nullopt;
-      if (lateral > options_.merge_distance_m + tan_chain_ * std::max(0.0, along)) {
+      if (lateral > options_.merge_distance_m + tan_max * std::max(0.0, along)) {
         return std::nullopt;
       }
     }
@@ -445,6 +452,8 @@ class Assembler {
   double cos_merge_;
   double cos_chain_;
   double tan_chain_;
+  double cos_long_chain_;
+  double tan_long_chain_;
 };
 
 bool PositiveFinite(double x) { return std::isfinite(x) && x > 0.0; }
@@ -472,6 +481,7 @@ absl::Status AssemblyOptions::Validate() const {
       {"min_overlap_m", min_overlap_m},
       {"end_tolerance_m", end_tolerance_m},
       {"max_gap_m", max_gap_m},
+      {"max_long_gap_m", max_long_gap_m},
       {"tangent_baseline_m", tangent_baseline_m},
       {"radius_smoothing_m", radius_smoothing_m}};
   for (const auto& [name, value] : positive) {
@@ -489,10 +499,15 @@ absl::Status AssemblyOptions::Validate() const {
     }
   }
   for (const auto& [name, value] : {std::pair{"merge_angle_deg", merge_angle_deg},
-                                    std::pair{"max_chain_angle_deg", max_chain_angle_deg}}) {
+                                    std::pair{"max_chain_angle_deg", max_chain_angle_deg},
+                                    std::pair{"max_long_gap_angle_deg", max_long_gap_angle_deg}}) {
     if (!(value > 0.0 && value < 90.0)) {
       return absl::InvalidArgumentError(absl::StrCat(name, ": must be in (0, 90), is ", value));
     }
+  }
+  if (max_long_gap_m < max_gap_m) {
+    return absl::InvalidArgumentError(absl::StrCat("max_long_gap_m: must be >= max_gap_m (",
+                                                   max_gap_m, "), is ", max_long_gap_m));
   }
   if (!(max_radius_ratio >= 1.0 && std::isfinite(max_radius_ratio))) {
     return absl::InvalidArgumentError(

@@ -15,7 +15,9 @@
 //     Otherwise it starts a new track. Tracks that come to overlap are fused the same way.
 //  3. Chaining: track ends are joined, best pair first, when the gap is <= `max_gap_m`, the end
 //     tangents and the gap direction agree within `max_chain_angle_deg` and the end radii within
-//     a factor `max_radius_ratio`; each end joins at most once. Steps 2-3 repeat until stable.
+//     a factor `max_radius_ratio`; each end joins at most once. Longer gaps, up to
+//     `max_long_gap_m` (a cane behind a post in two views), are joined when the tangents and the
+//     gap agree within `max_long_gap_angle_deg`. Steps 2-3 repeat until stable.
 //  4. Ghosts: a track made of one piece shorter than `min_isolated_length_m`, or any track
 //     shorter than `min_cane_length_m` or with less weighted evidence than `min_evidence_m`, is
 //     dropped.
@@ -45,6 +47,8 @@ struct AssemblyOptions {
   double end_tolerance_m = 0.03;        // duplicates: a piece may leave a track this far from its end
   double max_gap_m = 0.10;              // chaining: max distance between the joined ends
   double max_chain_angle_deg = 30.0;    // chaining: max angle between end tangents and the gap
+  double max_long_gap_m = 0.15;         // chaining: gaps from max_gap_m up to this are joined
+  double max_long_gap_angle_deg = 12.0;  // ... only within this angle (a cane behind a post)
   double max_radius_ratio = 2.0;        // chaining: max ratio of the end radii (larger / smaller)
   double tangent_baseline_m = 0.03;     // chord length over which tangents and end radii are taken
   double min_piece_probability = 0.05;  // pieces less likely than this are ignored
@@ -54,7 +58,8 @@ struct AssemblyOptions {
   double radius_smoothing_m = 0.05;     // half-width of the weighted mean of radii along a cane
 
   // INVALID_ARGUMENT naming the field: non-finite or non-positive lengths and ratios, angles
-  // outside (0, 90], max_radius_ratio < 1, min_piece_probability outside [0, 1].
+  // outside (0, 90], max_radius_ratio < 1, min_piece_probability outside [0, 1],
+  // max_long_gap_m < max_gap_m.
   absl::Status Validate() const;
 };
 

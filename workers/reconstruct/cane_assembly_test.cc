@@ -250,6 +250,51 @@ TEST(AssembleCanes, ChainsAcrossAGapButNotAcrossACorner) {
   EXPECT_EQ(canes->size(), 2u);
 }
 
+TEST(AssembleCanes, ChainsAcrossALongGapOnlyWhenStraight) {
+  auto line = [](Eigen::Vector3d a, Eigen::Vector3d b) {
+    Piece3D piece;
+    for (int i = 0; i <= 20; ++i) {
+      piece.polyline.points.push_back(a + (b - a) * i / 20.0);
+      piece.polyline.radii.push_back(0.005);
+    }
+    piece.probability = 0.9;
+    piece.support = 1.0;
+    return piece;
+  };
+  // The second piece starts `gap_m` beyond the first's end, turned by `bend_deg` about the end.
+  auto pair = [&](double gap_m, double bend_deg) {
+    const double t = bend_deg * 3.14159265358979 / 180.0;
+    const Eigen::Vector3d start(0.2 + gap_m * std::cos(t), 0.8, 1.0 + gap_m * std::sin(t));
+    const Eigen::Vector3d end = start + 0.2 * Eigen::Vector3d(std::cos(t), 0.0, std::sin(t));
+    return std::vector<Piece3D>{line({0, 0.8, 1}, {0.2, 0.8, 1}), line(start, end)};
+  };
+  AssemblyOptions options;
+  options.max_gap_m = 0.10;
+  options.max_long_gap_m = 0.15;
+  options.max_long_gap_angle_deg = 12.0;
+  // A post hides 13 cm of a straight cane: one cane across the gap.
+  auto canes = AssembleCanes(pair(0.13, 0.0), options, Deadline::Infinite());
+  ASSERT_TRUE(canes.ok()) << canes.status();
+  ASSERT_EQ(canes->size(), 1u);
+  EXPECT_NEAR((*canes)[0].Length(), 0.53, 0.01);
+  // The same gap with a 20 degree turn: two canes (20 degrees is within max_chain_angle_deg,
+  // which a gap of 8 cm is allowed).
+  canes = AssembleCanes(pair(0.13, 20.0), options, Deadline::Infinite());
+  ASSERT_TRUE(canes.ok());
+  EXPECT_EQ(canes->size(), 2u);
+  canes = AssembleCanes(pair(0.08, 20.0), options, Deadline::Infinite());
+  ASSERT_TRUE(canes.ok());
+  EXPECT_EQ(canes->size(), 1u);
+  // Beyond max_long_gap_m, or with long gaps turned off: two canes.
+  canes = AssembleCanes(pair(0.17, 0.0), options, Deadline::Infinite());
+  ASSERT_TRUE(canes.ok());
+  EXPECT_EQ(canes->size(), 2u);
+  options.max_long_gap_m = options.max_gap_m;
+  canes = AssembleCanes(pair(0.13, 0.0), options, Deadline::Infinite());
+  ASSERT_TRUE(canes.ok());
+  EXPECT_EQ(canes->size(), 2u);
+}
+
 TEST(AssembleCanes, EmptyInputGivesNoCanes) {
   const auto canes = AssembleCanes({}, AssemblyOptions(), Deadline::Infinite());
   ASSERT_TRUE(canes.ok());
@@ -282,6 +327,13 @@ TEST(AssembleCanes, InvalidOptionsRejects) {
   options = AssemblyOptions();
   options.merge_angle_deg = std::nan("");
   EXPECT_EQ(options.Validate().code(), absl::StatusCode::kInvalidArgument);
+  options = AssemblyOptions();
+  options.max_long_gap_m = options.max_gap_m - 0.01;
+  EXPECT_NE(std::string(options.Validate().message()).find("max_long_gap_m"), std::string::npos);
+  options = AssemblyOptions();
+  options.max_long_gap_angle_deg = 95.0;
+  EXPECT_NE(std::string(options.Validate().message()).find("max_long_gap_angle_deg"),
+            std::string::npos);
 }
 
 TEST(AssembleCanes, ExpiredDeadlineFails) {

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // A diagnosis tool, not a test: why true cane length with foreground in two views has no
 // skeleton segment near it in two views (the "skeleton in fewer than 2 views" row of
-// MatchLoss.DISABLED_Report), and why matched pieces are lost in assembly. Run with
+// MatchLoss.DISABLED_Report), what hides the true cane where the foreground row loses it, and
+// why matched pieces are lost in assembly. Run with
 //   VB_INPUT=images VB_SEED=1300 VB_STOPS=10 vb_reconstruct_test
 //     --gtest_also_run_disabled_tests --gtest_filter='SkeletonLoss.DISABLED_*'
 // Tuning seeds only (1100-1999; docs/reconstruction.md "Seeds").
@@ -11,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "absl/strings/str_cat.h"
 #include "gtest/gtest.h"
 #include "workers/reconstruct/correspondence_test_util.h"
 #include "workers/reconstruct/mask_ops.h"
@@ -52,6 +54,7 @@ TEST(SkeletonLoss, DISABLED_Report) {
                                 "other"};
   double cause[kCauses] = {}, cause_other_cane[kCauses] = {}, total = 0, lost = 0;
   double lost_by_width[4] = {};
+  double fg_lost = 0, fg_class[3] = {}, fg_thin[3] = {};  // post, wire, background
   double angle_bins[kCauses][4] = {}, behind_count[kCauses] = {};  // own projected diameter < 3, 3-5, 5-8, >= 8 px
   for (int k = 0; k < count; ++k) {
     const SimulatedStop stop = MakeRenderedStop(first + k, images, fiducials);
@@ -128,6 +131,21 @@ TEST(SkeletonLoss, DISABLED_Report) {
           skel_view[v] = s;
           skel += s;
         }
+        if (in_image >= 2 && fg < 2) {
+          // Foreground missed: what the views without foreground there show instead.
+          fg_lost += 1;
+          for (int v = 0; v < n; ++v) {
+            if (fg_view[v] || radius_px[v] <= 0) continue;
+            const View2D& view = stop.views[v];
+            const int x = std::clamp(static_cast<int>(std::lround(px[v].x())), 0, view.width - 1);
+            const int y = std::clamp(static_cast<int>(std::lround(px[v].y())), 0, view.height - 1);
+            const PixelClass c = view.classes.at(x, y);
+            const int f = c == PixelClass::kPost ? 0 : c == PixelClass::kWire ? 1 : 2;
+            const double weight = 1.0 / (in_image - fg);
+            fg_class[f] += weight;
+            fg_thin[f] += weight * (2 * radius_px[v] < 3.0);
+          }
+        }
         if (in_image < 2 || fg < 2 || skel >= 2) continue;
         lost += 1;
         double own_diameter = 0;
@@ -198,6 +216,10 @@ TEST(SkeletonLoss, DISABLED_Report) {
     std::printf("seed %llu: lost at skeleton %.3f\n", static_cast<unsigned long long>(first + k),
                 lost / total);
   }
+  std::printf("foreground in < 2 views: %.3f of true length; the views without it show post "
+              "%.3f (own diameter < 3 px %.3f), wire %.3f (%.3f), background %.3f (%.3f)\n",
+              fg_lost / total, fg_class[0] / total, fg_thin[0] / total, fg_class[1] / total,
+              fg_thin[1] / total, fg_class[2] / total, fg_thin[2] / total);
   std::printf("skeleton in < 2 views: %.3f of true length (%d stops)\n", lost / total, count);
   for (int c = 0; c < kCauses; ++c)
     std::printf("  %-52s %.3f (another cane within reach: %.3f; at <5 deg %.3f, 5-15 %.3f, "
@@ -217,7 +239,7 @@ TEST(SkeletonLoss, DISABLED_Assembly) {
   const auto [first, count, images, fiducials] = ReportStopsFromEnv(1300, 4, true);
   const ReconstructOptions options;
   struct Variant {
-    const char* name;
+    std::string name;
     AssemblyOptions assembly;
     bool volume_filter = true;
   };
@@ -237,6 +259,11 @@ TEST(SkeletonLoss, DISABLED_Assembly) {
     a.min_isolated_length_m = 0.06;
     variants.push_back({"min_isolated_length 0.06", a});
   }
+  for (const double length : {0.08, 0.09, 0.10}) {
+    AssemblyOptions a = options.assembly;
+    a.min_isolated_length_m = length;
+    variants.push_back({absl::StrCat("min_isolated_length ", length), a});
+  }
   {
     AssemblyOptions a = options.assembly;
     a.merge_distance_m = 0.004;
@@ -250,6 +277,9 @@ TEST(SkeletonLoss, DISABLED_Assembly) {
   const int nv = static_cast<int>(variants.size());
   std::vector<double> recovered(nv, 0.0), wrong(nv, 0.0), length(nv, 0.0);
   double total = 0, lost = 0;
+  // [bin][right]: samples of dropped pieces.
+  double by_probability[4][2] = {}, by_support[4][2] = {}, by_length[5][2] = {};
+  double by_length_probable[5][2] = {}, own_samples = 0;
   for (int k = 0; k < count; ++k) {
     const SimulatedStop stop = MakeRenderedStop(first + k, images, fiducials);
     ASSERT_FALSE(stop.views.empty());
@@ -291,14 +321,65 @@ TEST(SkeletonLoss, DISABLED_Assembly) {
         for (int v = 1; v < nv; ++v) recovered[v] += near_any(p, canes[v]);
       }
     }
+    // The pieces the assembly drops whole (no sample within 10 mm of an assembled cane), by
+    // probability, support and length: the samples near a drawn cane (right) and not (wrong).
+    for (const Piece3D& piece : matched->pieces) {
+      if (piece.probability < options.assembly.min_piece_probability) continue;
+      const std::vector<Eigen::Vector3d> samples = piece.polyline.Sample(0.005);
+      bool kept = false;
+      for (const Eigen::Vector3d& p : samples)
+        if (near_any(p, canes[0])) {
+          kept = true;
+          break;
+        }
+      if (kept) continue;
+      const double length = piece.polyline.Length();
+      const int pb = piece.probability < 0.5 ? 0 : piece.probability < 0.8 ? 1
+                     : piece.probability < 0.95 ? 2 : 3;
+      const int sb = piece.support < 0.8 ? 0 : piece.support < 0.9 ? 1
+                     : piece.support < 0.97 ? 2 : 3;
+      const int lb = length < 0.04 ? 0 : length < 0.06 ? 1 : length < 0.09 ? 2 : length < 0.12 ? 3 : 4;
+      for (const Eigen::Vector3d& p : samples) {
+        bool right = false, own = false;
+        for (const Cane& d : stop.drawn.canes)
+          if (DistanceToPolyline(p, d.polyline) <= 0.01) {
+            right = true;
+            break;
+          }
+        for (const Cane& c : stop.scene.vine.canes)
+          if (DistanceToPolyline(p, c.polyline) <= 0.01) {
+            own = true;
+            break;
+          }
+        by_probability[pb][right] += 1;
+        by_support[sb][right] += 1;
+        by_length[lb][right] += 1;
+        by_length_probable[lb][right] += piece.probability >= 0.8 && piece.support >= 0.9;
+        own_samples += own;
+      }
+    }
     std::printf("seed %llu: lost in assembly %.3f so far\n",
                 static_cast<unsigned long long>(first + k), lost / total);
   }
   std::printf("lost in assembly: %.3f of true length (%d stops)\n", lost / total, count);
   for (int v = 0; v < nv; ++v)
     std::printf("  %-40s recovers %.3f; assembled length wrong %.4f (%.0f samples)\n",
-                variants[v].name, recovered[v] / total, wrong[v] / std::max(1.0, length[v]),
+                variants[v].name.c_str(), recovered[v] / total, wrong[v] / std::max(1.0, length[v]),
                 length[v]);
+  const auto row = [&](const char* name, const double (*bins)[2], int nb, const char** labels) {
+    std::printf("  dropped pieces by %s (samples right / wrong):", name);
+    for (int b = 0; b < nb; ++b)
+      std::printf(" %s %.0f/%.0f", labels[b], bins[b][1], bins[b][0]);
+    std::printf("\n");
+  };
+  const char* pl[] = {"<0.5", "0.5-0.8", "0.8-0.95", ">=0.95"};
+  const char* sl[] = {"<0.8", "0.8-0.9", "0.9-0.97", ">=0.97"};
+  const char* ll[] = {"<4cm", "4-6", "6-9", "9-12", ">=12"};
+  row("probability", by_probability, 4, pl);
+  row("support", by_support, 4, sl);
+  row("length", by_length, 5, ll);
+  row("length, p >= 0.8 and support >= 0.9", by_length_probable, 5, ll);
+  std::printf("  of them near this vine's canes: %.0f samples\n", own_samples);
 }
 
 }  // namespace
