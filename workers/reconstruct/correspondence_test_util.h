@@ -8,6 +8,8 @@
 #include <cstdint>
 #include <cstdlib>
 #include <string>
+#include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "core/deadline.h"
@@ -280,5 +282,42 @@ inline ReportStops ReportStopsFromEnv(uint64_t default_first, int default_count,
           input ? std::string(input) == "images" : images_by_default,
           !fiducials || std::string(fiducials) != "0"};
 }
+
+// Points in a 1 cm hash grid, each with a value; query: largest value within 10 mm.
+class PointGrid {
+ public:
+  void Add(const Eigen::Vector3d& p, double value) {
+    cells_[Key(Cell(p))].push_back({p, value});
+  }
+  double MaxNear(const Eigen::Vector3d& p, double radius = 0.01) const {
+    double best = -1;
+    const Eigen::Vector3i c = Cell(p);
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) {
+          const auto it = cells_.find(Key(c + Eigen::Vector3i(dx, dy, dz)));
+          if (it == cells_.end()) continue;
+          for (const auto& [q, v] : it->second)
+            if ((q - p).norm() <= radius) best = std::max(best, v);
+        }
+    return best;
+  }
+  void AddLine(const std::vector<Eigen::Vector3d>& pts, double value) {
+    for (size_t i = 0; i + 1 < pts.size(); ++i) {
+      const int n = std::max(1, static_cast<int>((pts[i + 1] - pts[i]).norm() / 0.004));
+      for (int k = 0; k < n; ++k) Add(pts[i] + (pts[i + 1] - pts[i]) * (double(k) / n), value);
+    }
+    if (!pts.empty()) Add(pts.back(), value);
+  }
+
+ private:
+  static Eigen::Vector3i Cell(const Eigen::Vector3d& p) {
+    return (p / 0.01).array().floor().cast<int>();
+  }
+  static int64_t Key(const Eigen::Vector3i& c) {
+    return (int64_t(c.x() + 100000) * 200003 + (c.y() + 100000)) * 200003 + (c.z() + 100000);
+  }
+  std::unordered_map<int64_t, std::vector<std::pair<Eigen::Vector3d, double>>> cells_;
+};
 
 }  // namespace vb::reconstruct
