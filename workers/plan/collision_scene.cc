@@ -96,6 +96,28 @@ absl::StatusOr<CollisionScene> CollisionScene::Build(const VineModel& model,
     }
   }
 
+  // Finite but absurd coordinates would make the chord grid (and memory) explode: no part of a
+  // stop's vine lies this far from the platform origin.
+  constexpr double kMaxReachM = 10.0;
+  auto far = [&](const Polyline3& line) {
+    for (const Eigen::Vector3d& p : line.points) {
+      if (p.norm() > kMaxReachM) return true;
+    }
+    return false;
+  };
+  for (size_t i = 0; i < model.canes.size(); ++i) {
+    if (far(model.canes[i].polyline)) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          "canes[", i, "].points: a point lies more than ", kMaxReachM, " m from the platform"));
+    }
+  }
+  for (size_t i = 0; i < model.obstacles.size(); ++i) {
+    if (far(model.obstacles[i].polyline)) {
+      return absl::InvalidArgumentError(absl::StrCat("obstacles[", i, "].points: a point lies more than ",
+                                                     kMaxReachM, " m from the platform"));
+    }
+  }
+
   const Eigen::Isometry3d base_from_platform = robot.platform_from_arm_base.inverse();
   const double margin = options.default_margin_m;
   CollisionScene scene;

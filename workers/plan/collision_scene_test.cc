@@ -227,6 +227,17 @@ TEST(CollisionScene, BuildRejectsBadInput) {
   vine.head.spheres.push_back({Eigen::Vector3d(0, 0, std::nan("")), 0.05});
   EXPECT_NE(CollisionScene::Build(vine, DefaultPlatform(), robot).status().message().find("head"),
             std::string::npos);
+  vine = SimVine(1103);
+  vine.canes[2].polyline.points[1].x() = 1e9;  // finite, absurd: no chord grid of it is built
+  EXPECT_NE(CollisionScene::Build(vine, DefaultPlatform(), robot).status().message().find(
+                "canes[2].points"),
+            std::string::npos);
+  vine = SimVine(1103);
+  vine.obstacles.push_back({vine.canes[2].polyline});
+  vine.obstacles[0].polyline.points[0].z() = -1e9;
+  EXPECT_NE(CollisionScene::Build(vine, DefaultPlatform(), robot).status().message().find(
+                "obstacles[0].points"),
+            std::string::npos);
   SceneOptions options;
   options.cane_segment_m = 0.0;
   EXPECT_NE(CollisionScene::Build(SimVine(1103), DefaultPlatform(), robot, options)

@@ -257,19 +257,27 @@ Capsule CameraBody(const Eigen::Vector3d& centre_in_platform,
   return {centre_in_platform - kBehindM * axis, centre_in_platform + kAheadM * axis, kRadiusM};
 }
 
+namespace {
+
+// sim/rig.h's default trinocular rig, hard-coded because workers do not depend on sim: an
+// equilateral triangle of side 0.29 m centred at (0, -0.12, 1.05), cam0 lower left, cam1 lower
+// right, cam2 above the middle, each aimed at kRigAim on the vine plane.
+constexpr double kRigSide = 0.29, kRigY = -0.12, kRigHeight = 1.05;
+const Eigen::Vector3d kRigAim(0.0, 0.80, 1.15);
+
+std::vector<Eigen::Vector3d> NominalCameraCentres() {
+  const double circum = kRigSide / std::sqrt(3.0);  // centroid to vertex
+  return {Eigen::Vector3d(-kRigSide / 2, kRigY, kRigHeight - circum / 2),
+          Eigen::Vector3d(kRigSide / 2, kRigY, kRigHeight - circum / 2),
+          Eigen::Vector3d(0, kRigY, kRigHeight + circum)};
+}
+
+}  // namespace
+
 PlatformGeometry DefaultPlatform() {
-  // sim/rig.h's default trinocular rig, hard-coded because workers do not depend on sim: an
-  // equilateral triangle of side 0.29 m centred at (0, -0.12, 1.05), cam0 lower left, cam1 lower
-  // right, cam2 above the middle, each aimed at (0, 0.80, 1.15) on the vine plane.
-  constexpr double kSide = 0.29, kY = -0.12, kHeight = 1.05;
-  const Eigen::Vector3d aim(0.0, 0.80, 1.15);
-  const double circum = kSide / std::sqrt(3.0);  // centroid to vertex
-  const Eigen::Vector3d centres[] = {Eigen::Vector3d(-kSide / 2, kY, kHeight - circum / 2),
-                                     Eigen::Vector3d(kSide / 2, kY, kHeight - circum / 2),
-                                     Eigen::Vector3d(0, kY, kHeight + circum)};
   PlatformGeometry platform;
-  for (const Eigen::Vector3d& centre : centres) {
-    platform.fixed_capsules.push_back(CameraBody(centre, aim - centre));
+  for (const Eigen::Vector3d& centre : NominalCameraCentres()) {
+    platform.fixed_capsules.push_back(CameraBody(centre, kRigAim - centre));
   }
   return platform;
 }
@@ -277,6 +285,21 @@ PlatformGeometry DefaultPlatform() {
 absl::StatusOr<PlatformGeometry> PlatformAroundRig(const RigCalibration& rig) {
   if (absl::Status s = rig.Validate(); !s.ok()) {
     return absl::InvalidArgumentError(absl::StrCat("calibration: ", s.message()));
+  }
+  // A calibration of another rig, or one with a frame or sign error, would move the capsules
+  // away from the real cameras: each calibrated camera must lie near a camera of the platform's
+  // design (a real rig is mounted within a few cm of it).
+  for (const CameraCalibration& camera : rig.cameras) {
+    double nearest = std::numeric_limits<double>::infinity();
+    for (const Eigen::Vector3d& c : NominalCameraCentres()) {
+      nearest = std::min(nearest, (camera.CentreInPlatform() - c).norm());
+    }
+    if (nearest > kMaxCameraOffNominalM) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          "calibration: camera '", camera.name, "' lies ", nearest,
+          " m from every camera position of the platform's design (at most ",
+          kMaxCameraOffNominalM, " m): a calibration of another rig, or a frame error?"));
+    }
   }
   PlatformGeometry platform = DefaultPlatform();
   platform.fixed_capsules.clear();

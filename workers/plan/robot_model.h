@@ -85,7 +85,10 @@ Capsule CameraBody(const Eigen::Vector3d& centre_in_platform,
 // camera's z axis), so that a rig mounted off nominal moves its capsules with it. For the
 // simulator's default rig (sim::MakeRig) the capsules are DefaultPlatform's.
 // INVALID_ARGUMENT naming the camera and field for an invalid calibration
-// (RigCalibration::Validate).
+// (RigCalibration::Validate), and naming the camera when its centre lies farther than
+// kMaxCameraOffNominalM from every camera of DefaultPlatform's design (another rig's calibration,
+// or a frame or sign error, would leave the real cameras unprotected).
+inline constexpr double kMaxCameraOffNominalM = 0.15;
 absl::StatusOr<PlatformGeometry> PlatformAroundRig(const RigCalibration& rig);
 
 }  // namespace vb::plan

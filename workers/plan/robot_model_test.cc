@@ -300,6 +300,25 @@ TEST(PlatformAroundRig, RejectsAnInvalidCalibrationNamingTheCamera) {
             absl::StatusCode::kInvalidArgument);
 }
 
+// A calibration whose camera lies far from every camera of the platform's design (another rig,
+// a frame or sign error) would leave the real cameras unprotected: rejected, naming the camera.
+TEST(PlatformAroundRig, RejectsACameraFarFromThePlatformsDesign) {
+  auto rig = sim::MakeRig();
+  ASSERT_TRUE(rig.ok()) << rig.status();
+  CameraCalibration& cam = rig->cameras[1];
+  const Eigen::Vector3d shift(0.0, 0.0, -0.5);  // centre 0.5 m lower
+  cam.translation_camera_from_platform -= cam.rotation_camera_from_platform * shift;
+  const auto platform = PlatformAroundRig(*rig);
+  EXPECT_EQ(platform.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(platform.status().message().find("cam1"), std::string::npos) << platform.status();
+  // 0.1 m off is a rig mounted off its nominal pose: accepted.
+  auto near = sim::MakeRig();
+  ASSERT_TRUE(near.ok());
+  near->cameras[1].translation_camera_from_platform -=
+      near->cameras[1].rotation_camera_from_platform * Eigen::Vector3d(0.0, 0.0, -0.1);
+  EXPECT_TRUE(PlatformAroundRig(*near).ok());
+}
+
 TEST(PlatformGeometry, ValidateRejectsBadPlanes) {
   PlatformGeometry platform = DefaultPlatform();
   platform.roof_z_m = -1.0;

@@ -65,7 +65,7 @@ absl::Status ConnectOptions::Validate() const {
         "connect options: head_margin_m and spur_length_m must be >= 0");
   }
   if (!std::isfinite(rescue_min_taper) || rescue_min_taper < 0) {
-    return absl::InvalidArgumentError("connect options: rescue_min_taper must be >= 0");
+    return absl::InvalidArgumentError("connect options: rescue_min_taper must be finite and >= 0");
   }
   if (!(rescue_min_probability >= 0 && rescue_min_probability < 1)) {
     return absl::InvalidArgumentError(
@@ -73,6 +73,11 @@ absl::Status ConnectOptions::Validate() const {
   }
   if (!(min_join_probability > 0 && min_join_probability < 1)) {
     return absl::InvalidArgumentError("connect options: min_join_probability must be in (0, 1)");
+  }
+  if (rescue_min_probability > 0 && rescue_min_probability < min_join_probability) {
+    return absl::InvalidArgumentError(
+        "connect options: rescue_min_probability must be 0 (off) or at least "
+        "min_join_probability (a rescue never takes a join less likely than none)");
   }
   for (double w : join_weights.cane) {
     if (!std::isfinite(w))

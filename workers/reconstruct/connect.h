@@ -86,7 +86,8 @@ struct ConnectOptions {
   double min_join_probability = 0.12; // a cane hangs on the tree only by a join this likely
   double rescue_min_probability = 0.12;  // step 3b: a cane left out though it has a join at
                                      // least this likely to the tree hangs on it, and the canes
-                                     // hung on it follow; 0 turns this off; otherwise in (0, 1)
+                                     // hung on it follow; 0 turns this off; otherwise in
+                                     // [min_join_probability, 1)
   double rescue_min_taper = 1.0;     // ... a cane reaching beyond keep_within_m only if it is at
                                      // least this much thicker at its end nearer the vine's
                                      // centre (TaperTowardCentre); 0 turns this test off

@@ -308,6 +308,10 @@ TEST(ConnectCanes, ACaneHungOnALeftOutCaneTakesItsLikelyJoinToTheTree) {
   EXPECT_EQ(rejected.status().code(), absl::StatusCode::kInvalidArgument);
   EXPECT_NE(std::string(rejected.status().message()).find("rescue_min_probability"),
             std::string::npos);
+  bad.rescue_min_probability = 0.1;  // below "none" (min_join_probability 0.12)
+  const auto below_none = BuildTree(prepared, joins, Head(), bad);
+  EXPECT_NE(std::string(below_none.status().message()).find("min_join_probability"),
+            std::string::npos);
 }
 
 TEST(TaperTowardCentre, IsInnerOverOuterRadiusWhicheverWayTheCaneRuns) {
