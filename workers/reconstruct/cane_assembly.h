@@ -58,7 +58,7 @@ struct AssemblyOptions {
   double radius_smoothing_m = 0.05;     // half-width of the weighted mean of radii along a cane
 
   // INVALID_ARGUMENT naming the field: non-finite or non-positive lengths and ratios, angles
-  // outside (0, 90], max_radius_ratio < 1, min_piece_probability outside [0, 1],
+  // outside (0, 90), max_radius_ratio < 1, min_piece_probability outside [0, 1],
   // max_long_gap_m < max_gap_m.
   absl::Status Validate() const;
 };

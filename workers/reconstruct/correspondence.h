@@ -69,6 +69,9 @@ struct CorrespondenceOptions {
   // offset. Does nothing with other_views.rounds 0 (the first pass sets that). Off (only the
   // selected pieces are refined, after Gibbs sampling): on tuning seeds it raised recall but
   // lowered precision on 1200-1299 (docs/reconstruction.md, section 3, "Refining before scoring").
+  // The classifier's refinement features (match_classifier.h, 19-21) are measured only with this
+  // off and stay 0 with it on, while the committed second-pass weights expect them measured: with
+  // it on, probabilities shift (retrain with it on before using it).
   bool refine_before_scoring = false;
   double max_rms_px = 8.0;              // candidates fitting worse are dropped before scoring
   MatchClassifier classifier = DefaultMatchClassifier();  // candidate probabilities
