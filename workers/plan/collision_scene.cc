@@ -113,8 +113,8 @@ absl::StatusOr<CollisionScene> CollisionScene::Build(const VineModel& model,
   }
   for (size_t i = 0; i < model.obstacles.size(); ++i) {
     if (far(model.obstacles[i].polyline)) {
-      return absl::InvalidArgumentError(absl::StrCat("obstacles[", i, "].points: a point lies more than ",
-                                                     kMaxReachM, " m from the platform"));
+      return absl::InvalidArgumentError(absl::StrCat(
+          "obstacles[", i, "].points: a point lies more than ", kMaxReachM, " m from the platform"));
     }
   }
 

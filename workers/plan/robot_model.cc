@@ -291,14 +291,28 @@ absl::StatusOr<PlatformGeometry> PlatformAroundRig(const RigCalibration& rig) {
   // design (a real rig is mounted within a few cm of it).
   for (const CameraCalibration& camera : rig.cameras) {
     double nearest = std::numeric_limits<double>::infinity();
+    Eigen::Vector3d nominal_axis = Eigen::Vector3d::UnitY();
     for (const Eigen::Vector3d& c : NominalCameraCentres()) {
-      nearest = std::min(nearest, (camera.CentreInPlatform() - c).norm());
+      const double d = (camera.CentreInPlatform() - c).norm();
+      if (d < nearest) {
+        nearest = d;
+        nominal_axis = (kRigAim - c).normalized();
+      }
     }
     if (nearest > kMaxCameraOffNominalM) {
       return absl::InvalidArgumentError(absl::StrCat(
           "calibration: camera '", camera.name, "' lies ", nearest,
           " m from every camera position of the platform's design (at most ",
           kMaxCameraOffNominalM, " m): a calibration of another rig, or a frame error?"));
+    }
+    // x_cam = R x_platform + t: the camera's z axis is R's last row in the platform frame.
+    const Eigen::Vector3d axis = camera.rotation_camera_from_platform.row(2).transpose();
+    const double angle_deg = std::acos(std::clamp(axis.dot(nominal_axis), -1.0, 1.0)) * 180 / M_PI;
+    if (angle_deg > kMaxCameraTurnFromNominalDeg) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          "calibration: camera '", camera.name, "' looks ", angle_deg,
+          " degrees away from its direction in the platform's design (at most ",
+          kMaxCameraTurnFromNominalDeg, "): a calibration of another rig, or a frame error?"));
     }
   }
   PlatformGeometry platform = DefaultPlatform();

@@ -86,9 +86,11 @@ Capsule CameraBody(const Eigen::Vector3d& centre_in_platform,
 // simulator's default rig (sim::MakeRig) the capsules are DefaultPlatform's.
 // INVALID_ARGUMENT naming the camera and field for an invalid calibration
 // (RigCalibration::Validate), and naming the camera when its centre lies farther than
-// kMaxCameraOffNominalM from every camera of DefaultPlatform's design (another rig's calibration,
-// or a frame or sign error, would leave the real cameras unprotected).
+// kMaxCameraOffNominalM from every camera of DefaultPlatform's design, or its optical axis turned
+// more than kMaxCameraTurnFromNominalDeg from that camera's (another rig's calibration, or a frame
+// or sign error, would leave the real cameras unprotected).
 inline constexpr double kMaxCameraOffNominalM = 0.15;
+inline constexpr double kMaxCameraTurnFromNominalDeg = 30.0;
 absl::StatusOr<PlatformGeometry> PlatformAroundRig(const RigCalibration& rig);
 
 }  // namespace vb::plan

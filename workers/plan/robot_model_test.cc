@@ -311,6 +311,19 @@ TEST(PlatformAroundRig, RejectsACameraFarFromThePlatformsDesign) {
   const auto platform = PlatformAroundRig(*rig);
   EXPECT_EQ(platform.status().code(), absl::StatusCode::kInvalidArgument);
   EXPECT_NE(platform.status().message().find("cam1"), std::string::npos) << platform.status();
+  // Turned around (a sign error in the rotation): rejected, naming the camera.
+  auto flipped = sim::MakeRig();
+  ASSERT_TRUE(flipped.ok());
+  CameraCalibration& f = flipped->cameras[2];
+  const Eigen::Vector3d centre = f.CentreInPlatform();
+  f.rotation_camera_from_platform =
+      Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitY()).toRotationMatrix() *
+      f.rotation_camera_from_platform;
+  f.translation_camera_from_platform = -f.rotation_camera_from_platform * centre;
+  const auto turned = PlatformAroundRig(*flipped);
+  EXPECT_EQ(turned.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(turned.status().message().find("cam2"), std::string::npos) << turned.status();
+  EXPECT_NE(turned.status().message().find("degrees"), std::string::npos) << turned.status();
   // 0.1 m off is a rig mounted off its nominal pose: accepted.
   auto near = sim::MakeRig();
   ASSERT_TRUE(near.ok());
