@@ -29,6 +29,7 @@
 #include "sim/vine_generator.h"
 #include "workers/decide/decide.h"
 #include "workers/plan/plan_vine.h"
+#include "workers/plan/robot_model.h"
 #include "workers/plan/trajectory_check.h"
 #include "workers/plan/ur5_kinematics.h"
 
@@ -294,9 +295,11 @@ absl::Status RunBenchPlan(Flags& flags) {
       if (s.nearest_neighbour_cost_s > 0)
         saving_vs_nn.push_back(1.0 - s.order_cost_s / s.nearest_neighbour_cost_s);
       if (verify && base_scene.ok()) {
-        // Margins removed (the scene as built has none), 1 mm of travel between checks.
+        // Margins removed (the scene as built has none), 1 mm of travel between checks, against
+        // the cameras where the simulator put them (its default rig, DefaultPlatform), not where
+        // a --calibration says they are: a wrong calibration cannot hide a collision here.
         const int64_t collisions = plan::CountTrajectoryCollisions(
-            result->trajectory, result->cuts, scene.vine, setup.platform, setup.robot,
+            result->trajectory, result->cuts, scene.vine, plan::DefaultPlatform(), setup.robot,
             CheckerKind::kFclMesh, 0.001, setup.options.cut_motion.cut_cane_free_radius_m);
         ++verified;
         if (collisions == 0) ++verified_free;
