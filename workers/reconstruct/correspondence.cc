@@ -115,7 +115,7 @@ std::vector<OtherView> OtherViewsOf(int a, int b, const std::vector<View2D>& vie
   std::vector<OtherView> others;
   for (int c = 0; c < static_cast<int>(views.size()); ++c) {
     if (c == a || c == b || IsEmptyView(views[c])) continue;
-    others.push_back({&samples[c], &rig.cameras[c]});
+    others.push_back({&samples[c], &rig.cameras[c], &views[c]});
   }
   return others;
 }
@@ -231,10 +231,6 @@ absl::StatusOr<std::vector<ScoredCandidate>> ScoreCandidates(
       std::vector<MatchCandidate> candidates =
           FindCandidates(a, samples[a], rig.cameras[a], b, samples[b], rig.cameras[b],
                          CandidateOptionsFor(options, !other_views.empty()));
-      std::vector<const View2D*> other_images;  // the views other_views samples, in order
-      for (int c = 0; c < n; ++c) {
-        if (c != a && c != b && !IsEmptyView(views[c])) other_images.push_back(&views[c]);
-      }
       for (size_t i = 0; i < candidates.size(); ++i) {
         if (i % 64 == 0) VB_RETURN_IF_ERROR(deadline.Check("correspondence"));
         ScoredCandidate s;
@@ -252,16 +248,15 @@ absl::StatusOr<std::vector<ScoredCandidate>> ScoreCandidates(
           s.refined = true;
         }
         std::vector<ViewSupport> others;
-        for (int c = 0; c < n; ++c) {
-          if (c == a || c == b || IsEmptyView(views[c])) continue;
-          others.push_back(CheckInView(s.fit.points, views[c], samples[c], rig.cameras[c]));
+        for (const OtherView& o : other_views) {
+          others.push_back(CheckInView(s.fit.points, *o.view, *o.samples, *o.camera));
         }
         s.multi_view = !others.empty();
         // How the selected pieces' refinement would move it (match_classifier.h).
         const RefinementAgreement refinement =
             s.refined ? RefinementAgreement{}
                       : MeasureRefinement(s.candidate, s.fit, rig.cameras[a], rig.cameras[b],
-                                          other_views, other_images, others, options.fit,
+                                          other_views, others, options.fit,
                                           options.other_views);
         s.features = s.multi_view ? ComputeMatchFeatures(s.candidate, s.fit, others,
                                                          options.volume, refinement)

@@ -51,13 +51,12 @@ RefinementAgreement MeasureRefinement(const MatchCandidate& candidate, const Pol
                                       const CameraCalibration& camera_a,
                                       const CameraCalibration& camera_b,
                                       const std::vector<OtherView>& others,
-                                      const std::vector<const View2D*>& other_images,
                                       const std::vector<ViewSupport>& before,
                                       const PolylineFitOptions& fit_options,
                                       const OtherViewFitOptions& other_options) {
   RefinementAgreement out;
-  if (others.empty() || other_options.rounds <= 0 || other_images.size() != others.size() ||
-      before.size() != others.size()) {
+  if (others.empty() || other_options.rounds <= 0 || before.size() != others.size() ||
+      std::any_of(others.begin(), others.end(), [](const OtherView& o) { return !o.view; })) {
     return out;
   }
   PolylineFit refined = fit;
@@ -72,7 +71,7 @@ RefinementAgreement MeasureRefinement(const MatchCandidate& candidate, const Pol
   std::vector<ViewSupport> after;
   after.reserve(others.size());
   for (size_t v = 0; v < others.size(); ++v) {
-    after.push_back(CheckInView(refined.points, *other_images[v], *others[v].samples,
+    after.push_back(CheckInView(refined.points, *others[v].view, *others[v].samples,
                                 *others[v].camera));
   }
   out.centreline_gain = WeightedCentreline(before) - WeightedCentreline(after);

@@ -50,14 +50,13 @@ struct RefinementAgreement {
 
 // Refines a copy of `fit` (FitPolyline of `candidate` with camera_a, camera_b) in `others`
 // (RefineInOtherViews with `fit_options`, `other_options`) and measures the change.
-// `other_images[i]` is the view that others[i] samples; `before[i]` its CheckInView of the
-// unrefined fit. Nothing is measured (all 0) when the sizes differ, others is empty or
-// other_options.rounds is 0. Thread-safe.
+// `before[i]` is others[i]'s CheckInView of the unrefined fit. Nothing is measured (all 0) when
+// the sizes differ, others is empty, an other view lacks its `view`, or other_options.rounds is
+// 0. Thread-safe.
 RefinementAgreement MeasureRefinement(const MatchCandidate& candidate, const PolylineFit& fit,
                                       const CameraCalibration& camera_a,
                                       const CameraCalibration& camera_b,
                                       const std::vector<OtherView>& others,
-                                      const std::vector<const View2D*>& other_images,
                                       const std::vector<ViewSupport>& before,
                                       const PolylineFitOptions& fit_options,
                                       const OtherViewFitOptions& other_options);

@@ -44,10 +44,13 @@ struct PolylineFit {
 PolylineFit FitPolyline(const MatchCandidate& candidate, const CameraCalibration& camera_a,
                         const CameraCalibration& camera_b, const PolylineFitOptions& options = {});
 
-// A view that took no part in a match: its resampled segments and its camera (not owned).
+// A view that took no part in a match: its resampled segments, its camera and, for callers that
+// also check the fit in it (CheckInView), the view itself (not owned; RefineInOtherViews reads
+// only samples and camera).
 struct OtherView {
   const ViewSamples* samples = nullptr;
   const CameraCalibration* camera = nullptr;
+  const View2D* view = nullptr;
 };
 
 struct OtherViewFitOptions {
