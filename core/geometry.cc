@@ -98,11 +98,13 @@ double Polyline3::MeanBaseDiameter(double span_m) const {
   return 2.0 * area / span;
 }
 
-Eigen::Vector3d Polyline3::TangentAt(double s) const {
+Eigen::Vector3d Polyline3::TangentAt(double s) const { return TangentAt(s, ArcLengths()); }
+
+Eigen::Vector3d Polyline3::TangentAt(double s, const std::vector<double>& arc) const {
   if (points.size() < 2) return Eigen::Vector3d::UnitX();
   size_t i;
   double f;
-  Locate(ArcLengths(), s, &i, &f);
+  Locate(arc, s, &i, &f);
   const Eigen::Vector3d d = points[i + 1] - points[i];
   const double n = d.norm();
   return n > 0.0 ? Eigen::Vector3d(d / n) : Eigen::Vector3d::UnitX();

@@ -30,8 +30,10 @@ struct Polyline3 {
   // callers that locate many points on one polyline.
   Eigen::Vector3d PointAt(double s, const std::vector<double>& arc) const;
   double RadiusAt(double s, const std::vector<double>& arc) const;
-  // Unit tangent at arc length s (direction base -> tip).
+  // Unit tangent at arc length s (direction base -> tip); the second form takes `arc` as
+  // PointAt's does.
   Eigen::Vector3d TangentAt(double s) const;
+  Eigen::Vector3d TangentAt(double s, const std::vector<double>& arc) const;
   // Mean diameter over the first `span_m` of the polyline (all of it if shorter): how a pruner
   // reads a cane's thickness, along a hand-width rather than at one knot. 2 * radii.front() if
   // span_m <= 0.

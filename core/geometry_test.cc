@@ -44,6 +44,8 @@ TEST(Polyline3, PointAndRadiusGivenArcLengths) {
   EXPECT_EQ(p.PointAt(-1.0, arc), Eigen::Vector3d(0, 0, 0));  // clamped
   EXPECT_EQ(p.PointAt(4.0, arc), Eigen::Vector3d(1, 2, 0));
   EXPECT_EQ(p.RadiusAt(4.0, arc), 0.004);
+  for (double s : {-1.0, 0.2, 1.0, 1.5, 2.5, 4.0}) EXPECT_EQ(p.TangentAt(s, arc), p.TangentAt(s));
+  EXPECT_TRUE(p.TangentAt(1.5, arc).isApprox(Eigen::Vector3d::UnitY()));
 }
 
 TEST(Polyline3, TruncateAtKeepsTheBasePart) {

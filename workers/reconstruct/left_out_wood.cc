@@ -116,7 +116,7 @@ absl::StatusOr<std::vector<WoodObstacle>> LeftOutWood(const std::vector<Polyline
     for (int k = 0; k * options.sample_step_m < length; ++k) at.push_back(k * options.sample_step_m);
     at.push_back(length);
     const auto covered = [&](double s) {
-      return Covered(line.PointAt(s, arc), line.RadiusAt(s, arc), line.TangentAt(s), solids,
+      return Covered(line.PointAt(s, arc), line.RadiusAt(s, arc), line.TangentAt(s, arc), solids,
                      options);
     };
     // Maximal runs of samples outside the model, grown by one step at each end.
