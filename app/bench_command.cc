@@ -89,6 +89,9 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   // images replace step 1) or truth (perfect 2D: views drawn from the true model replace steps
   // 1-2). The last two locate where accuracy is lost.
   VB_ASSIGN_OR_RETURN(const std::string input, flags.String("input", "images"));
+  // With --input truth: break each drawn cane at crossings (SyntheticViewOptions, a diagnosis).
+  VB_ASSIGN_OR_RETURN(const double truth_break_px, flags.Double("truth-break-px", 0.0));
+  VB_ASSIGN_OR_RETURN(const bool truth_merge, flags.Bool("truth-merge-overlaps", false));
   // Cut-point metrics decide under this policy (default: PruningPolicy's defaults).
   VB_ASSIGN_OR_RETURN(const std::string policy_path, flags.String("policy", ""));
   // --rig-refine off, canes (canes only) or trellis (canes, wires and posts): for comparisons.
@@ -104,6 +107,12 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   if (input != "images" && input != "labels" && input != "truth")
     return absl::InvalidArgumentError("--input must be images, labels or truth");
   VB_RETURN_IF_ERROR(flags.Finish());
+  if (!(truth_break_px >= 0.0 && truth_break_px <= 100.0))
+    return absl::InvalidArgumentError("--truth-break-px must be in [0, 100]");
+  if (truth_break_px > 0.0 && input != "truth")
+    return absl::InvalidArgumentError("--truth-break-px needs --input truth");
+  if (truth_merge && truth_break_px <= 0.0)
+    return absl::InvalidArgumentError("--truth-merge-overlaps needs --truth-break-px > 0");
   if (vines < 1 || vines > 10000) return absl::InvalidArgumentError("--vines must be in [1, 10000]");
   if (seed_base < 0) return absl::InvalidArgumentError("--seed-base must be >= 0");
   if (threads < 1 || threads > 64) return absl::InvalidArgumentError("--threads must be in [1, 64]");
@@ -158,7 +167,10 @@ absl::Status RunBenchReconstruct(Flags& flags) {
       std::vector<reconstruct::View2D> views;
       if (input == "truth") {
         // Drawn through the reported calibration: the 3D stages see consistent 2D evidence.
-        views = reconstruct::SyntheticViews(capture.ground_truth, rig);
+        reconstruct::SyntheticViewOptions drawn;
+        drawn.break_at_crossings_px = truth_break_px;
+        drawn.merge_overlaps = truth_merge;
+        views = reconstruct::SyntheticViews(capture.ground_truth, rig, drawn);
       } else {
         for (size_t c = 0; c < capture.labels.size(); ++c) {
           VB_ASSIGN_OR_RETURN(reconstruct::View2D view,

@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 #include <optional>
+#include <unordered_map>
+#include <utility>
 
 #include "opencv2/imgproc.hpp"
 
@@ -44,6 +46,77 @@ Line2D LineFrom(const CameraCalibration& camera, const Eigen::Vector3d& a,
     line.centre_px.push_back(*uv);
   }
   return line;
+}
+
+// For each cane's samples (uv, width, visible), whether its segment leaves it out: it lies within
+// `margin_px` plus the two half-widths of a visible sample of another cane, in a run of such
+// samples at most kMaxCrossingRunPx long (a crossing) or, with `merge`, in a longer run beside a
+// cane of lower index (which keeps the pair's samples). All false for margin_px <= 0.
+template <typename Sample>
+std::vector<std::vector<bool>> BrokenAtCrossings(const std::vector<std::vector<Sample>>& samples,
+                                                 double margin_px, bool merge) {
+  std::vector<std::vector<bool>> broken(samples.size());
+  for (size_t c = 0; c < samples.size(); ++c) broken[c].assign(samples[c].size(), false);
+  std::vector<std::vector<int>> other(samples.size());
+  for (size_t c = 0; c < samples.size(); ++c) other[c].assign(samples[c].size(), 1 << 30);
+  if (!(margin_px > 0.0)) return broken;
+  // A grid of cells of `cell` px holding (cane, sample) of every visible sample.
+  double widest = 0.0;
+  for (const auto& cane : samples)
+    for (const Sample& s : cane) widest = std::max(widest, s.visible ? s.width_px : 0.0);
+  const double cell = std::max(4.0, widest + margin_px);
+  std::unordered_map<int64_t, std::vector<std::pair<int, int>>> grid;
+  auto key = [&](const Eigen::Vector2d& uv, int dx, int dy) {
+    const int64_t x = static_cast<int64_t>(std::floor(uv.x() / cell)) + dx;
+    const int64_t y = static_cast<int64_t>(std::floor(uv.y() / cell)) + dy;
+    return (x << 32) ^ (y & 0xffffffff);
+  };
+  for (size_t c = 0; c < samples.size(); ++c)
+    for (size_t k = 0; k < samples[c].size(); ++k)
+      if (samples[c][k].visible)
+        grid[key(samples[c][k].uv, 0, 0)].emplace_back(static_cast<int>(c), static_cast<int>(k));
+  for (size_t c = 0; c < samples.size(); ++c) {
+    for (size_t k = 0; k < samples[c].size(); ++k) {
+      const Sample& s = samples[c][k];
+      if (!s.visible) continue;
+      for (int dx = -1; dx <= 1; ++dx) {
+        for (int dy = -1; dy <= 1; ++dy) {
+          const auto it = grid.find(key(s.uv, dx, dy));
+          if (it == grid.end()) continue;
+          for (const auto& [oc, ok] : it->second) {
+            if (oc == static_cast<int>(c)) continue;
+            const Sample& o = samples[oc][ok];
+            if ((o.uv - s.uv).norm() <= 0.5 * (s.width_px + o.width_px) + margin_px) {
+              broken[c][k] = true;
+              other[c][k] = std::min(other[c][k], oc);
+            }
+          }
+        }
+      }
+    }
+  }
+  // A long run of near samples is a cane lying along another: a skeleton draws one path for the
+  // pair rather than breaking it. Only runs up to kMaxCrossingRunPx long count as crossings.
+  constexpr double kMaxCrossingRunPx = 30.0;
+  for (size_t c = 0; c < samples.size(); ++c) {
+    for (size_t k = 0; k < samples[c].size();) {
+      if (!broken[c][k]) {
+        ++k;
+        continue;
+      }
+      size_t end = k;
+      double run_px = 0.0;
+      while (end + 1 < samples[c].size() && broken[c][end + 1]) {
+        run_px += (samples[c][end + 1].uv - samples[c][end].uv).norm();
+        ++end;
+      }
+      if (run_px > kMaxCrossingRunPx) {
+        for (size_t i = k; i <= end; ++i) broken[c][i] = merge && other[c][i] < static_cast<int>(c);
+      }
+      k = end + 1;
+    }
+  }
+  return broken;
 }
 
 }  // namespace
@@ -87,10 +160,34 @@ std::vector<View2D> SyntheticViews(const VineModel& model, const RigCalibration&
         }
       }
     }
-    for (const Cane& cane : model.canes) {
-      const std::vector<double> s = cane.polyline.ArcLengths();
+    // Every cane's samples in this view: position, width, and whether the image sees it.
+    struct Sample {
+      Eigen::Vector2d uv = Eigen::Vector2d::Zero();
+      double width_px = 0.0;
+      bool visible = false;
+    };
+    std::vector<std::vector<Sample>> samples(model.canes.size());
+    for (size_t c = 0; c < model.canes.size(); ++c) {
+      const Polyline3& line = model.canes[c].polyline;
+      const std::vector<double> s = line.ArcLengths();
       const double length = s.empty() ? 0.0 : s.back();
       const int n = std::max(2, static_cast<int>(std::ceil(length / options.sample_step_m)) + 1);
+      for (int k = 0; k < n; ++k) {
+        const double sk = length * k / (n - 1);
+        const Eigen::Vector3d p = line.PointAt(sk, s);
+        Sample sample;
+        const auto uv = camera.Project(p);
+        if (uv && camera.InImage(*uv)) {
+          sample.uv = *uv;
+          sample.width_px = std::max(options.min_width_px, WidthPx(camera, p, line.RadiusAt(sk, s)));
+          sample.visible = true;
+        }
+        samples[c].push_back(sample);
+      }
+    }
+    const std::vector<std::vector<bool>> broken =
+        BrokenAtCrossings(samples, options.break_at_crossings_px, options.merge_overlaps);
+    for (size_t c = 0; c < model.canes.size(); ++c) {
       Segment2D current;
       auto flush = [&]() {
         if (current.points.size() >= 2) {
@@ -103,24 +200,26 @@ std::vector<View2D> SyntheticViews(const VineModel& model, const RigCalibration&
         }
         current = Segment2D();
       };
-      for (int k = 0; k < n; ++k) {
-        const double sk = length * k / (n - 1);
-        const Eigen::Vector3d p = cane.polyline.PointAt(sk);
-        const auto uv = camera.Project(p);
-        if (!uv || !camera.InImage(*uv)) {
+      for (size_t k = 0; k < samples[c].size(); ++k) {
+        const Sample& sample = samples[c][k];
+        if (!sample.visible) {
           flush();
           continue;
         }
-        const double w =
-            std::max(options.min_width_px, WidthPx(camera, p, cane.polyline.RadiusAt(sk)));
-        if (!current.points.empty()) {
+        const double w = sample.width_px;
+        if (k > 0 && samples[c][k - 1].visible) {
+          const Eigen::Vector2d& prev = samples[c][k - 1].uv;
           const int iw = std::max(1, static_cast<int>(std::lround(w)));
-          cv::line(classes, ToCv(current.points.back()), ToCv(*uv),
+          cv::line(classes, ToCv(prev), ToCv(sample.uv),
                    cv::Scalar(static_cast<int>(PixelClass::kForeground)), iw);
-          if (w >= thick_width_px) cv::line(thick, ToCv(current.points.back()), ToCv(*uv), 1, iw);
-          cv::line(skeleton, ToCv(current.points.back()), ToCv(*uv), cv::Scalar(0), 1);
+          if (w >= thick_width_px) cv::line(thick, ToCv(prev), ToCv(sample.uv), 1, iw);
+          cv::line(skeleton, ToCv(prev), ToCv(sample.uv), cv::Scalar(0), 1);
         }
-        current.points.push_back(*uv);
+        if (broken[c][k]) {
+          flush();
+          continue;
+        }
+        current.points.push_back(sample.uv);
         current.widths_px.push_back(w);
       }
       flush();

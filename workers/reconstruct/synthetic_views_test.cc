@@ -33,5 +33,59 @@ TEST(SyntheticViews, SegmentsLieOnTheProjectedCane) {
   }
 }
 
+// Two canes crossing in the vine plane, and a third lying 3 mm beside the second's upper part.
+VineModel CrossingAndLyingAlong() {
+  VineModel model;
+  model.canes.push_back(StraightCane(1, std::nullopt, CaneKind::kTrunk, {-0.2, 0.8, 1.0},
+                                     {0.2, 0.8, 1.0}, 0.004));
+  model.canes.push_back(
+      StraightCane(2, 1, CaneKind::kCane, {0.0, 0.8, 0.85}, {0.0, 0.8, 1.3}, 0.004));
+  model.canes.push_back(
+      StraightCane(3, 1, CaneKind::kCane, {0.003, 0.8, 1.1}, {0.003, 0.8, 1.3}, 0.004));
+  return model;
+}
+
+int SegmentsOf(const View2D& view, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  // Segments whose both ends lie on the image line from a to b (within 2 px).
+  int count = 0;
+  const Eigen::Vector2d d = (b - a).normalized();
+  for (const Segment2D& s : view.segments) {
+    auto off = [&](const Eigen::Vector2d& p) {
+      const Eigen::Vector2d r = p - a;
+      return std::abs(r.x() * d.y() - r.y() * d.x());
+    };
+    if (off(s.points.front()) < 2.0 && off(s.points.back()) < 2.0) ++count;
+  }
+  return count;
+}
+
+TEST(SyntheticViews, CrossingsBreakSegmentsAndOverlapsMergeOnlyWhenAsked) {
+  const RigCalibration rig = sim::MakeRig().value();
+  const VineModel model = CrossingAndLyingAlong();
+  const auto horizontal = [&](int v) {
+    return std::pair(*rig.cameras[v].Project({-0.2, 0.8, 1.0}),
+                     *rig.cameras[v].Project({0.2, 0.8, 1.0}));
+  };
+  const std::vector<View2D> whole = SyntheticViews(model, rig);
+  SyntheticViewOptions broken;
+  broken.break_at_crossings_px = 2.0;
+  const std::vector<View2D> crossed = SyntheticViews(model, rig, broken);
+  broken.merge_overlaps = true;
+  const std::vector<View2D> merged = SyntheticViews(model, rig, broken);
+  for (size_t v = 0; v < rig.cameras.size(); ++v) {
+    EXPECT_EQ(whole[v].segments.size(), 3u);
+    const auto [a, b] = horizontal(static_cast<int>(v));
+    EXPECT_EQ(SegmentsOf(whole[v], a, b), 1);
+    // The horizontal cane is broken where the upright one crosses it, and the upright one where
+    // the horizontal one crosses it; cane 3 lies along cane 2 (a long run): kept whole.
+    EXPECT_EQ(SegmentsOf(crossed[v], a, b), 2);
+    EXPECT_EQ(crossed[v].segments.size(), 5u);
+    // Merged: cane 3, listed after cane 2, loses the stretch beside it (all of it).
+    EXPECT_EQ(merged[v].segments.size(), 4u);
+    // The foreground is drawn the same in every case.
+    EXPECT_EQ(whole[v].classes.data, merged[v].classes.data);
+  }
+}
+
 }  // namespace
 }  // namespace vb::reconstruct
