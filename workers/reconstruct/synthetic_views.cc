@@ -48,18 +48,61 @@ Line2D LineFrom(const CameraCalibration& camera, const Eigen::Vector3d& a,
   return line;
 }
 
-// For each cane's samples (uv, width, visible), whether its segment leaves it out: it lies within
-// `margin_px` plus the two half-widths of a visible sample of another cane, in a run of such
-// samples at most kMaxCrossingRunPx long (a crossing) or, with `merge`, in a longer run beside a
-// cane of lower index (which keeps the pair's samples). All false for margin_px <= 0.
-template <typename Sample>
-std::vector<std::vector<bool>> BrokenAtCrossings(const std::vector<std::vector<Sample>>& samples,
-                                                 double margin_px, bool merge) {
-  std::vector<std::vector<bool>> broken(samples.size());
-  for (size_t c = 0; c < samples.size(); ++c) broken[c].assign(samples[c].size(), false);
-  std::vector<std::vector<int>> other(samples.size());
-  for (size_t c = 0; c < samples.size(); ++c) other[c].assign(samples[c].size(), 1 << 30);
-  if (!(margin_px > 0.0)) return broken;
+struct Sample {
+  Eigen::Vector2d uv = Eigen::Vector2d::Zero();
+  double width_px = 0.0;
+  bool visible = false;
+};
+
+// Every cane's samples in `camera`'s view, every ~step_m along it: position, width (at least
+// min_width_px), and whether the image sees it.
+std::vector<std::vector<Sample>> ProjectSamples(const VineModel& model,
+                                                const CameraCalibration& camera, double step_m,
+                                                double min_width_px) {
+  std::vector<std::vector<Sample>> samples(model.canes.size());
+  for (size_t c = 0; c < model.canes.size(); ++c) {
+    const Polyline3& line = model.canes[c].polyline;
+    const std::vector<double> s = line.ArcLengths();
+    const double length = s.empty() ? 0.0 : s.back();
+    const int n = std::max(2, static_cast<int>(std::ceil(length / step_m)) + 1);
+    for (int k = 0; k < n; ++k) {
+      const double sk = length * k / (n - 1);
+      const Eigen::Vector3d p = line.PointAt(sk, s);
+      Sample sample;
+      const auto uv = camera.Project(p);
+      if (uv && camera.InImage(*uv)) {
+        sample.uv = *uv;
+        sample.width_px = std::max(min_width_px, WidthPx(camera, p, line.RadiusAt(sk, s)));
+        sample.visible = true;
+      }
+      samples[c].push_back(sample);
+    }
+  }
+  return samples;
+}
+
+// What lies beside a sample in its view.
+enum class Beside : uint8_t {
+  kNothing,
+  kCrossing,    // another cane, in a run of such samples at most kMaxCrossingRunPx long
+  kAlongFirst,  // another cane, in a longer run; this cane is listed before every such cane
+  kAlongLater,  // ... a cane listed before this one lies beside it
+};
+// Runs longer than this are a cane lying along another: a skeleton draws one path for the pair
+// rather than breaking it.
+constexpr double kMaxCrossingRunPx = 30.0;
+
+// For each sample, what lies within `margin_px` plus the two half-widths of it (visible samples of
+// other canes only). All kNothing for margin_px <= 0.
+std::vector<std::vector<Beside>> Classify(const std::vector<std::vector<Sample>>& samples,
+                                          double margin_px) {
+  std::vector<std::vector<Beside>> beside(samples.size());
+  std::vector<std::vector<int>> first_other(samples.size());
+  for (size_t c = 0; c < samples.size(); ++c) {
+    beside[c].assign(samples[c].size(), Beside::kNothing);
+    first_other[c].assign(samples[c].size(), static_cast<int>(samples.size()));
+  }
+  if (!(margin_px > 0.0)) return beside;
   // A grid of cells of `cell` px holding (cane, sample) of every visible sample.
   double widest = 0.0;
   for (const auto& cane : samples)
@@ -87,36 +130,36 @@ std::vector<std::vector<bool>> BrokenAtCrossings(const std::vector<std::vector<S
             if (oc == static_cast<int>(c)) continue;
             const Sample& o = samples[oc][ok];
             if ((o.uv - s.uv).norm() <= 0.5 * (s.width_px + o.width_px) + margin_px) {
-              broken[c][k] = true;
-              other[c][k] = std::min(other[c][k], oc);
+              beside[c][k] = Beside::kCrossing;
+              first_other[c][k] = std::min(first_other[c][k], oc);
             }
           }
         }
       }
     }
   }
-  // A long run of near samples is a cane lying along another: a skeleton draws one path for the
-  // pair rather than breaking it. Only runs up to kMaxCrossingRunPx long count as crossings.
-  constexpr double kMaxCrossingRunPx = 30.0;
   for (size_t c = 0; c < samples.size(); ++c) {
     for (size_t k = 0; k < samples[c].size();) {
-      if (!broken[c][k]) {
+      if (beside[c][k] == Beside::kNothing) {
         ++k;
         continue;
       }
       size_t end = k;
       double run_px = 0.0;
-      while (end + 1 < samples[c].size() && broken[c][end + 1]) {
+      while (end + 1 < samples[c].size() && beside[c][end + 1] != Beside::kNothing) {
         run_px += (samples[c][end + 1].uv - samples[c][end].uv).norm();
         ++end;
       }
       if (run_px > kMaxCrossingRunPx) {
-        for (size_t i = k; i <= end; ++i) broken[c][i] = merge && other[c][i] < static_cast<int>(c);
+        for (size_t i = k; i <= end; ++i) {
+          beside[c][i] = first_other[c][i] < static_cast<int>(c) ? Beside::kAlongLater
+                                                                 : Beside::kAlongFirst;
+        }
       }
       k = end + 1;
     }
   }
-  return broken;
+  return beside;
 }
 
 }  // namespace
@@ -160,33 +203,10 @@ std::vector<View2D> SyntheticViews(const VineModel& model, const RigCalibration&
         }
       }
     }
-    // Every cane's samples in this view: position, width, and whether the image sees it.
-    struct Sample {
-      Eigen::Vector2d uv = Eigen::Vector2d::Zero();
-      double width_px = 0.0;
-      bool visible = false;
-    };
-    std::vector<std::vector<Sample>> samples(model.canes.size());
-    for (size_t c = 0; c < model.canes.size(); ++c) {
-      const Polyline3& line = model.canes[c].polyline;
-      const std::vector<double> s = line.ArcLengths();
-      const double length = s.empty() ? 0.0 : s.back();
-      const int n = std::max(2, static_cast<int>(std::ceil(length / options.sample_step_m)) + 1);
-      for (int k = 0; k < n; ++k) {
-        const double sk = length * k / (n - 1);
-        const Eigen::Vector3d p = line.PointAt(sk, s);
-        Sample sample;
-        const auto uv = camera.Project(p);
-        if (uv && camera.InImage(*uv)) {
-          sample.uv = *uv;
-          sample.width_px = std::max(options.min_width_px, WidthPx(camera, p, line.RadiusAt(sk, s)));
-          sample.visible = true;
-        }
-        samples[c].push_back(sample);
-      }
-    }
-    const std::vector<std::vector<bool>> broken =
-        BrokenAtCrossings(samples, options.break_at_crossings_px, options.merge_overlaps);
+    const std::vector<std::vector<Sample>> samples =
+        ProjectSamples(model, camera, options.sample_step_m, options.min_width_px);
+    const std::vector<std::vector<Beside>> beside =
+        Classify(samples, options.break_at_crossings_px);
     for (size_t c = 0; c < model.canes.size(); ++c) {
       Segment2D current;
       auto flush = [&]() {
@@ -215,7 +235,8 @@ std::vector<View2D> SyntheticViews(const VineModel& model, const RigCalibration&
           if (w >= thick_width_px) cv::line(thick, ToCv(prev), ToCv(sample.uv), 1, iw);
           cv::line(skeleton, ToCv(prev), ToCv(sample.uv), cv::Scalar(0), 1);
         }
-        if (broken[c][k]) {
+        if (beside[c][k] == Beside::kCrossing ||
+            (options.merge_overlaps && beside[c][k] == Beside::kAlongLater)) {
           flush();
           continue;
         }
@@ -252,6 +273,20 @@ std::vector<View2D> SyntheticViews(const VineModel& model, const RigCalibration&
     views.push_back(std::move(view));
   }
   return views;
+}
+
+std::vector<std::vector<bool>> LyingAlongAnother(const VineModel& model,
+                                                 const CameraCalibration& camera, double step_m,
+                                                 double margin_px) {
+  const std::vector<std::vector<Beside>> beside =
+      Classify(ProjectSamples(model, camera, step_m, 1.0), margin_px);
+  std::vector<std::vector<bool>> along(beside.size());
+  for (size_t c = 0; c < beside.size(); ++c) {
+    for (Beside b : beside[c]) {
+      along[c].push_back(b == Beside::kAlongFirst || b == Beside::kAlongLater);
+    }
+  }
+  return along;
 }
 
 }  // namespace vb::reconstruct

@@ -39,4 +39,13 @@ std::vector<View2D> SyntheticViews(const VineModel& model, const RigCalibration&
                                    const SyntheticViewOptions& options = {},
                                    double thick_width_px = 14.0);
 
+// Diagnosis: for each cane of `model`, its samples every ~step_m along it (the first at its base,
+// the last at its tip, evenly spaced) and whether `camera` sees each lying along another cane of
+// `model`: within margin_px plus the two half-widths (canes drawn at least 1 px wide) of a visible
+// sample of another cane, in a run of such samples longer than 30 px (shorter runs are crossings,
+// which do not count). Samples outside the image are false.
+std::vector<std::vector<bool>> LyingAlongAnother(const VineModel& model,
+                                                 const CameraCalibration& camera, double step_m,
+                                                 double margin_px);
+
 }  // namespace vb::reconstruct
