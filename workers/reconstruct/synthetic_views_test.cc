@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "workers/reconstruct/synthetic_views.h"
 
+#include <algorithm>
+
 #include "gtest/gtest.h"
 #include "core/vine_model_test_util.h"
 #include "sim/rig.h"
@@ -84,6 +86,23 @@ TEST(SyntheticViews, CrossingsBreakSegmentsAndOverlapsMergeOnlyWhenAsked) {
     EXPECT_EQ(merged[v].segments.size(), 4u);
     // The foreground is drawn the same in every case.
     EXPECT_EQ(whole[v].classes.data, merged[v].classes.data);
+  }
+}
+
+TEST(SyntheticViews, LyingAlongAnotherFlagsParallelStretchesNotCrossings) {
+  const RigCalibration rig = sim::MakeRig().value();
+  const VineModel model = CrossingAndLyingAlong();
+  for (const CameraCalibration& camera : rig.cameras) {
+    const std::vector<std::vector<bool>> along = LyingAlongAnother(model, camera, 0.005, 2.0);
+    ASSERT_EQ(along.size(), 3u);
+    auto count = [](const std::vector<bool>& flags) {
+      return static_cast<int>(std::count(flags.begin(), flags.end(), true));
+    };
+    EXPECT_EQ(count(along[0]), 0);  // crossed only
+    EXPECT_EQ(count(along[2]), static_cast<int>(along[2].size()));  // beside cane 2 throughout
+    // Cane 2 is flagged beside cane 3 (its upper 0.2 m of 0.45 m) and not at the crossing.
+    EXPECT_GT(count(along[1]), static_cast<int>(along[1].size()) / 3);
+    EXPECT_LT(count(along[1]), static_cast<int>(along[1].size()) * 2 / 3);
   }
 }
 
