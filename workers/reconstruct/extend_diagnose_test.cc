@@ -6,7 +6,6 @@
 
 #include <cstdio>
 #include <cstdlib>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -15,33 +14,12 @@
 #include "core/view_coverage.h"
 #include "gtest/gtest.h"
 #include "workers/reconstruct/correspondence_test_util.h"
+#include "workers/reconstruct/diagnose_util.h"
 #include "workers/reconstruct/extend.h"
 #include "workers/reconstruct/reconstruct.h"
 
 namespace vb::reconstruct {
 namespace {
-
-double DistanceToModel(const Eigen::Vector3d& p, const std::vector<Cane>& canes) {
-  double best = 1e9;
-  for (const Cane& c : canes) {
-    const std::vector<Eigen::Vector3d>& q = c.polyline.points;
-    for (size_t i = 0; i + 1 < q.size(); ++i) {
-      double t = 0;
-      best = std::min(best, PointSegmentDistance(p, q[i], q[i + 1], &t));
-    }
-  }
-  return best;
-}
-
-std::vector<double> ListFromEnv(const char* name, std::vector<double> fallback) {
-  const char* text = std::getenv(name);
-  if (text == nullptr) return fallback;
-  std::vector<double> out;
-  std::stringstream in(text);
-  std::string item;
-  while (std::getline(in, item, ',')) out.push_back(std::atof(item.c_str()));
-  return out;
-}
 
 // Per stop, the model without the extension; then (a) the prize: shares of the true trunk + cane
 // length inside exactly one image (CoverageSample, true rig), recalled or not, and the part of
@@ -82,14 +60,10 @@ TEST(Extend, DISABLED_Report) {
         arm.options.max_depth_sd_m = sd;
         arm.options.second_difference_sd_m = dd;
         arm.options.max_length_m = len;
-        if (const char* span = std::getenv("VB_EXT_SPAN"))
-          arm.options.anchor_span_m = std::atof(span);
-        if (const char* turn = std::getenv("VB_EXT_TURN"))
-          arm.options.max_turn_rad = std::atof(turn);
-        if (const char* other = std::getenv("VB_EXT_OTHER"))
-          arm.options.other_cane_px = std::atof(other);
-        if (const char* bg = std::getenv("VB_EXT_BACKGROUND"))
-          arm.options.background_px = std::atof(bg);
+        OverrideFromEnv("VB_EXT_SPAN", &arm.options.anchor_span_m);
+        OverrideFromEnv("VB_EXT_TURN", &arm.options.max_turn_rad);
+        OverrideFromEnv("VB_EXT_OTHER", &arm.options.other_cane_px);
+        OverrideFromEnv("VB_EXT_BACKGROUND", &arm.options.background_px);
         arms.push_back(arm);
       }
   double base_recall = 0, base_precision = 0;
@@ -109,7 +83,7 @@ TEST(Extend, DISABLED_Report) {
     std::vector<bool> recalled(samples->size());
     for (size_t i = 0; i < samples->size(); ++i) {
       const CoverageSample& s = (*samples)[i];
-      recalled[i] = DistanceToModel(s.point, model.canes) <= 0.010;
+      recalled[i] = DistanceToCanes(s.point, model.canes) <= 0.010;
       total += s.length_m;
       if (s.kind == CaneKind::kTrunk && s.views < 2) {
         trunk_below += s.length_m;
@@ -160,7 +134,7 @@ TEST(Extend, DISABLED_Report) {
       for (size_t c = 0; c < extended.canes.size(); ++c) {
         const std::vector<Eigen::Vector3d>& pts = extended.canes[c].polyline.points;
         const size_t old = model.canes[c].polyline.points.size();
-        const bool tip_right = DistanceToModel(pts[old - 1], truth.canes) <= 0.010;
+        const bool tip_right = DistanceToCanes(pts[old - 1], truth.canes) <= 0.010;
         if (std::getenv("VB_VERBOSE") != nullptr && pts.size() > old && &arm == &arms.front()) {
           const Cane& cane = model.canes[c];
           int fg = 0, inside = 0;
@@ -180,7 +154,7 @@ TEST(Extend, DISABLED_Report) {
           double right_len = 0, len = 0;
           for (const Eigen::Vector3d& q : cane.polyline.Sample(0.005)) {
             len += 0.005;
-            right_len += 0.005 * (DistanceToModel(q, truth.canes) <= 0.010);
+            right_len += 0.005 * (DistanceToCanes(q, truth.canes) <= 0.010);
           }
           const Eigen::Vector3d d =
               (pts[old - 1] - cane.polyline.PointAt(std::max(0.0, cane.polyline.Length() - 0.03)))
@@ -196,7 +170,7 @@ TEST(Extend, DISABLED_Report) {
         for (size_t i = old; i < pts.size(); ++i) {
           const double step = (pts[i] - pts[i - 1]).norm();
           arm.added += step;
-          const bool right = DistanceToModel(pts[i], truth.canes) <= 0.010;
+          const bool right = DistanceToCanes(pts[i], truth.canes) <= 0.010;
           arm.added_right += step * right;
           if (!tip_right) arm.added_wrong_tip += step, arm.right_wrong_tip += step * right;
           int seen = 0;

@@ -10,21 +10,18 @@
 //   VB_INPUT=labels|images VB_SEED=1300 VB_STOPS=10 [VB_FIDUCIALS=0] vb_reconstruct_test
 //     --gtest_also_run_disabled_tests --gtest_filter='MatchLoss.DISABLED_*'
 // Tuning seeds only (1100-1999; docs/reconstruction.md "Seeds").
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <map>
-#include <string>
+#include <optional>
 #include <set>
 #include <tuple>
-#include <unordered_map>
 #include <vector>
 
-#include "absl/strings/str_cat.h"
-#include "core/model_metrics.h"
 #include "gtest/gtest.h"
 #include "workers/reconstruct/correspondence_test_util.h"
-#include "workers/reconstruct/gap_support.h"
+#include "workers/reconstruct/diagnose_util.h"
 #include "workers/reconstruct/reconstruct.h"
 
 namespace vb::reconstruct {
@@ -49,78 +46,42 @@ TEST(MatchLoss, DISABLED_Report) {
   double raw_same_pair_elsewhere = 0, trunk_out = 0, one_image = 0;
   for (int k = 0; k < count; ++k) {
     const uint64_t seed = first + k;
-    const SimulatedStop stop = MakeRenderedStop(seed, images, fiducials);
-    ASSERT_FALSE(stop.views.empty());
+    const auto run = RenderAndMatch(seed, images, fiducials, options);
+    ASSERT_TRUE(run.ok()) << run.status();
+    const SimulatedStop& stop = run->stop;
     const VineModel& truth = stop.scene.vine;
-    const Deadline deadline = Deadline::Infinite();
-    const auto matched = MatchWithRigRefinement(stop.views, stop.rig, options, deadline);
-    ASSERT_TRUE(matched.ok()) << matched.status();
-    const RigCalibration& rig = matched->rig;
+    const RigCalibration& rig = run->matched.rig;
     const int n = static_cast<int>(stop.views.size());
 
     // Raw candidates (epipolar runs) and fitted, scored ones.
     PointGrid raw_grid, fitted_grid, piece_grid, final_grid;
-    std::vector<ViewSamples> samples;
-    for (int v = 0; v < n; ++v)
-      samples.emplace_back(stop.views[v], rig.cameras[v], options.correspondence.sample_step_px);
     // As the second pass searches each pair (a view outside it shows anything in a 3-camera rig).
     const CandidateOptions co = CandidateOptionsFor(options.correspondence, n > 2);
     std::set<std::tuple<int, int, int, int>> raw_pairs;
-    for (int a = 0; a < n; ++a)
-      for (int b = a + 1; b < n; ++b)
-        for (const MatchCandidate& c :
-             FindCandidates(a, samples[a], rig.cameras[a], b, samples[b], rig.cameras[b], co)) {
-          std::vector<Eigen::Vector3d> pts;
-          for (const EpipolarHit& h : c.hits) pts.push_back(h.point);
-          raw_grid.AddLine(pts, 1.0);
-          raw_pairs.insert({a, c.segment_a, b, c.segment_b});
-        }
-    const auto scored = ScoreCandidates(stop.views, rig, options.correspondence, deadline);
+    const std::vector<ViewSamples> samples =
+        SampleViews(stop.views, rig, options.correspondence.sample_step_px);
+    for (const MatchCandidate& c : RawCandidates(samples, rig, co)) {
+      raw_grid.AddLine(HitPoints(c), 1.0);
+      raw_pairs.insert({c.view_a, c.segment_a, c.view_b, c.segment_b});
+    }
+    const auto scored =
+        ScoreCandidates(stop.views, rig, options.correspondence, Deadline::Infinite());
     ASSERT_TRUE(scored.ok());
     for (const ScoredCandidate& s : *scored)
       fitted_grid.AddLine(s.fit.control_points, s.probability);
-    for (const Piece3D& p : matched->pieces) piece_grid.AddLine(p.polyline.points, 1.0);
+    for (const Piece3D& p : run->matched.pieces) piece_grid.AddLine(p.polyline.points, 1.0);
     // The later stages as PipelineStages.DISABLED_Report runs them.
+    const auto assembled = AssembleStop(stop.views, rig, run->matched.pieces, options);
+    ASSERT_TRUE(assembled.ok()) << assembled.status();
+    const auto connected = ConnectAndRefine(stop.views, rig, *assembled, assembled->joins, options);
+    ASSERT_TRUE(connected.ok()) << connected.status();
     PointGrid assembled_grid, connected_grid;
-    auto canes = AssembleCanes(matched->pieces, options.assembly, deadline);
-    ASSERT_TRUE(canes.ok());
-    std::erase_if(*canes,
-                  [&](const Polyline3& cane) { return options.volume.MostlyOutside(cane); });
-    for (const Polyline3& c : *canes) assembled_grid.AddLine(c.points, 1.0);
-    std::vector<Eigen::Vector3d> hints;
-    for (const Polyline3& c : *canes) hints.insert(hints.end(), c.points.begin(), c.points.end());
-    const auto head = ReconstructHeadAndTrunk(stop.views, rig, options.volume, options.head,
-                                              deadline, hints);
-    ASSERT_TRUE(head.ok());
-    if (head->trunk) assembled_grid.AddLine(head->trunk->points, 1.0);
-    const auto prepared = PrepareCanes(*canes, head->trunk, head->head, options.connect);
-    ASSERT_TRUE(prepared.ok());
-    const GapSupportFn gap_support = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-      return GapSupport(a, b, stop.views, rig);
-    };
-    const std::vector<JoinCandidate> joins = FindJoins(*prepared, head->head, options.connect);
-    ConnectSummary summary;
-    auto model = BuildTree(*prepared, joins, head->head, options.connect, &summary, gap_support);
-    ASSERT_TRUE(model.ok());
-    for (const Cane& c : model->canes) connected_grid.AddLine(c.polyline.points, 1.0);
-    ASSERT_TRUE(RefineModel(&*model, stop.views, rig, options.fit, deadline).ok());
-    for (const Cane& c : model->canes) final_grid.AddLine(c.polyline.points, 1.0);
+    for (const Polyline3& c : assembled->canes) assembled_grid.AddLine(c.points, 1.0);
+    if (assembled->head.trunk) assembled_grid.AddLine(assembled->head.trunk->points, 1.0);
+    for (const Cane& c : connected->connected.canes) connected_grid.AddLine(c.polyline.points, 1.0);
+    for (const Cane& c : connected->refined.canes) final_grid.AddLine(c.polyline.points, 1.0);
 
-    // Per view: the segment index near each pixel (skeleton dilated by 3 px).
-    std::vector<std::vector<int>> seg_at(n);
-    for (int v = 0; v < n; ++v) {
-      const View2D& view = stop.views[v];
-      seg_at[v].assign(static_cast<size_t>(view.width) * view.height, -1);
-      for (size_t s = 0; s < view.segments.size(); ++s)
-        for (const Eigen::Vector2d& q : view.segments[s].points)
-          for (int dy = -3; dy <= 3; ++dy)
-            for (int dx = -3; dx <= 3; ++dx) {
-              const int x = static_cast<int>(std::lround(q.x())) + dx;
-              const int y = static_cast<int>(std::lround(q.y())) + dy;
-              if (x < 0 || y < 0 || x >= view.width || y >= view.height) continue;
-              seg_at[v][static_cast<size_t>(y) * view.width + x] = static_cast<int>(s);
-            }
-    }
+    const SegmentMaps maps(stop.views);
     double stop_lost[kStages] = {};
     double stop_total = 0;
     for (const Cane& cane : truth.canes) {
@@ -128,23 +89,14 @@ TEST(MatchLoss, DISABLED_Report) {
       const std::vector<Eigen::Vector3d> pts = cane.polyline.Sample(0.005);
       for (size_t i = 0; i < pts.size(); ++i) {
         const Eigen::Vector3d& p = pts[i];
-        const Eigen::Vector3d t =
-            (pts[std::min(i + 1, pts.size() - 1)] - pts[i > 0 ? i - 1 : 0]).normalized();
-        int in_image = 0, fg = 0, skel = 0;
+        const Eigen::Vector3d t = TangentAt(pts, i);
+        const SampleInViews at = LocateSample(p, stop.true_rig, stop.views, maps);
+        const int in_image = at.in_image, fg = at.foreground;
+        // Skeleton counts where the view also shows foreground.
         std::vector<int> seg(n, -1);
-        std::vector<Eigen::Vector2d> px(n);
+        int skel = 0;
         for (int v = 0; v < n; ++v) {
-          const auto uv = stop.true_rig.cameras[v].Project(p);
-          if (!uv || !stop.true_rig.cameras[v].InImage(*uv)) continue;
-          ++in_image;
-          px[v] = *uv;
-          const View2D& view = stop.views[v];
-          const int x = static_cast<int>(std::lround(uv->x()));
-          const int y = static_cast<int>(std::lround(uv->y()));
-          if (!ForegroundWithin(view, x, y, 2)) continue;
-          ++fg;
-          if (x < 0 || y < 0 || x >= view.width || y >= view.height) continue;
-          seg[v] = seg_at[v][static_cast<size_t>(y) * view.width + x];
+          if (at.on_foreground[v]) seg[v] = at.segment[v];
           skel += seg[v] >= 0;
         }
         // A pair with skeleton in both views, the cane not along the epipolar line in view a.
@@ -152,14 +104,9 @@ TEST(MatchLoss, DISABLED_Report) {
         for (int a = 0; a < n; ++a)
           for (int b = a + 1; b < n; ++b) {
             if (seg[a] < 0 || seg[b] < 0) continue;
-            const CameraCalibration& ca = stop.true_rig.cameras[a];
-            const Eigen::Vector3d cb = stop.true_rig.cameras[b].CentreInPlatform();
-            const auto e = ca.Project(p + 0.01 * (p - cb).normalized());
-            const auto tt = ca.Project(p + 0.005 * t);
-            if (!e || !tt) continue;
-            const Eigen::Vector2d de = (*e - px[a]).normalized(), dt = (*tt - px[a]).normalized();
-            const double sin = std::abs(de.x() * dt.y() - de.y() * dt.x());
-            if (sin >= co.min_epipolar_sin) conditioned = true;
+            const std::optional<double> sin = EpipolarSin(stop.true_rig, a, b, p, t, at.px[a]);
+            if (!sin) continue;
+            if (*sin >= co.min_epipolar_sin) conditioned = true;
             if (raw_pairs.count({a, seg[a], b, seg[b]})) same_pair_elsewhere = true;
           }
         Stage stage = kKept;
@@ -202,13 +149,6 @@ TEST(MatchLoss, DISABLED_Report) {
               one_image / total);
 }
 
-}  // namespace
-}  // namespace vb::reconstruct
-
-
-namespace vb::reconstruct {
-namespace {
-
 // Why no run of epipolar crossings triangulates near a true sample (the "no raw candidate" row
 // of the report above): for each such sample, over the view pairs whose skeleton segments lie
 // on it, the nearest crossing of those two segments (FindCandidates with min_hits 1, so every
@@ -233,14 +173,12 @@ TEST(MatchLoss, DISABLED_RawCandidates) {
          with_sin = 0;
   double no_crossing[8] = {};
   for (int k = 0; k < count; ++k) {
-    const SimulatedStop stop = MakeRenderedStop(first + k, images, fiducials);
-    ASSERT_FALSE(stop.views.empty());
-    const auto matched =
-        MatchWithRigRefinement(stop.views, stop.rig, options, Deadline::Infinite());
-    ASSERT_TRUE(matched.ok()) << matched.status();
+    const auto run = RenderAndMatch(first + k, images, fiducials, options);
+    ASSERT_TRUE(run.ok()) << run.status();
+    const SimulatedStop& stop = run->stop;
+    const MatchedStop& matched = run->matched;
     const int n = static_cast<int>(stop.views.size());
-    const std::vector<View2D>& views =
-        matched->refined_views.empty() ? stop.views : matched->refined_views;
+    const std::vector<View2D>& views = run->views();
     // As the second pass searches each pair (a view outside it shows anything in a 3-camera rig).
     const CandidateOptions co = CandidateOptionsFor(options.correspondence, n > 2);
     // Raw candidates of a rig and options, as a grid; with `runs`, every run's hits keyed by
@@ -248,77 +186,47 @@ TEST(MatchLoss, DISABLED_RawCandidates) {
     using PairKey = std::tuple<int, int, int, int>;
     auto raw = [&](const RigCalibration& rig, const CandidateOptions& o, PointGrid* grid,
                    std::map<PairKey, std::vector<std::pair<Eigen::Vector3d, int>>>* runs) {
-      std::vector<ViewSamples> samples;
-      for (int v = 0; v < n; ++v)
-        samples.emplace_back(views[v], rig.cameras[v], options.correspondence.sample_step_px);
-      for (int a = 0; a < n; ++a)
-        for (int b = a + 1; b < n; ++b)
-          for (const MatchCandidate& c :
-               FindCandidates(a, samples[a], rig.cameras[a], b, samples[b], rig.cameras[b], o)) {
-            const int size = static_cast<int>(c.hits.size());
-            if (size >= co.min_hits) {
-              std::vector<Eigen::Vector3d> pts;
-              for (const EpipolarHit& h : c.hits) pts.push_back(h.point);
-              grid->AddLine(pts, 1.0);
-            }
-            if (runs) {
-              auto& list = (*runs)[{a, c.segment_a, b, c.segment_b}];
-              for (const EpipolarHit& h : c.hits) list.push_back({h.point, size});
-            }
-          }
+      const std::vector<ViewSamples> samples =
+          SampleViews(views, rig, options.correspondence.sample_step_px);
+      for (const MatchCandidate& c : RawCandidates(samples, rig, o)) {
+        const int size = static_cast<int>(c.hits.size());
+        if (size >= co.min_hits) grid->AddLine(HitPoints(c), 1.0);
+        if (runs) {
+          auto& list = (*runs)[{c.view_a, c.segment_a, c.view_b, c.segment_b}];
+          for (const EpipolarHit& h : c.hits) list.push_back({h.point, size});
+        }
+      }
     };
     PointGrid grid, grid_true, grid_tol, grid_sin;
     std::map<PairKey, std::vector<std::pair<Eigen::Vector3d, int>>> runs;
     CandidateOptions all_runs = co;
     all_runs.min_hits = 1;
-    raw(matched->rig, all_runs, &grid_sin /*unused*/, &runs);
+    raw(matched.rig, all_runs, &grid_sin /*unused*/, &runs);
     grid_sin = PointGrid();
-    raw(matched->rig, co, &grid, nullptr);
+    raw(matched.rig, co, &grid, nullptr);
     raw(stop.true_rig, co, &grid_true, nullptr);
     CandidateOptions tol = co;
     tol.depth_tolerance_m *= 2.0;
     tol.max_depth_slope *= 2.0;
-    raw(matched->rig, tol, &grid_tol, nullptr);
+    raw(matched.rig, tol, &grid_tol, nullptr);
     CandidateOptions sin = co;
     sin.min_epipolar_sin = 0.05;
-    raw(matched->rig, sin, &grid_sin, nullptr);
+    raw(matched.rig, sin, &grid_sin, nullptr);
     PointGrid fitted;
     const auto scored =
-        ScoreCandidates(views, matched->rig, options.correspondence, Deadline::Infinite());
+        ScoreCandidates(views, matched.rig, options.correspondence, Deadline::Infinite());
     ASSERT_TRUE(scored.ok());
     for (const ScoredCandidate& c : *scored) fitted.AddLine(c.fit.control_points, 1.0);
     // Per view: the segment near each pixel (skeleton dilated by 3 px), as the report.
-    std::vector<std::vector<int>> seg_at(n);
-    for (int v = 0; v < n; ++v) {
-      const View2D& view = views[v];
-      seg_at[v].assign(static_cast<size_t>(view.width) * view.height, -1);
-      for (size_t s = 0; s < view.segments.size(); ++s)
-        for (const Eigen::Vector2d& q : view.segments[s].points)
-          for (int dy = -3; dy <= 3; ++dy)
-            for (int dx = -3; dx <= 3; ++dx) {
-              const int x = static_cast<int>(std::lround(q.x())) + dx;
-              const int y = static_cast<int>(std::lround(q.y())) + dy;
-              if (x < 0 || y < 0 || x >= view.width || y >= view.height) continue;
-              seg_at[v][static_cast<size_t>(y) * view.width + x] = static_cast<int>(s);
-            }
-    }
-    std::vector<ViewSamples> samples;
-    for (int v = 0; v < n; ++v)
-      samples.emplace_back(views[v], matched->rig.cameras[v], options.correspondence.sample_step_px);
+    const SegmentMaps maps(views);
+    const std::vector<ViewSamples> samples =
+        SampleViews(views, matched.rig, options.correspondence.sample_step_px);
     for (const Cane& cane : stop.scene.vine.canes) {
       if (cane.kind == CaneKind::kSpur) continue;
       for (const Eigen::Vector3d& p : cane.polyline.Sample(0.005)) {
-        std::vector<int> seg(n, -1);
-        int skel = 0;
-        for (int v = 0; v < n; ++v) {
-          const auto uv = stop.true_rig.cameras[v].Project(p);
-          if (!uv || !stop.true_rig.cameras[v].InImage(*uv)) continue;
-          const int x = static_cast<int>(std::lround(uv->x()));
-          const int y = static_cast<int>(std::lround(uv->y()));
-          if (x < 0 || y < 0 || x >= views[v].width || y >= views[v].height) continue;
-          seg[v] = seg_at[v][static_cast<size_t>(y) * views[v].width + x];
-          skel += seg[v] >= 0;
-        }
+        const SampleInViews at = LocateSample(p, stop.true_rig, views, maps);
+        const std::vector<int>& seg = at.segment;
+        const int skel = at.skeleton;
         total += 1;
         if (skel < 2 || grid.MaxNear(p) >= 0) continue;
         lost_raw += 1;
@@ -360,9 +268,8 @@ TEST(MatchLoss, DISABLED_RawCandidates) {
           }
         for (int v = 0; v < n; ++v) {
           if (seg[v] < 0) continue;
-          const auto uv = stop.true_rig.cameras[v].Project(p);
           const auto& pts = views[v].segments[seg[v]].points;
-          if (uv && ((pts.front() - *uv).norm() < 12.0 || (pts.back() - *uv).norm() < 12.0))
+          if ((pts.front() - at.px[v]).norm() < 12.0 || (pts.back() - at.px[v]).norm() < 12.0)
             near_end = true;
         }
         if (fitted.MaxNear(p) >= 0) no_crossing[6] += 1;

@@ -7,19 +7,16 @@
 // Tuning seeds only (1100-1999; docs/reconstruction.md "Seeds").
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <map>
+#include <optional>
 #include <string>
-#include <set>
 #include <tuple>
-#include <unordered_map>
 #include <vector>
 
 #include "absl/strings/str_cat.h"
-#include "core/model_metrics.h"
 #include "gtest/gtest.h"
 #include "workers/reconstruct/correspondence_test_util.h"
-#include "workers/reconstruct/gap_support.h"
+#include "workers/reconstruct/diagnose_util.h"
 #include "workers/reconstruct/reconstruct.h"
 
 namespace vb::reconstruct {
@@ -38,16 +35,13 @@ TEST(MatchLoss, DISABLED_LowScores) {
   double n[3] = {}, length[3] = {};
   MatchFeatures sum[3]{}, contribution[3]{};
   for (int k = 0; k < count; ++k) {
-    const SimulatedStop stop = MakeRenderedStop(first + k, images, fiducials);
-    ASSERT_FALSE(stop.views.empty());
-    const auto matched =
-        MatchWithRigRefinement(stop.views, stop.rig, options, Deadline::Infinite());
-    ASSERT_TRUE(matched.ok()) << matched.status();
-    const auto scored = ScoreCandidates(stop.views, matched->rig, options.correspondence,
+    const auto run = RenderAndMatch(first + k, images, fiducials, options);
+    ASSERT_TRUE(run.ok()) << run.status();
+    const auto scored = ScoreCandidates(run->stop.views, run->matched.rig, options.correspondence,
                                         Deadline::Infinite());
     ASSERT_TRUE(scored.ok());
     std::vector<const Polyline3*> truth;
-    for (const Cane& cane : stop.drawn.canes) truth.push_back(&cane.polyline);
+    for (const Cane& cane : run->stop.drawn.canes) truth.push_back(&cane.polyline);
     for (const ScoredCandidate& s : *scored) {
       const bool right = IsRightMatch(s.fit.points, truth);
       const bool above = s.probability > threshold;
@@ -74,12 +68,6 @@ TEST(MatchLoss, DISABLED_LowScores) {
                 contribution[1][i] / n[1], contribution[2][i] / n[2]);
   }
 }
-
-}  // namespace
-}  // namespace vb::reconstruct
-
-namespace vb::reconstruct {
-namespace {
 
 // The "no raw candidate" row by view pair (DISABLED_RawCandidates classes why a run is missing;
 // this classes which pairs could have given one): for each true sample with skeleton in two or
@@ -108,72 +96,41 @@ TEST(MatchLoss, DISABLED_RawCandidatePairs) {
     return s < 0.2 ? "<0.2" : s < 0.4 ? "0.2-0.4" : s < 0.7 ? "0.4-0.7" : ">=0.7";
   };
   for (int k = 0; k < count; ++k) {
-    const SimulatedStop stop = MakeRenderedStop(first + k, images, fiducials);
-    ASSERT_FALSE(stop.views.empty());
-    const auto matched =
-        MatchWithRigRefinement(stop.views, stop.rig, options, Deadline::Infinite());
-    ASSERT_TRUE(matched.ok()) << matched.status();
+    const auto run = RenderAndMatch(first + k, images, fiducials, options);
+    ASSERT_TRUE(run.ok()) << run.status();
+    const SimulatedStop& stop = run->stop;
     const int n = static_cast<int>(stop.views.size());
-    const std::vector<View2D>& views =
-        matched->refined_views.empty() ? stop.views : matched->refined_views;
-    const RigCalibration& rig = matched->rig;
+    const std::vector<View2D>& views = run->views();
+    const RigCalibration& rig = run->matched.rig;
     // As the second pass searches each pair (a view outside it shows anything in a 3-camera rig).
     const CandidateOptions co = CandidateOptionsFor(options.correspondence, n > 2);
     using PairKey = std::tuple<int, int, int, int>;
     std::map<PairKey, std::vector<Eigen::Vector3d>> runs;
     PointGrid grid, piece10;
-    for (const Piece3D& piece : matched->pieces) {
+    for (const Piece3D& piece : run->matched.pieces) {
       piece10.AddLine(piece.polyline.points, 1.0);
     }
-    std::vector<ViewSamples> samples;
-    for (int v = 0; v < n; ++v)
-      samples.emplace_back(views[v], rig.cameras[v], options.correspondence.sample_step_px);
+    const std::vector<ViewSamples> samples =
+        SampleViews(views, rig, options.correspondence.sample_step_px);
     CandidateOptions all_runs = co;
     all_runs.min_hits = 1;
-    for (int a = 0; a < n; ++a)
-      for (int b = a + 1; b < n; ++b)
-        for (const MatchCandidate& c : FindCandidates(a, samples[a], rig.cameras[a], b,
-                                                      samples[b], rig.cameras[b], all_runs)) {
-          std::vector<Eigen::Vector3d> pts;
-          for (const EpipolarHit& h : c.hits) pts.push_back(h.point);
-          if (static_cast<int>(c.hits.size()) >= co.min_hits) grid.AddLine(pts, 1.0);
-          auto& list = runs[{a, c.segment_a, b, c.segment_b}];
-          list.insert(list.end(), pts.begin(), pts.end());
-        }
-    std::vector<std::vector<int>> seg_at(n);
-    for (int v = 0; v < n; ++v) {
-      const View2D& view = views[v];
-      seg_at[v].assign(static_cast<size_t>(view.width) * view.height, -1);
-      for (size_t s = 0; s < view.segments.size(); ++s)
-        for (const Eigen::Vector2d& q : view.segments[s].points)
-          for (int dy = -3; dy <= 3; ++dy)
-            for (int dx = -3; dx <= 3; ++dx) {
-              const int x = static_cast<int>(std::lround(q.x())) + dx;
-              const int y = static_cast<int>(std::lround(q.y())) + dy;
-              if (x < 0 || y < 0 || x >= view.width || y >= view.height) continue;
-              seg_at[v][static_cast<size_t>(y) * view.width + x] = static_cast<int>(s);
-            }
+    for (const MatchCandidate& c : RawCandidates(samples, rig, all_runs)) {
+      const std::vector<Eigen::Vector3d> pts = HitPoints(c);
+      if (static_cast<int>(c.hits.size()) >= co.min_hits) grid.AddLine(pts, 1.0);
+      auto& list = runs[{c.view_a, c.segment_a, c.view_b, c.segment_b}];
+      list.insert(list.end(), pts.begin(), pts.end());
     }
+    const SegmentMaps maps(views);
     for (const Cane& cane : stop.scene.vine.canes) {
       if (cane.kind == CaneKind::kSpur) continue;
       const std::vector<Eigen::Vector3d> pts = cane.polyline.Sample(0.005);
       for (size_t i = 0; i < pts.size(); ++i) {
         const Eigen::Vector3d& p = pts[i];
-        const Eigen::Vector3d t =
-            (pts[std::min(i + 1, pts.size() - 1)] - pts[i > 0 ? i - 1 : 0]).normalized();
-        std::vector<int> seg(n, -1);
-        std::vector<Eigen::Vector2d> px(n);
-        int skel = 0;
-        for (int v = 0; v < n; ++v) {
-          const auto uv = stop.true_rig.cameras[v].Project(p);
-          if (!uv || !stop.true_rig.cameras[v].InImage(*uv)) continue;
-          const int x = static_cast<int>(std::lround(uv->x()));
-          const int y = static_cast<int>(std::lround(uv->y()));
-          if (x < 0 || y < 0 || x >= views[v].width || y >= views[v].height) continue;
-          px[v] = *uv;
-          seg[v] = seg_at[v][static_cast<size_t>(y) * views[v].width + x];
-          skel += seg[v] >= 0;
-        }
+        const Eigen::Vector3d t = TangentAt(pts, i);
+        const SampleInViews at = LocateSample(p, stop.true_rig, views, maps);
+        const std::vector<int>& seg = at.segment;
+        const std::vector<Eigen::Vector2d>& px = at.px;
+        const int skel = at.skeleton;
         total += 1;
         bool end_near = false;
         for (int v = 0; v < n && skel >= 2; ++v) {
@@ -193,13 +150,9 @@ TEST(MatchLoss, DISABLED_RawCandidatePairs) {
         for (int a = 0; a < n; ++a)
           for (int b = a + 1; b < n; ++b) {
             if (seg[a] < 0 || seg[b] < 0) continue;
-            const CameraCalibration& ca = stop.true_rig.cameras[a];
-            const Eigen::Vector3d cb = stop.true_rig.cameras[b].CentreInPlatform();
-            const auto e = ca.Project(p + 0.01 * (p - cb).normalized());
-            const auto tt = ca.Project(p + 0.005 * t);
-            if (!e || !tt) continue;
-            const Eigen::Vector2d de = (*e - px[a]).normalized(), dt = (*tt - px[a]).normalized();
-            const double sin = std::abs(de.x() * dt.y() - de.y() * dt.x());
+            const std::optional<double> s = EpipolarSin(stop.true_rig, a, b, p, t, px[a]);
+            if (!s) continue;
+            const double sin = *s;
             if (sin > best_sin) best_sin = sin, best_a = a, best_b = b;
             if (sin < worst_sin) worst_sin = sin, worst_a = a, worst_b = b;
           }

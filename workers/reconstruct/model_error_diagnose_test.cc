@@ -16,6 +16,7 @@
 #include "sim/rig.h"
 #include "sim/vine_generator.h"
 #include "workers/reconstruct/correspondence_test_util.h"
+#include "workers/reconstruct/diagnose_util.h"
 #include "workers/reconstruct/reconstruct.h"
 
 namespace vb::reconstruct {
@@ -24,32 +25,19 @@ namespace {
 // The default rig, or with VB_OLD_RIG=1 the default rig before 2026-11-22 (at the vine's
 // distance 0.8 m, triangle side 0.22 m, aimed at its own height).
 sim::RigOptions RigOptionsFromEnv() {
-  sim::RigOptions rig_options;
   const char* old_rig = std::getenv("VB_OLD_RIG");
-  if (old_rig != nullptr && std::string(old_rig) == "1") {
-    rig_options.rig_y_m = 0.0;
-    rig_options.distance_to_vine_plane_m = 0.8;
-    rig_options.baseline_m = 0.22;
-    rig_options.aim_below_rig_m = 0.0;
-  }
-  return rig_options;
+  if (old_rig != nullptr && std::string(old_rig) == "1") return OldRigOptions();
+  return sim::RigOptions();
 }
 
-double DistanceToCanes(const Eigen::Vector3d& p, const std::vector<Cane>& canes,
-                       Eigen::Vector3d* nearest = nullptr) {
-  double best = 1e9;
-  for (const Cane& c : canes) {
-    const std::vector<Eigen::Vector3d>& q = c.polyline.points;
-    for (size_t i = 0; i + 1 < q.size(); ++i) {
-      double t = 0;
-      const double d = PointSegmentDistance(p, q[i], q[i + 1], &t);
-      if (d < best) {
-        best = d;
-        if (nearest) *nearest = q[i] + t * (q[i + 1] - q[i]);
-      }
-    }
+// The box that holds every sphere.
+Eigen::AlignedBox3d BoxOf(const std::vector<Sphere>& spheres) {
+  Eigen::AlignedBox3d box;
+  for (const Sphere& s : spheres) {
+    box.extend(s.center - Eigen::Vector3d::Constant(s.radius));
+    box.extend(s.center + Eigen::Vector3d::Constant(s.radius));
   }
-  return best;
+  return box;
 }
 
 // Where the model's cane length that misses the vine (cane precision's complement) lies, for the
@@ -221,12 +209,6 @@ TEST(TrellisLoss, DISABLED_FalseCaneLength) {
               1000 * misplaced_dxz / std::max(by_class[1], 1e-9));
 }
 
-}  // namespace
-}  // namespace vb::reconstruct
-
-namespace vb::reconstruct {
-namespace {
-
 // Where the true head is not enclosed by the model's spheres (head_enclosed_fraction's
 // complement), per stop: the share missed, and the missed part's extent against the true head's
 // (x, y = depth, z), on a 2 mm grid. VB_SEED, VB_STOPS (default 1189, 1), VB_OLD_RIG=1,
@@ -239,20 +221,13 @@ TEST(TrellisLoss, DISABLED_HeadMisses) {
     const SimulatedStop stop = MakeRenderedStop(seed, images, fiducials, rig_options);
     ASSERT_FALSE(stop.views.empty());
     ReconstructOptions options;
-    if (const char* v = std::getenv("VB_HEAD_OVERLAP")) options.head.head_overlap_m = std::atof(v);
+    OverrideFromEnv("VB_HEAD_OVERLAP", &options.head.head_overlap_m);
     const auto result = ReconstructFromViews(stop.views, stop.rig, options, Deadline::Infinite());
     ASSERT_TRUE(result.ok()) << result.status();
     const std::vector<Sphere>& truth = stop.scene.vine.head.spheres;
     const std::vector<Sphere>& model = result->model.head.spheres;
-    Eigen::AlignedBox3d box, missed_box, model_box;
-    for (const Sphere& s : truth) {
-      box.extend(s.center - Eigen::Vector3d::Constant(s.radius));
-      box.extend(s.center + Eigen::Vector3d::Constant(s.radius));
-    }
-    for (const Sphere& s : model) {
-      model_box.extend(s.center - Eigen::Vector3d::Constant(s.radius));
-      model_box.extend(s.center + Eigen::Vector3d::Constant(s.radius));
-    }
+    const Eigen::AlignedBox3d box = BoxOf(truth), model_box = BoxOf(model);
+    Eigen::AlignedBox3d missed_box;
     int inside = 0, missed = 0;
     for (double x = box.min().x(); x <= box.max().x(); x += 0.002)
       for (double y = box.min().y(); y <= box.max().y(); y += 0.002)

@@ -6,32 +6,20 @@
 // Tuning seeds only (1100-1999; docs/reconstruction.md "Seeds").
 #include <cstdio>
 #include <cstdlib>
+#include <initializer_list>
+#include <utility>
 #include <string>
 #include <vector>
 
 #include "core/model_metrics.h"
 #include "gtest/gtest.h"
 #include "workers/reconstruct/correspondence_test_util.h"
+#include "workers/reconstruct/diagnose_util.h"
 #include "workers/reconstruct/join_test_util.h"
-#include "workers/reconstruct/gap_support.h"
 #include "workers/reconstruct/reconstruct.h"
 
 namespace vb::reconstruct {
 namespace {
-
-// Every polyline as a cane on a stand-in trunk (the first), so that recall and precision of a
-// bag of unconnected polylines can be scored with the bench's metrics.
-VineModel Flat(const std::vector<Polyline3>& lines) {
-  VineModel model;
-  for (const Polyline3& line : lines) {
-    const bool first = model.canes.empty();
-    model.canes.push_back({.id = CaneId(static_cast<int64_t>(model.canes.size()) + 1),
-                           .parent_id = first ? std::nullopt : std::optional(CaneId(1)),
-                           .kind = first ? CaneKind::kTrunk : CaneKind::kCane,
-                           .polyline = line});
-  }
-  return model;
-}
 
 struct Row {
   double recall = 0, precision = 0, connectivity = 0;
@@ -70,69 +58,60 @@ TEST(PipelineStages, DISABLED_Report) {
   const auto [first, count, images, fiducials] = ReportStopsFromEnv(1100, 8);
   const bool verbose = std::getenv("VB_VERBOSE") != nullptr;
   ReconstructOptions options;
-  if (const char* v = std::getenv("VB_MIN_JOIN")) options.connect.min_join_probability = std::atof(v);
-  if (const char* v = std::getenv("VB_MERGE")) options.connect.merge_continuations = std::atoi(v);
-  if (const char* v = std::getenv("VB_MAX_BRIDGE")) options.connect.max_bridge_m = std::atof(v);
-  if (const char* v = std::getenv("VB_MAX_ATTACH")) options.connect.max_attach_m = std::atof(v);
-  if (const char* v = std::getenv("VB_MIN_HITS")) options.correspondence.min_hits = std::atoi(v);
-  if (const char* v = std::getenv("VB_MAX_GAP")) options.correspondence.max_gap_samples = std::atoi(v);
-  if (const char* v = std::getenv("VB_ALPHA")) options.correspondence.alpha = std::atof(v);
-  if (const char* v = std::getenv("VB_GAP_SUPPORT")) options.connect.min_gap_support = std::atof(v);
-  if (const char* v = std::getenv("VB_KEEP_WITHIN")) options.connect.keep_within_m = std::atof(v);
-  if (const char* v = std::getenv("VB_KEEP_MIN_LENGTH")) options.connect.keep_min_length_m = std::atof(v);
-  if (const char* v = std::getenv("VB_MIN_ISOLATED")) options.assembly.min_isolated_length_m = std::atof(v);
-  if (const char* v = std::getenv("VB_MIN_EVIDENCE")) options.assembly.min_evidence_m = std::atof(v);
-  if (const char* v = std::getenv("VB_MIN_PIECE_P")) options.assembly.min_piece_probability = std::atof(v);
+  // Knobs: the environment variable and the option it sets.
+  for (const auto& [name, field] : std::initializer_list<std::pair<const char*, double*>>{
+           {"VB_MIN_JOIN", &options.connect.min_join_probability},
+           {"VB_MAX_BRIDGE", &options.connect.max_bridge_m},
+           {"VB_MAX_ATTACH", &options.connect.max_attach_m},
+           {"VB_ALPHA", &options.correspondence.alpha},
+           {"VB_GAP_SUPPORT", &options.connect.min_gap_support},
+           {"VB_KEEP_WITHIN", &options.connect.keep_within_m},
+           {"VB_KEEP_MIN_LENGTH", &options.connect.keep_min_length_m},
+           {"VB_MIN_ISOLATED", &options.assembly.min_isolated_length_m},
+           {"VB_MIN_EVIDENCE", &options.assembly.min_evidence_m},
+           {"VB_MIN_PIECE_P", &options.assembly.min_piece_probability}})
+    OverrideFromEnv(name, field);
+  OverrideFromEnv("VB_MERGE", &options.connect.merge_continuations);
+  OverrideFromEnv("VB_MIN_HITS", &options.correspondence.min_hits);
+  OverrideFromEnv("VB_MAX_GAP", &options.correspondence.max_gap_samples);
   Row pieces_row, assembled_row, connected_row, final_row;
   double unattached_recall = 0;
   ParentBreakdown parents;
   for (int k = 0; k < count; ++k) {
     const uint64_t seed = first + k;
-    const SimulatedStop stop = MakeRenderedStop(seed, images);
-    ASSERT_FALSE(stop.views.empty());
-    const VineModel& truth = stop.scene.vine;
-    const Deadline deadline = Deadline::Infinite();
     // Correspondence with the rig refined in between, as the pipeline does it.
-    const auto matched = MatchWithRigRefinement(stop.views, stop.rig, options, deadline);
-    ASSERT_TRUE(matched.ok()) << matched.status();
-    const std::vector<Piece3D>* pieces = &matched->pieces;
-    const RigCalibration& rig = matched->rig;
+    const auto run = RenderAndMatch(seed, images, /*fiducials=*/false, options);
+    ASSERT_TRUE(run.ok()) << run.status();
+    const SimulatedStop& stop = run->stop;
+    const VineModel& truth = stop.scene.vine;
+    const std::vector<Piece3D>& pieces = run->matched.pieces;
+    const RigCalibration& rig = run->matched.rig;
     std::vector<Polyline3> piece_lines;
-    for (const Piece3D& p : *pieces) piece_lines.push_back(p.polyline);
-    auto canes = AssembleCanes(*pieces, options.assembly, deadline);
-    ASSERT_TRUE(canes.ok()) << canes.status();
-    std::erase_if(*canes,
-                  [&](const Polyline3& cane) { return options.volume.MostlyOutside(cane); });
-    std::vector<Eigen::Vector3d> hints;
-    for (const Polyline3& c : *canes) hints.insert(hints.end(), c.points.begin(), c.points.end());
-    const auto head = ReconstructHeadAndTrunk(stop.views, rig, options.volume, options.head,
-                                              deadline, hints);
-    ASSERT_TRUE(head.ok()) << head.status();
-    ConnectSummary summary;
-    const auto prepared = PrepareCanes(*canes, head->trunk, head->head, options.connect);
-    ASSERT_TRUE(prepared.ok()) << prepared.status();
-    const GapSupportFn gap_support = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-      return GapSupport(a, b, stop.views, rig);
-    };
-    std::vector<JoinCandidate> joins = FindJoins(*prepared, head->head, options.connect);
+    for (const Piece3D& p : pieces) piece_lines.push_back(p.polyline);
+    const auto assembled = AssembleStop(stop.views, rig, pieces, options);
+    ASSERT_TRUE(assembled.ok()) << assembled.status();
+    const std::vector<Polyline3>& canes = assembled->canes;
+    const HeadAndTrunk& head = assembled->head;
+    const PreparedCanes& prepared = assembled->prepared;
+    std::vector<JoinCandidate> joins = assembled->joins;
     if (std::getenv("VB_ORACLE") && *std::getenv("VB_ORACLE")) {
       // Upper bound of the tree step: the join classifier replaced by the true labels.
-      if (const char* v = std::getenv("VB_BASE_REACH")) kBaseReach = std::atof(v);
-      const std::vector<LabelledJoin> labels = LabelJoins(*prepared, joins, truth);
+      OverrideFromEnv("VB_BASE_REACH", &kBaseReach);
+      const std::vector<LabelledJoin> labels = LabelJoins(prepared, joins, truth);
       for (size_t j = 0; j < joins.size(); ++j) joins[j].probability = labels[j].right ? 0.95 : 0.01;
     }
-    auto model = BuildTree(*prepared, joins, head->head, options.connect, &summary, gap_support);
-    ASSERT_TRUE(model.ok()) << model.status();
-    VineModel connected = *model;
-    ASSERT_TRUE(RefineModel(&*model, stop.views, rig, options.fit, deadline).ok());
+    const auto built = ConnectAndRefine(stop.views, rig, *assembled, joins, options);
+    ASSERT_TRUE(built.ok()) << built.status();
+    const VineModel& connected = built->connected;
+    const ConnectSummary& summary = built->summary;
 
     const auto mp = EvaluateReconstruction(Flat(piece_lines), truth).value();
     std::vector<Polyline3> with_trunk;
-    if (head->trunk) with_trunk.push_back(*head->trunk);
-    with_trunk.insert(with_trunk.end(), canes->begin(), canes->end());
+    if (head.trunk) with_trunk.push_back(*head.trunk);
+    with_trunk.insert(with_trunk.end(), canes.begin(), canes.end());
     const auto ma = EvaluateReconstruction(Flat(with_trunk), truth).value();
     const auto mc = EvaluateReconstruction(connected, truth).value();
-    const auto mf = EvaluateReconstruction(*model, truth).value();
+    const auto mf = EvaluateReconstruction(built->refined, truth).value();
     if (verbose) {
       VineModel bridgeless = connected;
       for (size_t i = 1; i < bridgeless.canes.size(); ++i) {
@@ -149,8 +128,7 @@ TEST(PipelineStages, DISABLED_Report) {
         const int b = gap < 0.03 ? 0 : (gap < 0.08 ? 1 : 2);
         for (int q = 0; q < 10; ++q) {
           const Eigen::Vector3d x = l.points[0] + (q + 0.5) / 10.0 * (l.points[1] - l.points[0]);
-          bool near = false;
-          for (const Cane& c : truth.canes) near = near || DistanceToPolyline(x, c.polyline) <= 0.01;
+          const bool near = NearAnyCane(x, truth.canes);
           total[t][b] += gap / 10;
           if (!near) bad[t][b] += gap / 10;
         }
@@ -166,8 +144,8 @@ TEST(PipelineStages, DISABLED_Report) {
 
     // Recall the connection step lost: assembled canes it left out or dropped inside the head.
     std::vector<Polyline3> left_out;
-    if (head->trunk) left_out.push_back(*head->trunk);
-    for (const Polyline3& c : *canes) {
+    if (head.trunk) left_out.push_back(*head.trunk);
+    for (const Polyline3& c : canes) {
       bool in_model = false;
       for (const Cane& m : connected.canes) {
         // Attached canes keep their points (plus a base point on the parent).
@@ -183,19 +161,19 @@ TEST(PipelineStages, DISABLED_Report) {
     std::vector<Polyline3> model_lines;
     for (const Cane& m : connected.canes) model_lines.push_back(m.polyline);
     std::vector<Polyline3> both = model_lines;
-    both.insert(both.end(), left_out.begin() + (head->trunk ? 1 : 0), left_out.end());
+    both.insert(both.end(), left_out.begin() + (head.trunk ? 1 : 0), left_out.end());
     const double recall_with_left_out = EvaluateReconstruction(Flat(both), truth)->cane_recall;
     unattached_recall += (recall_with_left_out - mc.cane_recall) / count;
 
     // Prepared canes the tree left out: their length, how much of it lies within 1 cm of the
     // true vine, by the best join they had (VB_LEFT_OUT=1).
     if (std::getenv("VB_LEFT_OUT")) {
-      std::vector<double> best_p(prepared->canes.size(), 0.0);
-      std::vector<int> best_target(prepared->canes.size(), -3);
+      std::vector<double> best_p(prepared.canes.size(), 0.0);
+      std::vector<int> best_target(prepared.canes.size(), -3);
       for (const JoinCandidate& j : joins)
         if (j.probability > best_p[j.child]) best_p[j.child] = j.probability, best_target[j.child] = j.parent;
-      for (size_t i = 0; i < prepared->canes.size(); ++i) {
-        const Polyline3& c = prepared->canes[i];
+      for (size_t i = 0; i < prepared.canes.size(); ++i) {
+        const Polyline3& c = prepared.canes[i];
         bool in_model = false;
         for (const Cane& m : connected.canes)  // merged continuations lie inside their parent
           for (const Eigen::Vector3d& q : m.polyline.points)
@@ -205,8 +183,7 @@ TEST(PipelineStages, DISABLED_Report) {
         double near = 0, all = 0;
         for (const Eigen::Vector3d& p : c.Sample(0.005)) {
           all += 1;
-          for (const Cane& t : truth.canes)
-            if (DistanceToPolyline(p, t.polyline) <= 0.01) { near += 1; break; }
+          near += NearAnyCane(p, truth.canes);
         }
         const int g = MajorityCane(c, truth);
         double min_x = 1e9, max_x = -1e9;

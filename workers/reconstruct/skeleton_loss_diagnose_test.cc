@@ -15,6 +15,7 @@
 #include "absl/strings/str_cat.h"
 #include "gtest/gtest.h"
 #include "workers/reconstruct/correspondence_test_util.h"
+#include "workers/reconstruct/diagnose_util.h"
 #include "workers/reconstruct/mask_ops.h"
 #include "workers/reconstruct/reconstruct.h"
 #include "workers/reconstruct/skeleton.h"
@@ -88,6 +89,7 @@ TEST(SkeletonLoss, DISABLED_Report) {
         d.drawn_depth.push_back(std::move(depth));
       }
     }
+    const SegmentMaps maps(stop.views);
     for (size_t ci = 0; ci < stop.scene.vine.canes.size(); ++ci) {
       const Cane& cane = stop.scene.vine.canes[ci];
       if (cane.kind == CaneKind::kSpur) continue;
@@ -101,35 +103,20 @@ TEST(SkeletonLoss, DISABLED_Report) {
         for (size_t j = 1; j < line.points.size(); ++j)
           if ((line.points[j] - p).norm() < (line.points[nearest] - p).norm()) nearest = j;
         const double radius_m = line.radii[nearest];
-        int in_image = 0, fg = 0, skel = 0;
+        // Skeleton counts where the view also shows foreground, as the report.
+        const SampleInViews at = LocateSample(p, stop.true_rig, stop.views, maps);
+        const int in_image = at.in_image, fg = at.foreground;
+        const std::vector<Eigen::Vector2d>& px = at.px;
+        int skel = 0;
         std::vector<int> fg_view(n, 0), skel_view(n, 0);
-        std::vector<Eigen::Vector2d> px(n);
         std::vector<double> radius_px(n, 0);
         for (int v = 0; v < n; ++v) {
+          if (!at.inside[v]) continue;
           const CameraCalibration& cam = stop.true_rig.cameras[v];
-          const auto uv = cam.Project(p);
-          if (!uv || !cam.InImage(*uv)) continue;
-          ++in_image;
-          px[v] = *uv;
           radius_px[v] = radius_m * cam.camera_matrix(0, 0) / (p - cam.CentreInPlatform()).norm();
-          const View2D& view = stop.views[v];
-          const int x = static_cast<int>(std::lround(uv->x()));
-          const int y = static_cast<int>(std::lround(uv->y()));
-          if (!ForegroundWithin(view, x, y, 2)) continue;
-          ++fg;
-          fg_view[v] = 1;
-          bool s = false;
-          for (const Segment2D& seg : view.segments) {
-            // Same test as the report: a segment point within 3 px (Chebyshev).
-            for (const Eigen::Vector2d& q : seg.points)
-              if (std::abs(std::lround(q.x()) - x) <= 3 && std::abs(std::lround(q.y()) - y) <= 3) {
-                s = true;
-                break;
-              }
-            if (s) break;
-          }
-          skel_view[v] = s;
-          skel += s;
+          fg_view[v] = at.on_foreground[v];
+          skel_view[v] = at.on_foreground[v] && at.segment[v] >= 0;
+          skel += skel_view[v];
         }
         if (in_image >= 2 && fg < 2) {
           // Foreground missed: what the views without foreground there show instead.
@@ -281,28 +268,20 @@ TEST(SkeletonLoss, DISABLED_Assembly) {
   double by_probability[4][2] = {}, by_support[4][2] = {}, by_length[5][2] = {};
   double by_length_probable[5][2] = {}, own_samples = 0;
   for (int k = 0; k < count; ++k) {
-    const SimulatedStop stop = MakeRenderedStop(first + k, images, fiducials);
-    ASSERT_FALSE(stop.views.empty());
-    const auto matched =
-        MatchWithRigRefinement(stop.views, stop.rig, options, Deadline::Infinite());
-    ASSERT_TRUE(matched.ok()) << matched.status();
+    const auto run = RenderAndMatch(first + k, images, fiducials, options);
+    ASSERT_TRUE(run.ok()) << run.status();
+    const SimulatedStop& stop = run->stop;
     std::vector<std::vector<Polyline3>> canes(nv);
     for (int v = 0; v < nv; ++v) {
-      auto c = AssembleCanes(matched->pieces, variants[v].assembly, Deadline::Infinite());
+      auto c = AssembleCanes(run->matched.pieces, variants[v].assembly, Deadline::Infinite());
       ASSERT_TRUE(c.ok());
       if (variants[v].volume_filter)
         std::erase_if(*c, [&](const Polyline3& l) { return options.volume.MostlyOutside(l); });
       canes[v] = std::move(*c);
       for (const Polyline3& l : canes[v])
         for (const Eigen::Vector3d& p : l.Sample(0.005)) {
-          bool near = false;
-          for (const Cane& d : stop.drawn.canes)
-            if (DistanceToPolyline(p, d.polyline) <= 0.01) {
-              near = true;
-              break;
-            }
           length[v] += 1;
-          wrong[v] += !near;
+          wrong[v] += !NearAnyCane(p, stop.drawn.canes);
         }
     }
     const auto near_any = [](const Eigen::Vector3d& p, const std::vector<Polyline3>& lines) {
@@ -311,7 +290,7 @@ TEST(SkeletonLoss, DISABLED_Assembly) {
       return false;
     };
     std::vector<Polyline3> pieces;
-    for (const Piece3D& piece : matched->pieces) pieces.push_back(piece.polyline);
+    for (const Piece3D& piece : run->matched.pieces) pieces.push_back(piece.polyline);
     for (const Cane& cane : stop.scene.vine.canes) {
       if (cane.kind == CaneKind::kSpur) continue;
       for (const Eigen::Vector3d& p : cane.polyline.Sample(0.005)) {
@@ -323,7 +302,7 @@ TEST(SkeletonLoss, DISABLED_Assembly) {
     }
     // The pieces the assembly drops whole (no sample within 10 mm of an assembled cane), by
     // probability, support and length: the samples near a drawn cane (right) and not (wrong).
-    for (const Piece3D& piece : matched->pieces) {
+    for (const Piece3D& piece : run->matched.pieces) {
       if (piece.probability < options.assembly.min_piece_probability) continue;
       const std::vector<Eigen::Vector3d> samples = piece.polyline.Sample(0.005);
       bool kept = false;
@@ -340,17 +319,8 @@ TEST(SkeletonLoss, DISABLED_Assembly) {
                      : piece.support < 0.97 ? 2 : 3;
       const int lb = length < 0.04 ? 0 : length < 0.06 ? 1 : length < 0.09 ? 2 : length < 0.12 ? 3 : 4;
       for (const Eigen::Vector3d& p : samples) {
-        bool right = false, own = false;
-        for (const Cane& d : stop.drawn.canes)
-          if (DistanceToPolyline(p, d.polyline) <= 0.01) {
-            right = true;
-            break;
-          }
-        for (const Cane& c : stop.scene.vine.canes)
-          if (DistanceToPolyline(p, c.polyline) <= 0.01) {
-            own = true;
-            break;
-          }
+        const bool right = NearAnyCane(p, stop.drawn.canes);
+        const bool own = NearAnyCane(p, stop.scene.vine.canes);
         by_probability[pb][right] += 1;
         by_support[sb][right] += 1;
         by_length[lb][right] += 1;

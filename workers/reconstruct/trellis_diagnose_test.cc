@@ -21,6 +21,7 @@
 #include "sim/rig.h"
 #include "sim/vine_generator.h"
 #include "workers/reconstruct/correspondence_test_util.h"
+#include "workers/reconstruct/diagnose_util.h"
 #include "workers/reconstruct/reconstruct.h"
 #include "workers/reconstruct/trellis3d.h"
 
@@ -29,12 +30,17 @@ namespace {
 
 constexpr double kSpan = 0.8;
 
-std::vector<Eigen::Vector3d> SpanSamples(const Wire& wire) {
+// A wire as a polyline (1 mm radius), to sample it.
+Polyline3 WireLine(const Wire& wire) {
   Polyline3 line;
   line.points = wire.points;
   line.radii.assign(wire.points.size(), 0.001);
+  return line;
+}
+
+std::vector<Eigen::Vector3d> SpanSamples(const Wire& wire) {
   std::vector<Eigen::Vector3d> out;
-  for (const Eigen::Vector3d& p : line.Sample(0.005))
+  for (const Eigen::Vector3d& p : WireLine(wire).Sample(0.005))
     if (std::abs(p.x()) <= kSpan) out.push_back(p);
   return out;
 }
@@ -70,6 +76,23 @@ bool CoveredIn(const CameraCalibration& camera, const std::vector<Line2D>& lines
     if (t >= -margin_px && t <= (l.end - l.begin).norm() * f + margin_px) return true;
   }
   return false;
+}
+
+// Whether two of `rig`'s images hold p and their planes through a wire along `dir` at p meet at
+// 3 degrees or more (a pair that can place it: not two cameras side by side looking at a
+// horizontal wire).
+bool PlacedByAPair(const Eigen::Vector3d& p, const Eigen::Vector3d& dir, const RigCalibration& rig) {
+  std::vector<Eigen::Vector3d> normals;
+  for (const CameraCalibration& camera : rig.cameras) {
+    const auto uv = camera.Project(p);
+    if (uv && camera.InImage(*uv))
+      normals.push_back((p - camera.CentreInPlatform()).cross(dir).normalized());
+  }
+  bool posed = false;
+  for (size_t i = 0; i < normals.size(); ++i)
+    for (size_t j = i + 1; j < normals.size(); ++j)
+      posed |= normals[i].cross(normals[j]).norm() >= std::sin(3.0 * M_PI / 180);
+  return posed;
 }
 
 // Length (m) of true wire over the span by outcome, for one trellis configuration.
@@ -145,21 +168,10 @@ void Score(const VineModel& truth, const VineModel& model, const std::vector<Vie
         seen += in_image;
       }
       tally->in_images[std::min(seen, 3)] += 0.005;
-      {
-        // The wire's local direction: along its polyline at p.
-        const Eigen::Vector3d dir = (truth.wires[w].points.back() - truth.wires[w].points.front()).normalized();
-        std::vector<Eigen::Vector3d> normals;
-        for (size_t v = 0; v < views.size(); ++v) {
-          const auto uv = rig.cameras[v].Project(p);
-          if (uv && rig.cameras[v].InImage(*uv))
-            normals.push_back((p - rig.cameras[v].CentreInPlatform()).cross(dir).normalized());
-        }
-        bool posed = false;
-        for (size_t i = 0; i < normals.size(); ++i)
-          for (size_t j = i + 1; j < normals.size(); ++j)
-            posed |= normals[i].cross(normals[j]).norm() >= std::sin(3.0 * M_PI / 180);
-        if (posed) tally->well_posed += 0.005;
-      }
+      // The wire's direction: from its first point to its last.
+      const Eigen::Vector3d dir =
+          (truth.wires[w].points.back() - truth.wires[w].points.front()).normalized();
+      if (PlacedByAPair(p, dir, rig)) tally->well_posed += 0.005;
       tally->by_views_total[std::min(covered, 3)] += 0.005;
       if (post_in_span) tally->post_total += 0.005;
       if (d <= 0.010) {
@@ -185,9 +197,7 @@ void Score(const VineModel& truth, const VineModel& model, const std::vector<Vie
     if (verbose) {
       // Per view: metres of the wire over the whole volume (|x| <= 1.1 m) inside the image, and
       // covered by a 2D wire line.
-      Polyline3 full;
-      full.points = truth.wires[w].points;
-      full.radii.assign(full.points.size(), 0.001);
+      const Polyline3 full = WireLine(truth.wires[w]);
       std::printf("  wire %zu per view (in image / covered, |x| <= 1.1 m):", w);
       for (size_t v = 0; v < views.size(); ++v) {
         double in = 0, cov = 0;
@@ -227,10 +237,10 @@ TEST(TrellisLoss, DISABLED_Report) {
   const auto [first, count, images, fiducials] = ReportStopsFromEnv(1100, 8, true);
   const bool verbose = std::getenv("VB_VERBOSE") != nullptr;
   ReconstructOptions options;
-  if (const char* v = std::getenv("VB_SMOOTH")) options.trellis.wire_fit.smoothness_px = std::atof(v);
-  if (const char* v = std::getenv("VB_INLIER")) options.trellis.wire_fit.inlier_px = std::atof(v);
-  if (const char* v = std::getenv("VB_GATE")) options.trellis.wire_fit.gate_px = std::atof(v);
-  if (const char* v = std::getenv("VB_KNOT")) options.trellis.wire_fit.knot_spacing_m = std::atof(v);
+  OverrideFromEnv("VB_SMOOTH", &options.trellis.wire_fit.smoothness_px);
+  OverrideFromEnv("VB_INLIER", &options.trellis.wire_fit.inlier_px);
+  OverrideFromEnv("VB_GATE", &options.trellis.wire_fit.gate_px);
+  OverrideFromEnv("VB_KNOT", &options.trellis.wire_fit.knot_spacing_m);
   Tally straight, sag;
   // Cane precision: model cane length, the part far from every true cane (false), and of that
   // the part lying along a true wire or on a true post.
@@ -239,15 +249,14 @@ TEST(TrellisLoss, DISABLED_Report) {
   double true_on_fruiting = 0, true_on_foliage = 0, false_on_fruiting = 0, false_on_foliage = 0;
   for (int k = 0; k < count; ++k) {
     const uint64_t seed = first + k;
-    const SimulatedStop stop = MakeRenderedStop(seed, images);
-    ASSERT_FALSE(stop.views.empty());
+    const auto run = RenderAndMatch(seed, images, /*fiducials=*/false, options);
+    ASSERT_TRUE(run.ok()) << run.status();
+    const SimulatedStop& stop = run->stop;
+    const MatchedStop& matched = run->matched;
     const VineModel& truth = stop.scene.vine;
-    const auto matched = MatchWithRigRefinement(stop.views, stop.rig, options, Deadline::Infinite());
-    ASSERT_TRUE(matched.ok()) << matched.status();
-    const std::vector<View2D>& views =
-        matched->refined_views.empty() ? stop.views : matched->refined_views;
+    const std::vector<View2D>& views = run->views();
     if (verbose && k == 0)
-      for (const CameraCalibration& camera : matched->rig.cameras) {
+      for (const CameraCalibration& camera : matched.rig.cameras) {
         const Eigen::Vector3d c = camera.CentreInPlatform();
         const Eigen::Vector3d axis = camera.rotation_camera_from_platform.row(2).transpose();
         std::printf("%s centre (%.3f %.3f %.3f) pitch %.1f deg\n", camera.name.c_str(), c.x(), c.y(),
@@ -258,15 +267,12 @@ TEST(TrellisLoss, DISABLED_Report) {
     for (const Cane& cane : full->model.canes) {
       for (const Eigen::Vector3d& p : cane.polyline.Sample(0.005)) {
         cane_total += 0.005;
-        double near_cane = 1e9;
-        for (const Cane& t : truth.canes)
-          near_cane = std::min(near_cane, DistanceToPolyline(p, t.polyline));
         const bool along_fruiting =
             !truth.wires.empty() && DistanceToWires(p, {truth.wires.front()}) <= 0.015;
         const bool along_foliage =
             truth.wires.size() > 1 &&
             DistanceToWires(p, std::vector<Wire>(truth.wires.begin() + 1, truth.wires.end())) <= 0.015;
-        if (near_cane <= 0.010) {
+        if (NearAnyCane(p, truth.canes)) {
           true_on_fruiting += along_fruiting * 0.005;
           true_on_foliage += along_foliage * 0.005;
           continue;
@@ -285,7 +291,7 @@ TEST(TrellisLoss, DISABLED_Report) {
     for (bool fit_sag : {false, true}) {
       TrellisOptions trellis_options = options.trellis;
       trellis_options.fit_sag = fit_sag;
-      const auto trellis = ReconstructTrellis(views, matched->rig, options.volume, trellis_options);
+      const auto trellis = ReconstructTrellis(views, matched.rig, options.volume, trellis_options);
       ASSERT_TRUE(trellis.ok()) << trellis.status();
       VineModel model;
       model.wires = trellis->wires;
@@ -297,7 +303,7 @@ TEST(TrellisLoss, DISABLED_Report) {
         std::printf("seed %llu %s: %zu true wires, %zu model wires\n",
                     static_cast<unsigned long long>(seed), fit_sag ? "sag" : "straight",
                     truth.wires.size(), model.wires.size());
-      Score(truth, model, views, matched->rig, count, verbose, fit_sag ? &sag : &straight);
+      Score(truth, model, views, matched.rig, count, verbose, fit_sag ? &sag : &straight);
     }
   }
   std::printf("stops %d from %llu (%s)\n", count, static_cast<unsigned long long>(first),
@@ -313,12 +319,6 @@ TEST(TrellisLoss, DISABLED_Report) {
   straight.Print("straight wires");
   sag.Print("sagging wires (fit_sag)");
 }
-
-}  // namespace
-}  // namespace vb::reconstruct
-
-namespace vb::reconstruct {
-namespace {
 
 // The arm base of the default mount (workers/plan, DefaultPlatformFromArmBase; docs/plan.md
 // "Mount study"): a 0.075 m cylinder up to 0.15 m along the z axis of a frame at (0, 0.45, 0.45)
@@ -358,23 +358,10 @@ RigFigures EvaluateRig(const RigCalibration& rig, const std::vector<sim::Scene>&
       // A wire that a pair can place anywhere in the volume (|x| <= 1.1 m, at least 0.1 m of
       // it) is reconstructed along all of it (a line, extended), so it counts whole.
       const Eigen::Vector3d dir = (wire.points.back() - wire.points.front()).normalized();
-      Polyline3 line;
-      line.points = wire.points;
-      line.radii.assign(wire.points.size(), 0.001);
       double placed_m = 0;
-      for (const Eigen::Vector3d& p : line.Sample(0.005)) {
+      for (const Eigen::Vector3d& p : WireLine(wire).Sample(0.005)) {
         if (std::abs(p.x()) > 1.1) continue;
-        std::vector<Eigen::Vector3d> normals;
-        for (const CameraCalibration& camera : rig.cameras) {
-          const auto uv = camera.Project(p);
-          if (uv && camera.InImage(*uv))
-            normals.push_back((p - camera.CentreInPlatform()).cross(dir).normalized());
-        }
-        bool ok = false;
-        for (size_t i = 0; i < normals.size(); ++i)
-          for (size_t j = i + 1; j < normals.size(); ++j)
-            ok |= normals[i].cross(normals[j]).norm() >= std::sin(3.0 * M_PI / 180);
-        placed_m += ok * 0.005;
+        placed_m += PlacedByAPair(p, dir, rig) * 0.005;
       }
       const double span = static_cast<double>(SpanSamples(wire).size());
       total += span;
@@ -404,11 +391,7 @@ TEST(TrellisLoss, DISABLED_RigCeiling) {
     sim::RigOptions options;
   };
   // The default before 2026-11-22: 0.8 m from the vine plane, side 0.22 m, aimed at rig height.
-  sim::RigOptions old;
-  old.rig_y_m = 0.0;
-  old.distance_to_vine_plane_m = 0.8;
-  old.baseline_m = 0.22;
-  old.aim_below_rig_m = 0.0;
+  const sim::RigOptions old = OldRigOptions();
   std::vector<Variant> variants(6, Variant{"", old});
   variants[0].name = "old default (toe-in at rig height)";
   variants[1].name = "old, no toe-in (axes parallel)";
@@ -442,26 +425,14 @@ TEST(TrellisLoss, DISABLED_RigCeiling) {
 // grid of docs/simulator.md. VB_SEED, VB_STOPS (100 by default).
 TEST(TrellisLoss, DISABLED_RigSweep) {
   const auto [first, count, images, fiducials] = ReportStopsFromEnv(1100, 100);
-  auto axis = [](const char* name, std::vector<double> fallback) {
-    const char* v = std::getenv(name);
-    if (v == nullptr) return fallback;
-    std::vector<double> out;
-    for (const char* p = v; *p != '\0';) {
-      char* end = nullptr;
-      out.push_back(std::strtod(p, &end));
-      if (end == p) break;
-      p = *end == ',' ? end + 1 : end;
-    }
-    return out;
-  };
   const std::vector<sim::Scene> scenes = ReportScenes(first, count);
-  for (double apex_up : axis("VB_SWEEP_APEX_UP", {1, 0}))
-    for (double rig_y : axis("VB_SWEEP_Y", {0.0, -0.05, -0.1, -0.15}))
-      for (double side_scale : axis("VB_SWEEP_SIDE_SCALE", {1.0, 1.15}))
-        for (double height : axis("VB_SWEEP_HEIGHT", {1.0, 1.05, 1.1, 1.15, 1.2}))
-          for (double aim_below : axis("VB_SWEEP_BELOW", {-0.1, 0.0, 0.1}))
-            for (double apex_aim : axis("VB_SWEEP_APEX_AIM", {0.0, 0.15, 0.3}))
-              for (double pair_aim : axis("VB_SWEEP_PAIR_AIM", {-0.1, 0.0, 0.1})) {
+  for (double apex_up : ListFromEnv("VB_SWEEP_APEX_UP", {1, 0}))
+    for (double rig_y : ListFromEnv("VB_SWEEP_Y", {0.0, -0.05, -0.1, -0.15}))
+      for (double side_scale : ListFromEnv("VB_SWEEP_SIDE_SCALE", {1.0, 1.15}))
+        for (double height : ListFromEnv("VB_SWEEP_HEIGHT", {1.0, 1.05, 1.1, 1.15, 1.2}))
+          for (double aim_below : ListFromEnv("VB_SWEEP_BELOW", {-0.1, 0.0, 0.1}))
+            for (double apex_aim : ListFromEnv("VB_SWEEP_APEX_AIM", {0.0, 0.15, 0.3}))
+              for (double pair_aim : ListFromEnv("VB_SWEEP_PAIR_AIM", {-0.1, 0.0, 0.1})) {
                 sim::RigOptions o;
                 o.apex_up = apex_up != 0;
                 o.rig_y_m = rig_y;

@@ -1,0 +1,150 @@
+// SPDX-License-Identifier: Apache-2.0
+// Test support for the diagnosis tools (*_diagnose_test.cc; docs/diagnosis.md): the set-ups they
+// share. A rendered stop matched as the pipeline matches it; the stages after correspondence run
+// one at a time, so that a report can look between them; every view pair's raw candidates; where
+// a true 3D sample falls in each view (inside the image, on foreground, near which skeleton
+// segment); option overrides from the environment. Diagnosis and tests only; every function is
+// deterministic and holds no state, so reports may call them from any thread.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "core/calibration.h"
+#include "core/geometry.h"
+#include "core/vine_model.h"
+#include "sim/rig.h"
+#include "workers/reconstruct/correspondence_test_util.h"
+#include "workers/reconstruct/match_candidates.h"
+#include "workers/reconstruct/reconstruct.h"
+#include "workers/reconstruct/view2d.h"
+
+namespace vb::reconstruct {
+
+// A stop rendered as the bench renders it (MakeRenderedStop) and matched as the pipeline matches
+// it (MatchWithRigRefinement with `options`, no deadline).
+struct RenderedMatch {
+  SimulatedStop stop;
+  MatchedStop matched;
+  // The views the later stages see: matched.refined_views when the rig refinement re-expressed
+  // them, else stop.views.
+  const std::vector<View2D>& views() const {
+    return matched.refined_views.empty() ? stop.views : matched.refined_views;
+  }
+};
+// Errors: INTERNAL when the stop could not be rendered or its 2D stage failed (MakeRenderedStop
+// gave no views), naming the seed; else MatchWithRigRefinement's.
+absl::StatusOr<RenderedMatch> RenderAndMatch(uint64_t seed, bool images, bool fiducials,
+                                             const ReconstructOptions& options);
+
+// The stages after correspondence as the diagnosis reports run them (not all of
+// ReconstructFromViews: no extension, no left-out wood), with `options`' fields of each stage and
+// no deadline: AssembleCanes on `pieces`, the canes mostly outside options.volume dropped;
+// ReconstructHeadAndTrunk on `views`, hinted by the assembled canes' points; PrepareCanes and
+// FindJoins.
+struct AssembledStop {
+  std::vector<Polyline3> canes;  // assembled, inside the working volume
+  HeadAndTrunk head;
+  PreparedCanes prepared;
+  std::vector<JoinCandidate> joins;  // FindJoins on `prepared`
+};
+// Errors: each stage's, as it returns them.
+absl::StatusOr<AssembledStop> AssembleStop(const std::vector<View2D>& views,
+                                           const RigCalibration& rig,
+                                           const std::vector<Piece3D>& pieces,
+                                           const ReconstructOptions& options);
+
+// The tree BuildTree makes of `assembled` with `joins` (assembled.joins, or a report's changed
+// copy; GapSupport on `views` through `rig`), and that tree after RefineModel on `views`.
+struct ConnectedStop {
+  VineModel connected;  // as BuildTree returned it
+  VineModel refined;    // after RefineModel
+  ConnectSummary summary;
+};
+// Errors: BuildTree's and RefineModel's.
+absl::StatusOr<ConnectedStop> ConnectAndRefine(const std::vector<View2D>& views,
+                                               const RigCalibration& rig,
+                                               const AssembledStop& assembled,
+                                               const std::vector<JoinCandidate>& joins,
+                                               const ReconstructOptions& options);
+
+// Each view sampled for the candidate search (ViewSamples, every `step_px`) through `rig`'s
+// camera of the same index. The samples refer to `views`, which must outlive them.
+std::vector<ViewSamples> SampleViews(const std::vector<View2D>& views, const RigCalibration& rig,
+                                     double step_px);
+
+// The raw candidates (FindCandidates with `options`) of every view pair a < b, in that order.
+std::vector<MatchCandidate> RawCandidates(const std::vector<ViewSamples>& samples,
+                                          const RigCalibration& rig,
+                                          const CandidateOptions& options);
+
+// The triangulated points of a candidate's hits, in order.
+std::vector<Eigen::Vector3d> HitPoints(const MatchCandidate& candidate);
+
+// Per view, the index of the skeleton segment near each pixel: each segment point's 7 x 7 square
+// (3 px either way of its rounded position), a later segment overwriting an earlier one.
+class SegmentMaps {
+ public:
+  explicit SegmentMaps(const std::vector<View2D>& views);
+  // The segment near pixel (x, y) of view `view`; -1 if none or outside the image.
+  int At(int view, int x, int y) const;
+
+ private:
+  std::vector<int> width_, height_;
+  std::vector<std::vector<int>> index_;
+};
+
+// Where a 3D point falls in each view, projected through `rig` (the true rig in the reports).
+struct SampleInViews {
+  int in_image = 0;                   // views whose image holds its projection
+  int foreground = 0;                 // of those, views with foreground within 2 px of it
+  int skeleton = 0;                   // of those, views with a segment near it (SegmentMaps)
+  std::vector<bool> inside;           // per view: the image holds its projection
+  std::vector<bool> on_foreground;    // per view: foreground within 2 px (ForegroundWithin)
+  std::vector<int> segment;           // per view: the segment near it, -1 if none or outside
+  std::vector<Eigen::Vector2d> px;    // per view: its projection, where inside
+};
+// `views` and `maps` (SegmentMaps of those views) must have one entry per camera of `rig`.
+SampleInViews LocateSample(const Eigen::Vector3d& p, const RigCalibration& rig,
+                           const std::vector<View2D>& views, const SegmentMaps& maps);
+
+// The unit tangent at points[i] of a sampled curve: the central difference, one-sided at the ends.
+Eigen::Vector3d TangentAt(const std::vector<Eigen::Vector3d>& points, size_t i);
+
+// |sin| of the angle in view a's image between a cane through p with tangent t and the epipolar
+// line of view pair (a, b) through p's projection `px_a` (0: the cane runs along it, the pair
+// cannot place it); cameras a and b of `rig`. Empty where a projection fails.
+std::optional<double> EpipolarSin(const RigCalibration& rig, int a, int b,
+                                  const Eigen::Vector3d& p, const Eigen::Vector3d& t,
+                                  const Eigen::Vector2d& px_a);
+
+// Whether p lies within `radius_m` of a cane of `canes` (DistanceToPolyline).
+bool NearAnyCane(const Eigen::Vector3d& p, const std::vector<Cane>& canes,
+                 double radius_m = 0.01);
+
+// Distance from p to the nearest segment of the canes' polylines (1e9 if none); `nearest`, if
+// given, gets that nearest point.
+double DistanceToCanes(const Eigen::Vector3d& p, const std::vector<Cane>& canes,
+                       Eigen::Vector3d* nearest = nullptr);
+
+// Every polyline as a cane on a stand-in trunk (the first), so that recall and precision of a bag
+// of unconnected polylines can be scored with the bench's metrics (core/model_metrics.h).
+VineModel Flat(const std::vector<Polyline3>& lines);
+
+// The simulator's default rig before 2026-11-22: at the vine's distance 0.8 m, triangle side
+// 0.22 m, aimed at its own height.
+sim::RigOptions OldRigOptions();
+
+// Sets *field from the environment variable `name` when it is set (std::atof; an int std::atoi;
+// a bool std::atoi != 0); leaves it as it is otherwise. Returns whether it was set.
+bool OverrideFromEnv(const char* name, double* field);
+bool OverrideFromEnv(const char* name, int* field);
+bool OverrideFromEnv(const char* name, bool* field);
+
+// A comma-separated list of numbers from the environment variable `name` (std::strtod; the list
+// ends at the first item that is not a number), or `fallback` when it is not set.
+std::vector<double> ListFromEnv(const char* name, std::vector<double> fallback);
+
+}  // namespace vb::reconstruct
