@@ -11,7 +11,7 @@
 //    (LabelJoins), with its crossing evidence (MeasureCrossing: wood past the parent, miss).
 // Variants of the connect options (diagnosis only): VB_INSIDE, VB_KEEP_WITHIN,
 // VB_KEEP_MIN_LENGTH, VB_KEEP_TAPER, VB_MIN_JOIN, VB_MAX_ATTACH, VB_NO_MERGE, VB_RESCUE,
-// VB_RESCUE_TAPER, VB_NO_REPEAT, VB_CROSS_FACTOR, VB_CROSS_SUPPORT, VB_CROSS_REACH, VB_CROSS_MISS.
+// VB_RESCUE_TAPER, VB_REPEAT, VB_CROSS_FACTOR, VB_CROSS_SUPPORT, VB_CROSS_REACH, VB_CROSS_MISS.
 // Run with
 //   VB_INPUT=images VB_SEED=1300 VB_STOPS=12 [VB_VERBOSE=1] vb_reconstruct_test
 //     --gtest_also_run_disabled_tests --gtest_filter='ConnectLoss.DISABLED_*'
@@ -79,7 +79,7 @@ TEST(ConnectLoss, DISABLED_Report) {
   if (std::getenv("VB_NO_MERGE")) options.connect.merge_continuations = false;
   if (const char* v = std::getenv("VB_RESCUE"))
     options.connect.rescue_min_probability = std::atof(v);
-  if (std::getenv("VB_NO_REPEAT")) options.connect.repeat_rescue = false;
+  if (std::getenv("VB_REPEAT")) options.connect.repeat_rescue = true;
   if (const char* v = std::getenv("VB_RESCUE_TAPER"))
     options.connect.rescue_min_taper = std::atof(v);
   if (const char* v = std::getenv("VB_CROSS_FACTOR")) options.connect.crossing_factor = std::atof(v);

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // Connection's steps 3b (rescue) and 6 (kept near the vine) taken in turn (connect.h,
-// ConnectOptions::repeat_rescue): a cane kept by step 6 can be the likely join that rescues
-// another.
+// ConnectOptions::repeat_rescue, off by default): a cane kept by step 6 can be the likely join
+// that rescues another.
 #include <string>
 #include <vector>
 
@@ -48,6 +48,12 @@ struct Scene {
   std::vector<JoinCandidate> joins;
 };
 
+ConnectOptions Repeating() {
+  ConnectOptions options;
+  options.repeat_rescue = true;
+  return options;
+}
+
 Scene MakeScene() {
   Scene s;
   s.prepared.trunk = TaperedLine({0, 0.8, 0}, {0, 0.8, 0.95}, 0.025, 0.025);
@@ -76,7 +82,7 @@ TEST(ConnectRescue, ACaneKeptNearTheVineCanRescueAnother) {
   ASSERT_LT(TaperTowardCentre(s.prepared.canes[1], 0.0), ConnectOptions().keep_taper_ratio);
 
   ConnectSummary summary;
-  const auto model = BuildTree(s.prepared, s.joins, Head(), ConnectOptions(), &summary);
+  const auto model = BuildTree(s.prepared, s.joins, Head(), Repeating(), &summary);
   ASSERT_TRUE(model.ok()) << model.status();
   ASSERT_TRUE(model->Validate().ok()) << model->Validate();
   ASSERT_EQ(model->canes.size(), 3u);  // the trunk, N and R
@@ -99,10 +105,8 @@ TEST(ConnectRescue, ACaneKeptNearTheVineCanRescueAnother) {
 
 TEST(ConnectRescue, WithoutRepeatingOnlyStepSixKeeps) {
   const Scene s = MakeScene();
-  ConnectOptions once;
-  once.repeat_rescue = false;
-  ConnectSummary summary;
-  const auto model = BuildTree(s.prepared, s.joins, Head(), once, &summary);
+  ConnectSummary summary;  // the default: each step once
+  const auto model = BuildTree(s.prepared, s.joins, Head(), ConnectOptions(), &summary);
   ASSERT_TRUE(model.ok()) << model.status();
   EXPECT_EQ(model->canes.size(), 2u);  // the trunk and N
   EXPECT_EQ(summary.kept_near, 1);
@@ -115,7 +119,7 @@ TEST(ConnectRescue, ACaneThickeningOutwardIsNotRescuedEvenSo) {
   // R now thickens away from the vine's centre (a neighbour's cane, entering tip first).
   s.prepared.canes[1] = TaperedLine({0.41, 0.8, 1.31}, {0.7, 0.8, 1.7}, 0.0036, 0.0044);
   ConnectSummary summary;
-  const auto model = BuildTree(s.prepared, s.joins, Head(), ConnectOptions(), &summary);
+  const auto model = BuildTree(s.prepared, s.joins, Head(), Repeating(), &summary);
   ASSERT_TRUE(model.ok()) << model.status();
   EXPECT_EQ(model->canes.size(), 2u);
   EXPECT_EQ(summary.rescued, 0);
@@ -125,7 +129,7 @@ TEST(ConnectRescue, ANoneLikelierThanTheJoinToTheKeptCaneRescuesNothing) {
   Scene s = MakeScene();
   s.joins[1].probability = 0.1;  // below "none" (min_join_probability 0.12)
   ConnectSummary summary;
-  const auto model = BuildTree(s.prepared, s.joins, Head(), ConnectOptions(), &summary);
+  const auto model = BuildTree(s.prepared, s.joins, Head(), Repeating(), &summary);
   ASSERT_TRUE(model.ok()) << model.status();
   EXPECT_EQ(model->canes.size(), 2u);
   EXPECT_EQ(summary.rescued, 0);
