@@ -200,8 +200,8 @@ absl::StatusOr<VineModel> BuildTree(const PreparedCanes& prepared_in,
   // the tree, and be lost with it. Hang such canes on the tree after all (step 3b). Canes left
   // out but lying wholly near the vine's centre along the row are this vine's (a neighbour's
   // canes reach into the view from the sides): hang each on its likeliest join to the tree
-  // (step 6). Each step can bring into the tree a cane that the other's candidates hang on, so
-  // both are repeated until neither keeps another cane.
+  // (step 6). Each step can bring into the tree a cane that the other's candidates hang on:
+  // with repeat_rescue (off by default) both are repeated until neither keeps another cane.
   const double centre_x = prepared->trunk->points.back().x();
   const std::vector<char> near = KeptNearKinds(canes, centre_x, kept, options);
   for (int round = 0; round < n + 1; ++round) {
