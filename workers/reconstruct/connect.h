@@ -48,6 +48,9 @@
 //     third, TaperTowardCentre): canes thin from base to tip, so the far piece of this vine's cane thins
 //     outward and a neighbour's cane, entering the view tip first, thins inward. Such a cane
 //     hangs by its thicker end only.
+//     Optionally (off by default: no gain on the bench), steps 3b and 6 are repeated in turn
+//     until neither brings another cane into the tree (`repeat_rescue`): a cane kept by step 6
+//     may be the likely join that rescues another.
 //  6b. Neighbours' leaves dropped (beyond the paper): a cane in the tree without children that
 //     reaches beyond `keep_within_m` and is at least `drop_thickening_ratio` times as thick at
 //     its far third as at its third nearer the centre is a neighbour's cane hung by its tip on
@@ -91,6 +94,11 @@ struct ConnectOptions {
   double rescue_min_taper = 1.0;     // ... a cane reaching beyond keep_within_m only if it is at
                                      // least this much thicker at its end nearer the vine's
                                      // centre (TaperTowardCentre); 0 turns this test off
+  bool repeat_rescue = false;        // steps 3b and 6 are repeated, in turn, until neither
+                                     // brings another cane into the tree (a cane kept by step 6
+                                     // can be the likely join that rescues another); off by
+                                     // default: 2 stops of 200 changed on the bench, no gain
+                                     // (docs/reconstruction.md section 6, "Repeated")
   bool merge_continuations = true;   // append canes that continue their parent's tip to it
   double continuation_gap_m = 0.02;  // ... joining within this of the tip (arc length)
   double continuation_angle_deg = 35.0;  // ... with tangents within this angle

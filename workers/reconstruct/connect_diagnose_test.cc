@@ -11,7 +11,7 @@
 //    (LabelJoins), with its crossing evidence (MeasureCrossing: wood past the parent, miss).
 // Variants of the connect options (diagnosis only): VB_INSIDE, VB_KEEP_WITHIN,
 // VB_KEEP_MIN_LENGTH, VB_KEEP_TAPER, VB_MIN_JOIN, VB_MAX_ATTACH, VB_NO_MERGE, VB_RESCUE,
-// VB_RESCUE_TAPER, VB_CROSS_FACTOR, VB_CROSS_SUPPORT, VB_CROSS_REACH, VB_CROSS_MISS.
+// VB_RESCUE_TAPER, VB_REPEAT, VB_CROSS_FACTOR, VB_CROSS_SUPPORT, VB_CROSS_REACH, VB_CROSS_MISS.
 // Run with
 //   VB_INPUT=images VB_SEED=1300 VB_STOPS=12 [VB_VERBOSE=1] vb_reconstruct_test
 //     --gtest_also_run_disabled_tests --gtest_filter='ConnectLoss.DISABLED_*'
@@ -23,6 +23,7 @@
 #include "core/model_metrics.h"
 #include "gtest/gtest.h"
 #include "workers/reconstruct/correspondence_test_util.h"
+#include "workers/reconstruct/connect_internal.h"
 #include "workers/reconstruct/gap_support.h"
 #include "workers/reconstruct/join_test_util.h"
 #include "workers/reconstruct/reconstruct.h"
@@ -78,6 +79,7 @@ TEST(ConnectLoss, DISABLED_Report) {
   if (std::getenv("VB_NO_MERGE")) options.connect.merge_continuations = false;
   if (const char* v = std::getenv("VB_RESCUE"))
     options.connect.rescue_min_probability = std::atof(v);
+  if (std::getenv("VB_REPEAT")) options.connect.repeat_rescue = true;
   if (const char* v = std::getenv("VB_RESCUE_TAPER"))
     options.connect.rescue_min_taper = std::atof(v);
   if (const char* v = std::getenv("VB_CROSS_FACTOR")) options.connect.crossing_factor = std::atof(v);
@@ -210,6 +212,28 @@ TEST(ConnectLoss, DISABLED_Report) {
         std::printf("  left out seed %llu: %.3f m, true %d, best join %.3f, x %.2f..%.2f, r in %.4f out %.4f, %s\n",
                     static_cast<unsigned long long>(seed), c.Length(), g, best_p[p],
                     c.points.front().x(), c.points.back().x(), r_inner, r_outer, lost_names[reason[a]]);
+        // Its likeliest join to the tree (a cane in the model, the trunk or head), and by which
+        // end (the one nearer the vine's centre or the other).
+        int tree_best = -1;
+        for (size_t k = 0; k < joins.size(); ++k) {
+          const JoinCandidate& jc = joins[k];
+          if (jc.child != p) continue;
+          bool to_tree = jc.parent < 0;
+          for (const Cane& m : model->canes)
+            to_tree = to_tree || (jc.parent >= 0 && SameLine(prepared->canes[jc.parent], m.polyline));
+          if (to_tree && (tree_best < 0 || jc.probability > joins[tree_best].probability))
+            tree_best = static_cast<int>(k);
+        }
+        if (tree_best >= 0) {
+          const JoinCandidate& jc = joins[tree_best];
+          std::printf("    to the tree: %.3f to %s (true %d) by the %s end, gap %.3f, taper %.2f\n",
+                      jc.probability, jc.parent < 0 ? "root" : "cane",
+                      jc.parent < 0 ? 0 : MajorityCane(prepared->canes[jc.parent], truth),
+                      jc.base_is_last == !front_inner ? "inner" : "outer", jc.features[1] * 0.02,
+                      TaperTowardCentre(c, centre_x));
+        } else {
+          std::printf("    to the tree: none, taper %.2f\n", TaperTowardCentre(c, centre_x));
+        }
       }
     }
     std::vector<const Polyline3*> model_lines;
@@ -266,6 +290,8 @@ TEST(ConnectLoss, DISABLED_Report) {
     // Per prepared cane of this vine: is its likeliest join right (LabelJoins)? If not, was a
     // right one among the candidates, and what kind of join beat it?
     const std::vector<LabelledJoin> labels = LabelJoins(*prepared, joins, truth);
+    std::vector<int> majority_prepared;
+    for (const Polyline3& c : prepared->canes) majority_prepared.push_back(MajorityCane(c, truth));
     for (size_t i = 0; i < prepared->canes.size(); ++i) {
       const int g = MajorityCane(prepared->canes[i], truth);
       if (g <= 0) continue;
@@ -293,6 +319,37 @@ TEST(ConnectLoss, DISABLED_Report) {
                     b.parent, h, flipped ? ", wrong end" : "", b.features[1] * 0.02,
                     b.features[7], best_right >= 0 ? joins[best_right].probability : -1.0,
                     best_right >= 0 && joins[best_right].parent < 0 ? " (root)" : "");
+        // Without a right candidate: how far the child's true base end lies from the true
+        // parent's reconstruction (the head's surface for a cane of the head or trunk).
+        if (best_right < 0) {
+          const int tp = TrueParent(truth, g);
+          const Polyline3& c = prepared->canes[i];
+          const Polyline3& tc = truth.canes[g].polyline;
+          const Eigen::Vector3d base = tc.Project(c.points.front()) <= tc.Project(c.points.back())
+                                           ? c.points.front()
+                                           : c.points.back();
+          double d = 1e9;
+          if (tp == 0) {
+            d = std::max(0.0, connect_internal::DistanceToHead(base, head->head, nullptr));
+            d = std::min(d, DistanceToPolyline(base, *prepared->trunk));
+          }
+          for (size_t m = 0; m < prepared->canes.size(); ++m)
+            if (tp > 0 && majority_prepared[m] == tp)
+              d = std::min(d, DistanceToPolyline(base, prepared->canes[m]));
+          std::printf("    no right candidate: true parent %d, base %.3f m from it%s\n", tp, d,
+                      d > 1e8 ? " (not reconstructed)" : "");
+        }
+        // What ranked the wrong join above the right one, both to a cane (VB_FEATURES=1): each
+        // feature's weighted difference, wrong minus right.
+        if (std::getenv("VB_FEATURES") && best_right >= 0 && b.parent >= 0 &&
+            joins[best_right].parent >= 0) {
+          const JoinWeights w = options.connect.join_weights;
+          std::printf("    features wrong-right:");
+          for (int f = 1; f < kJoinFeatureCount; ++f)
+            std::printf(" %d:%+.2f", f,
+                        w.cane[f] * (b.features[f] - joins[best_right].features[f]));
+          std::printf("\n");
+        }
       }
     }
     // Crossings (VB_CROSSING=1): per child, its likeliest join to a cane, labelled; how much
@@ -358,6 +415,26 @@ TEST(ConnectLoss, DISABLED_Report) {
                     "inner end to own cane %.3f, to true parent %.3f\n",
                     static_cast<unsigned long long>(seed), c.Length(), g, tp, in_model >= 0,
                     parent_true, to_self, to_parent);
+      }
+    }
+    // Image support of each prepared cane (VB_SUPPORT=1): the fraction of it the images show
+    // as wood (GapSupport along its segments), by whether it is this vine's, a ghost or a
+    // neighbour's (beyond 0.5 m), and whether it is in the model.
+    if (std::getenv("VB_SUPPORT")) {
+      for (size_t i = 0; i < prepared->canes.size(); ++i) {
+        const Polyline3& c = prepared->canes[i];
+        double sum = 0, len = 0;
+        for (size_t k = 0; k + 1 < c.points.size(); ++k) {
+          const double l = (c.points[k + 1] - c.points[k]).norm();
+          sum += l * gap_support(c.points[k], c.points[k + 1]);
+          len += l;
+        }
+        bool in_model = false;
+        for (const Cane& m : model->canes) in_model = in_model || SameLine(c, m.polyline);
+        std::printf("  support seed %llu cane %zu: true %d, %.3f m, support %.3f, far %d, in model %d\n",
+                    static_cast<unsigned long long>(seed), i, majority_prepared[i], len,
+                    len > 0 ? sum / len : 0.0,
+                    !connect_internal::WhollyWithin(c, centre_x, 0.5), in_model);
       }
     }
     std::printf("seed %llu: attached %d (kept near %d), left out %d, inside %d\n",

@@ -69,6 +69,56 @@ void RescueLeftOut(const std::vector<Polyline3>& canes, double centre_x,
   }
 }
 
+// Which canes step 6 may keep: 1 wholly within keep_within_m of the vine's centre along the
+// row; 2 farther, but thinning away from the centre (this vine's), to hang by its thicker end
+// only (the one nearer the centre); 0 neither (or shorter than keep_min_length_m, or already
+// in the tree).
+std::vector<char> KeptNearKinds(const std::vector<Polyline3>& canes, double centre_x,
+                                const std::vector<int>& kept, const ConnectOptions& options) {
+  std::vector<char> near(canes.size(), 0);
+  if (options.keep_within_m <= 0.0) return near;
+  for (size_t i = 0; i < canes.size(); ++i) {
+    if (kept[i] != 0 || canes[i].Length() < options.keep_min_length_m) continue;
+    near[i] = WhollyWithin(canes[i], centre_x, options.keep_within_m);
+    if (!near[i] && options.keep_taper_ratio > 0.0 &&
+        TaperTowardCentre(canes[i], centre_x) >= options.keep_taper_ratio) {
+      near[i] = 2;
+    }
+  }
+  return near;
+}
+
+// Step 6: while a left-out cane that `near` marks has a candidate join to the tree (by its
+// inner end if marked 2), the likeliest such join of all is taken, however unlikely; the canes
+// that hung on it by their chosen joins follow it when rescuing is on.
+void KeepNear(const std::vector<Polyline3>& canes, double centre_x, const std::vector<char>& near,
+              const std::vector<JoinCandidate>& joins, const std::vector<double>& probability,
+              const ConnectOptions& options, std::vector<int>* kept, std::vector<int>* parent,
+              std::vector<int>* join, ConnectSummary* sum) {
+  auto inner_is_last = [&](int i) {
+    return std::abs(canes[i].points.back().x() - centre_x) <
+           std::abs(canes[i].points.front().x() - centre_x);
+  };
+  while (true) {
+    int best = -1;
+    for (size_t k = 0; k < joins.size(); ++k) {
+      const JoinCandidate& c = joins[k];
+      if ((*kept)[c.child] != 0 || !near[c.child] || (c.parent >= 0 && (*kept)[c.parent] != 1)) {
+        continue;
+      }
+      if (near[c.child] == 2 && c.base_is_last != inner_is_last(c.child)) continue;
+      if (best < 0 || probability[k] > probability[best]) best = static_cast<int>(k);
+    }
+    if (best < 0) return;
+    const int child = joins[best].child;
+    (*kept)[child] = 1;
+    (*parent)[child] = joins[best].parent;
+    (*join)[child] = best;
+    ++sum->kept_near;
+    if (options.rescue_min_probability > 0.0) sum->rescued += FollowParents(*parent, kept);
+  }
+}
+
 }  // namespace
 
 absl::StatusOr<VineModel> BuildTree(const PreparedCanes& prepared_in,
@@ -147,53 +197,27 @@ absl::StatusOr<VineModel> BuildTree(const PreparedCanes& prepared_in,
   }
   // The arborescence scores a join to a left-out cane as if that cane were in the tree: a cane
   // may take a likely join to a cane left out over a less likely, still better-than-none one to
-  // the tree, and be lost with it. Hang such canes on the tree after all (step 3b).
-  if (options.rescue_min_probability > 0.0)
-    RescueLeftOut(canes, prepared->trunk->points.back().x(), joins, probability, options, &kept,
-                  &parent, &join, &sum);
-  // Canes left out but lying wholly near the vine's centre along the row are this vine's (a
-  // neighbour's canes reach into the view from the sides): hang each on its likeliest join to
-  // the tree, the likeliest of all first, so that a cane kept so can take others after it.
-  if (options.keep_within_m > 0.0) {
-    const double centre_x = prepared->trunk->points.back().x();
-    // near: 1 wholly near the centre; 2 farther, but thinning away from the centre (this
-    // vine's), to hang by its thicker end, the one nearer the centre (`inner_is_last`).
-    std::vector<char> near(n, 0), inner_is_last(n, 0);
-    for (int i = 0; i < n; ++i) {
-      if (kept[i] != 0 || canes[i].Length() < options.keep_min_length_m) continue;
-      near[i] = WhollyWithin(canes[i], centre_x, options.keep_within_m);
-      if (!near[i] && options.keep_taper_ratio > 0.0 &&
-          TaperTowardCentre(canes[i], centre_x) >= options.keep_taper_ratio) {
-        near[i] = 2;
-        inner_is_last[i] = std::abs(canes[i].points.back().x() - centre_x) <
-                           std::abs(canes[i].points.front().x() - centre_x);
-      }
-    }
-    while (true) {
-      int best = -1;
-      for (size_t k = 0; k < joins.size(); ++k) {
-        const JoinCandidate& c = joins[k];
-        if (kept[c.child] != 0 || !near[c.child] || (c.parent >= 0 && kept[c.parent] != 1)) {
-          continue;
-        }
-        if (near[c.child] == 2 && c.base_is_last != static_cast<bool>(inner_is_last[c.child])) {
-          continue;
-        }
-        if (best < 0 || probability[k] > probability[best]) best = static_cast<int>(k);
-      }
-      if (best < 0) break;
-      const int child = joins[best].child;
-      kept[child] = 1;
-      parent[child] = joins[best].parent;
-      join[child] = best;
-      ++sum.kept_near;
-      if (options.rescue_min_probability > 0.0) sum.rescued += FollowParents(parent, &kept);
+  // the tree, and be lost with it. Hang such canes on the tree after all (step 3b). Canes left
+  // out but lying wholly near the vine's centre along the row are this vine's (a neighbour's
+  // canes reach into the view from the sides): hang each on its likeliest join to the tree
+  // (step 6). Each step can bring into the tree a cane that the other's candidates hang on:
+  // with repeat_rescue (off by default) both are repeated until neither keeps another cane.
+  const double centre_x = prepared->trunk->points.back().x();
+  const std::vector<char> near = KeptNearKinds(canes, centre_x, kept, options);
+  for (int round = 0; round < n + 1; ++round) {
+    const int before = static_cast<int>(std::count(kept.begin(), kept.end(), 1));
+    if (options.rescue_min_probability > 0.0)
+      RescueLeftOut(canes, centre_x, joins, probability, options, &kept, &parent, &join, &sum);
+    if (options.keep_within_m > 0.0)
+      KeepNear(canes, centre_x, near, joins, probability, options, &kept, &parent, &join, &sum);
+    if (!options.repeat_rescue ||
+        static_cast<int>(std::count(kept.begin(), kept.end(), 1)) == before) {
+      break;
     }
   }
   // A leaf of the tree that reaches beyond keep_within_m and thickens away from the centre is a
   // neighbour's cane hung on this vine's (by its tip, near a cane it crosses): drop it.
   if (options.drop_thickening_ratio > 0.0 && options.keep_within_m > 0.0) {
-    const double centre_x = prepared->trunk->points.back().x();
     std::vector<char> has_child(n, 0);
     for (int i = 0; i < n; ++i)
       if (kept[i] == 1 && parent[i] >= 0) has_child[parent[i]] = 1;
