@@ -47,17 +47,48 @@ struct ExtendOptions {
   double background_px = 0.0;             // a view contradicts a point if no wood lies within this
                                           // (plus the projected radius) of its projection
   int image_margin_px = 3;  // a view must see a point this far inside to contradict it
+  // Which tips are extended (docs/reconstruction.md, step 4c, "Which tips"; 0 turns a rule off).
+  double max_tip_row_distance_m = 0.9;  // skip a tip farther than this along the row (|x|) from
+                                        // the trunk's top: neighbours' canes overlap there
+  double max_tip_out_of_plane = 0.3;    // skip a tip whose unit tangent's component across the
+                                        // row (|y|, toward the cameras) passes this
+  double support_span_m = 0.03;         // the cane's last stretch checked against the skeletons
+  double max_support_px = 0.8;          // skip a tip whose last support_span_m lies farther than
+                                        // this from the skeleton (mean distance, px, over its
+                                        // points inside the image) in some view
 
   // INVALID_ARGUMENT naming the field for non-finite or out-of-range values.
   absl::Status Validate() const;
 };
 
+// Why an extension ended (the first rule that stopped it).
+enum class ExtendStop {
+  kPathEnd,       // the 2D path ended (a skeleton end, a junction without a smooth way on)
+  kMaxLength,     // max_length_m reached
+  kOtherCane,     // the path ran onto another model cane's projection
+  kUncertain,     // the depth's predicted sd passed max_depth_sd_m
+  kVolume,        // the point left the working volume
+  kContradicted,  // another view shows background where the point projects
+};
+
+// One extended tip.
+struct ExtendedTip {
+  int cane = -1;         // index into VineModel::canes
+  int view = -1;         // the view whose skeleton was followed
+  int first_point = 0;   // index in the cane's polyline of the first added point
+  int points = 0;        // points added
+  double length_m = 0.0;
+  ExtendStop stop = ExtendStop::kPathEnd;
+};
+
 struct ExtendSummary {
   int tips_tried = 0;     // cane tips looked at
   int tips_extended = 0;  // tips given an extension
+  int tips_skipped = 0;   // tips the which-tips rules (row distance, out of plane, support) skip
   int contradicted = 0;   // extensions cut short by another view's background
   int uncertain = 0;      // extensions cut short by the depth's predicted sd
   double added_length_m = 0.0;
+  std::vector<ExtendedTip> extended;  // one per extended tip, in cane order
 };
 
 // Extends the tips of the canes (kind kCane) of `model` in place, as described above. views[i]
