@@ -227,6 +227,30 @@ TEST(ExtendCanes, SkipsATipPointingAcrossTheRow) {
   }
 }
 
+TEST(ExtendCanes, SkipsATipOffTheSkeleton) {
+  const RigCalibration rig = sim::MakeRig().value();
+  const Cane cane = CurvedCane(0.05, 0.6);
+  const std::vector<View2D> views = SyntheticViews(VineWith(cane), rig);
+  // The model's cane 2 mm above the true one: ~2-3 px off the skeleton in every view, within
+  // snap_px of it at the tip.
+  for (const auto& [lift_m, extended] : {std::pair{0.0, true}, std::pair{0.002, false}}) {
+    VineModel model = VineWith(Truncated(cane, 21));
+    for (Eigen::Vector3d& p : model.canes[1].polyline.points) p.z() += lift_m;
+    ExtendSummary summary;
+    ASSERT_TRUE(ExtendCanes(views, rig, WorkingVolume{}, On(), &model, &summary).ok());
+    EXPECT_EQ(summary.tips_extended, extended ? 1 : 0) << lift_m;
+    EXPECT_EQ(summary.tips_skipped, extended ? 0 : 1) << lift_m;
+  }
+  // Without the rule the lifted cane is extended (the control).
+  VineModel model = VineWith(Truncated(cane, 21));
+  for (Eigen::Vector3d& p : model.canes[1].polyline.points) p.z() += 0.002;
+  ExtendOptions any = On();
+  any.max_support_px = 0;
+  ExtendSummary summary;
+  ASSERT_TRUE(ExtendCanes(views, rig, WorkingVolume{}, any, &model, &summary).ok());
+  EXPECT_EQ(summary.tips_extended, 1);
+}
+
 TEST(ExtendCanes, LeavesTheModelWhenDisabled) {
   const RigCalibration rig = sim::MakeRig().value();
   const Cane cane = CurvedCane(0.05, 0.6);
@@ -253,6 +277,14 @@ TEST(ExtendCanes, RejectsBadOptionsNamingTheField) {
   options.anchor_points = 1;
   status = ExtendCanes(views, rig, WorkingVolume{}, options, &model);
   EXPECT_THAT(status.message(), testing::HasSubstr("anchor_points"));
+  options = On();
+  options.max_tip_out_of_plane = -0.1;
+  status = ExtendCanes(views, rig, WorkingVolume{}, options, &model);
+  EXPECT_THAT(status.message(), testing::HasSubstr("max_tip_out_of_plane"));
+  options = On();
+  options.max_support_px = std::nan("");
+  status = ExtendCanes(views, rig, WorkingVolume{}, options, &model);
+  EXPECT_THAT(status.message(), testing::HasSubstr("max_support_px"));
   status = ExtendCanes({views[0]}, rig, WorkingVolume{}, On(), &model);
   EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument);
   EXPECT_THAT(status.message(), testing::HasSubstr("views"));
