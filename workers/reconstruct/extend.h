@@ -11,7 +11,9 @@
 // that passes `max_depth_sd_m` (the extrapolation grows uncertain with distance from the tip).
 // It also stops where another camera that should see the point shows background around it (a
 // contradiction), where the path runs onto another model cane, leaves the working volume, or
-// turns sharply at a junction.
+// turns sharply at a junction. Most wrong added length continues a tip that was already wrong
+// (a neighbour's cane, a mis-depthed end), so tips likely to be wrong are not extended: far
+// along the row from the trunk, pointing across the row, or lying off a view's skeleton.
 // Extended stretches are appended to the canes' polylines; vine_model.v1 has no field to mark
 // them, so ExtendSummary counts them. Thread-safe (pure function of its inputs).
 #pragma once
@@ -27,9 +29,10 @@
 namespace vb::reconstruct {
 
 struct ExtendOptions {
-  // Run the stage. Off by default: on tuning stops it adds recall but costs precision
-  // (docs/reconstruction.md, step 4c); off, the model is left as it is.
-  bool enabled = false;
+  // Run the stage (on by default since session 16: with the which-tips rules below it adds
+  // recall at unchanged precision on tuning stops, docs/reconstruction.md, step 4c); off, the
+  // model is left as it is.
+  bool enabled = true;
   double step_m = 0.005;            // 3D spacing of the continuation points (and anchors)
   int anchor_points = 4;            // the cane's last points (at step_m) that seed the depths
   double anchor_span_m = 0.05;      // the anchors lie on a line fitted to this much of the cane

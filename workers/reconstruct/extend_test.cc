@@ -256,10 +256,11 @@ TEST(ExtendCanes, LeavesTheModelWhenDisabled) {
   const Cane cane = CurvedCane(0.05, 0.6);
   const VineModel truth = VineWith(cane);
   VineModel model = VineWith(Truncated(cane, 21));
+  ExtendOptions off;
+  off.enabled = false;
   ExtendSummary summary;
-  ASSERT_TRUE(ExtendCanes(SyntheticViews(truth, rig), rig, WorkingVolume{}, ExtendOptions{}, &model,
-                          &summary)
-                  .ok());
+  ASSERT_TRUE(
+      ExtendCanes(SyntheticViews(truth, rig), rig, WorkingVolume{}, off, &model, &summary).ok());
   EXPECT_EQ(model.canes[1].polyline.points.size(), 21u);
   EXPECT_EQ(summary.tips_tried, 0);
 }
