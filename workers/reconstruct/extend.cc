@@ -190,8 +190,40 @@ bool WoodNear(const View2D& view, const Eigen::Vector2d& uv, int r) {
   return false;
 }
 
+// The largest, over the views, of the mean distance (px) from the projections of the cane's
+// last span_m (every 5 mm; those inside the image) to the nearest skeleton point.
+double WorstSupportPx(const Polyline3& line, const std::vector<View2D>& views,
+                      const RigCalibration& rig, double span_m) {
+  const std::vector<double> arc = line.ArcLengths();
+  const double length = arc.back();
+  std::vector<Eigen::Vector3d> samples;
+  for (double s = std::max(0.0, length - span_m); s <= length + 1e-9; s += 0.005)
+    samples.push_back(line.PointAt(s, arc));
+  double worst = 0;
+  for (size_t v = 0; v < views.size(); ++v) {
+    const CameraCalibration& camera = rig.cameras[v];
+    const View2D& view = views[v];
+    if (view.centreline_distance_px.size() != static_cast<size_t>(view.width) * view.height)
+      continue;
+    double sum = 0;
+    int n = 0;
+    for (const Eigen::Vector3d& p : samples) {
+      const std::optional<Eigen::Vector2d> uv = camera.Project(p);
+      if (!uv || !camera.InImage(*uv)) continue;
+      const int x = std::clamp(static_cast<int>(std::lround(uv->x())), 0, view.width - 1);
+      const int y = std::clamp(static_cast<int>(std::lround(uv->y())), 0, view.height - 1);
+      sum += view.centreline_distance_px[static_cast<size_t>(y) * view.width + x];
+      ++n;
+    }
+    if (n > 0) worst = std::max(worst, sum / n);
+  }
+  return worst;
+}
+
 struct Extension {
   std::vector<Eigen::Vector3d> points;
+  int view = -1;
+  ExtendStop stop = ExtendStop::kPathEnd;
   bool contradicted = false;
   bool uncertain = false;
 };
@@ -260,7 +292,11 @@ absl::Status ExtendOptions::Validate() const {
   for (const auto& [value, field] : {std::pair{min_length_m, "min_length_m"},
                                      {anchor_span_m, "anchor_span_m"},
                                      {other_cane_px, "other_cane_px"},
-                                     {background_px, "background_px"}}) {
+                                     {background_px, "background_px"},
+                                     {support_span_m, "support_span_m"},
+                                     {max_support_px, "max_support_px"},
+                                     {max_tip_row_distance_m, "max_tip_row_distance_m"},
+                                     {max_tip_out_of_plane, "max_tip_out_of_plane"}}) {
     if (!std::isfinite(value) || value < 0) {
       return absl::InvalidArgumentError(
           absl::StrCat("extend.", field, " must be finite and >= 0, is ", value));
@@ -310,12 +346,22 @@ absl::Status ExtendCanes(const std::vector<View2D>& views, const RigCalibration&
     }
   }
 
+  std::optional<double> trunk_x;
+  for (const Cane& cane : model->canes)
+    if (cane.kind == CaneKind::kTrunk && !cane.polyline.points.empty())
+      trunk_x = cane.polyline.points.back().x();
   for (size_t c = 0; c < model->canes.size(); ++c) {
     Cane& cane = model->canes[c];
     if (cane.kind != CaneKind::kCane) continue;
     const double length = cane.polyline.Length();
     if (length < options.min_cane_length_m) continue;
     ++sum.tips_tried;
+    if (options.max_support_px > 0 &&
+        WorstSupportPx(cane.polyline, views, rig, options.support_span_m) >
+            options.max_support_px) {
+      ++sum.tips_skipped;
+      continue;
+    }
     const std::vector<double> arc = cane.polyline.ArcLengths();
     std::vector<Eigen::Vector3d> anchors;
     for (int k = options.anchor_points - 1; k >= 0; --k)
@@ -351,6 +397,16 @@ absl::Status ExtendCanes(const std::vector<View2D>& views, const RigCalibration&
     const Eigen::Vector3d tip = anchors.back();
     const Eigen::Vector3d tangent = (tip - anchors[anchors.size() - 2]).normalized();
     const double tip_radius = cane.polyline.radii.back();
+    // Tips of which a wrong one is likelier than a right one is useful (docs/reconstruction.md,
+    // step 4c, "Which tips"): far along the row, where neighbours' canes run along the same
+    // wires, and tips pointing toward or away from the cameras, mostly mis-depthed ends.
+    if ((options.max_tip_row_distance_m > 0 && trunk_x &&
+         std::abs(tip.x() - *trunk_x) > options.max_tip_row_distance_m) ||
+        (options.max_tip_out_of_plane > 0 &&
+         std::abs(tangent.y()) > options.max_tip_out_of_plane)) {
+      ++sum.tips_skipped;
+      continue;
+    }
 
     Extension best;
     for (int v = 0; v < nv; ++v) {
@@ -376,11 +432,18 @@ absl::Status ExtendCanes(const std::vector<View2D>& views, const RigCalibration&
       const Eigen::Vector2d start_dir = PathDirection(path, true);
       if (start_dir.dot(ahead.normalized()) < std::cos(options.max_turn_rad)) continue;
       std::vector<Eigen::Vector2d> pixels = Resample(path, step_px);
+      Extension ext;
+      ext.view = v;
+      if (pixels.size() >= static_cast<size_t>(options.max_length_m / options.step_m))
+        ext.stop = ExtendStop::kMaxLength;
       // Up to where the path runs onto another model cane.
       size_t keep = 0;
       while (keep < pixels.size()) {
         const int label = labels[v].At(pixels[keep]);
-        if (label >= 0 && label != static_cast<int>(c)) break;
+        if (label >= 0 && label != static_cast<int>(c)) {
+          ext.stop = ExtendStop::kOtherCane;
+          break;
+        }
         ++keep;
       }
       pixels.resize(keep);
@@ -388,13 +451,16 @@ absl::Status ExtendCanes(const std::vector<View2D>& views, const RigCalibration&
       std::vector<Eigen::Vector3d> points;
       std::vector<double> sd;
       SolveDepths(camera, anchors, pixels, plane_y, options, &points, &sd);
-      Extension ext;
       for (size_t i = 0; i < points.size(); ++i) {
         if (sd[i] > options.max_depth_sd_m) {
           ext.uncertain = true;
+          ext.stop = ExtendStop::kUncertain;
           break;
         }
-        if (!volume.Contains(points[i])) break;
+        if (!volume.Contains(points[i])) {
+          ext.stop = ExtendStop::kVolume;
+          break;
+        }
         bool contradicted = false;
         for (int w = 0; w < nv && !contradicted; ++w) {
           if (w == v) continue;
@@ -411,6 +477,7 @@ absl::Status ExtendCanes(const std::vector<View2D>& views, const RigCalibration&
         }
         if (contradicted) {
           ext.contradicted = true;
+          ext.stop = ExtendStop::kContradicted;
           break;
         }
         ext.points.push_back(points[i]);
@@ -427,11 +494,19 @@ absl::Status ExtendCanes(const std::vector<View2D>& views, const RigCalibration&
     sum.uncertain += best.uncertain;
     if (best.points.empty()) continue;
     ++sum.tips_extended;
+    ExtendedTip record;
+    record.cane = static_cast<int>(c);
+    record.view = best.view;
+    record.first_point = static_cast<int>(cane.polyline.points.size());
+    record.points = static_cast<int>(best.points.size());
+    record.stop = best.stop;
     for (const Eigen::Vector3d& p : best.points) {
-      sum.added_length_m += (p - cane.polyline.points.back()).norm();
+      record.length_m += (p - cane.polyline.points.back()).norm();
       cane.polyline.points.push_back(p);
       cane.polyline.radii.push_back(tip_radius);
     }
+    sum.added_length_m += record.length_m;
+    sum.extended.push_back(record);
     std::vector<Eigen::Vector3d> drawn = {tip};
     drawn.insert(drawn.end(), best.points.begin(), best.points.end());
     for (int v = 0; v < nv; ++v)

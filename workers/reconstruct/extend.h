@@ -11,7 +11,9 @@
 // that passes `max_depth_sd_m` (the extrapolation grows uncertain with distance from the tip).
 // It also stops where another camera that should see the point shows background around it (a
 // contradiction), where the path runs onto another model cane, leaves the working volume, or
-// turns sharply at a junction.
+// turns sharply at a junction. Most wrong added length continues a tip that was already wrong
+// (a neighbour's cane, a mis-depthed end), so tips likely to be wrong are not extended: far
+// along the row from the trunk, pointing across the row, or lying off a view's skeleton.
 // Extended stretches are appended to the canes' polylines; vine_model.v1 has no field to mark
 // them, so ExtendSummary counts them. Thread-safe (pure function of its inputs).
 #pragma once
@@ -27,9 +29,10 @@
 namespace vb::reconstruct {
 
 struct ExtendOptions {
-  // Run the stage. Off by default: on tuning stops it adds recall but costs precision
-  // (docs/reconstruction.md, step 4c); off, the model is left as it is.
-  bool enabled = false;
+  // Run the stage (on by default since session 16: with the which-tips rules below it adds
+  // recall at unchanged precision on tuning stops, docs/reconstruction.md, step 4c); off, the
+  // model is left as it is.
+  bool enabled = true;
   double step_m = 0.005;            // 3D spacing of the continuation points (and anchors)
   int anchor_points = 4;            // the cane's last points (at step_m) that seed the depths
   double anchor_span_m = 0.05;      // the anchors lie on a line fitted to this much of the cane
@@ -47,17 +50,48 @@ struct ExtendOptions {
   double background_px = 0.0;             // a view contradicts a point if no wood lies within this
                                           // (plus the projected radius) of its projection
   int image_margin_px = 3;  // a view must see a point this far inside to contradict it
+  // Which tips are extended (docs/reconstruction.md, step 4c, "Which tips"; 0 turns a rule off).
+  double max_tip_row_distance_m = 0.9;  // skip a tip farther than this along the row (|x|) from
+                                        // the trunk's top: neighbours' canes overlap there
+  double max_tip_out_of_plane = 0.3;    // skip a tip whose unit tangent's component across the
+                                        // row (|y|, toward the cameras) passes this
+  double support_span_m = 0.03;         // the cane's last stretch checked against the skeletons
+  double max_support_px = 0.8;          // skip a tip whose last support_span_m lies farther than
+                                        // this from the skeleton (mean distance, px, over its
+                                        // points inside the image) in some view
 
   // INVALID_ARGUMENT naming the field for non-finite or out-of-range values.
   absl::Status Validate() const;
 };
 
+// Why an extension ended (the first rule that stopped it).
+enum class ExtendStop {
+  kPathEnd,       // the 2D path ended (a skeleton end, a junction without a smooth way on)
+  kMaxLength,     // max_length_m reached
+  kOtherCane,     // the path ran onto another model cane's projection
+  kUncertain,     // the depth's predicted sd passed max_depth_sd_m
+  kVolume,        // the point left the working volume
+  kContradicted,  // another view shows background where the point projects
+};
+
+// One extended tip.
+struct ExtendedTip {
+  int cane = -1;         // index into VineModel::canes
+  int view = -1;         // the view whose skeleton was followed
+  int first_point = 0;   // index in the cane's polyline of the first added point
+  int points = 0;        // points added
+  double length_m = 0.0;
+  ExtendStop stop = ExtendStop::kPathEnd;
+};
+
 struct ExtendSummary {
   int tips_tried = 0;     // cane tips looked at
   int tips_extended = 0;  // tips given an extension
+  int tips_skipped = 0;   // tips the which-tips rules (row distance, out of plane, support) skip
   int contradicted = 0;   // extensions cut short by another view's background
   int uncertain = 0;      // extensions cut short by the depth's predicted sd
   double added_length_m = 0.0;
+  std::vector<ExtendedTip> extended;  // one per extended tip, in cane order
 };
 
 // Extends the tips of the canes (kind kCane) of `model` in place, as described above. views[i]

@@ -89,8 +89,10 @@ TEST(ExtendCanes, ExtendsATipSeenByOneCameraWithinTolerance) {
   const double old_length = model.canes[1].polyline.Length();
   WorkingVolume volume;
   volume.box.max().x() = 1.6;  // the cane runs beyond the default volume's 1.1 m
+  ExtendOptions options = On();
+  options.max_tip_row_distance_m = 2.0;  // the tip lies ~1 m along the row from the trunk
   ExtendSummary summary;
-  ASSERT_TRUE(ExtendCanes(views, rig, volume, On(), &model, &summary).ok());
+  ASSERT_TRUE(ExtendCanes(views, rig, volume, options, &model, &summary).ok());
   EXPECT_EQ(summary.tips_extended, 1);
   const Polyline3& extended = model.canes[1].polyline;
   ASSERT_GT(extended.points.size(), last_two + 1);
@@ -106,7 +108,7 @@ TEST(ExtendCanes, ExtendsATipSeenByOneCameraWithinTolerance) {
 
   // A looser depth cap follows the cane further; its depth drifts with distance from the tip
   // (what the cap is for), but stays within tolerance over the first 4 cm.
-  ExtendOptions loose = On();
+  ExtendOptions loose = options;
   loose.max_depth_sd_m = 0.05;
   loose.second_difference_sd_m = 0.0003;
   VineModel far = VineWith(Truncated(cane, last_two + 1));
@@ -150,15 +152,115 @@ TEST(ExtendCanes, RejectsAnExtensionAnotherViewContradicts) {
   }
 }
 
+// The model's trunk moved along the row by dx (its canes stay).
+VineModel WithTrunkAt(VineModel model, double dx) {
+  for (Eigen::Vector3d& p : model.canes[0].polyline.points) p.x() += dx;
+  return model;
+}
+
+TEST(ExtendCanes, SkipsATipFarAlongTheRowFromTheTrunk) {
+  const RigCalibration rig = sim::MakeRig().value();
+  const Cane cane = CurvedCane(0.4, 1.5);
+  size_t last_two = 0;
+  for (size_t i = 0; i < cane.polyline.points.size(); ++i)
+    if (ImagesSeeing(rig, cane.polyline.points[i]) >= 2) last_two = i;
+  const Cane cut = Truncated(cane, last_two + 1);
+  const double tip_x = cut.polyline.points.back().x();
+  ASSERT_GT(tip_x, 0.95);  // beyond the default 0.9 m from the trunk at x = 0
+  const std::vector<View2D> views = SyntheticViews(VineWith(cane), rig);
+  WorkingVolume volume;
+  volume.box.max().x() = 1.6;
+  // Trunk at x = 0: the tip is farther than max_tip_row_distance_m along the row: skipped.
+  {
+    VineModel model = VineWith(cut);
+    ExtendSummary summary;
+    ASSERT_TRUE(ExtendCanes(views, rig, volume, On(), &model, &summary).ok());
+    EXPECT_EQ(summary.tips_tried, 1);
+    EXPECT_EQ(summary.tips_extended, 0);
+    EXPECT_EQ(model.canes[1].polyline.points.size(), last_two + 1);
+  }
+  // The distance is from the trunk, not from x = 0: with the trunk 0.3 m nearer the tip, it is
+  // extended (the trunk's own drawing is not in these views, which does not matter here).
+  {
+    VineModel model = WithTrunkAt(VineWith(cut), tip_x - 0.6);
+    ExtendSummary summary;
+    ASSERT_TRUE(ExtendCanes(views, rig, volume, On(), &model, &summary).ok());
+    EXPECT_EQ(summary.tips_extended, 1);
+    EXPECT_GT(model.canes[1].polyline.points.size(), last_two + 1);
+  }
+}
+
+// A straight cane from `from` along `direction` (normalised here), `length` long, every 1 cm.
+Cane StraightCane(const Eigen::Vector3d& from, const Eigen::Vector3d& direction, double length) {
+  Cane cane;
+  cane.id = CaneId(2);
+  cane.parent_id = CaneId(1);
+  cane.kind = CaneKind::kCane;
+  for (double s = 0; s <= length + 1e-9; s += 0.01) {
+    cane.polyline.points.push_back(from + s * direction.normalized());
+    cane.polyline.radii.push_back(0.005);
+  }
+  return cane;
+}
+
+TEST(ExtendCanes, SkipsATipPointingAcrossTheRow) {
+  const RigCalibration rig = sim::MakeRig().value();
+  // Two straight canes in the middle of the views, seen whole by every camera; the model holds
+  // their first 20 cm. One lies in the vine plane, one turns 40 degrees toward the cameras
+  // (tangent y component 0.64 > 0.3).
+  for (const auto& [direction, extended] :
+       {std::pair{Eigen::Vector3d(1, 0, 0.3), true},
+        std::pair{Eigen::Vector3d(std::cos(0.70), -std::sin(0.70), 0).normalized(), false}}) {
+    const Cane cane = StraightCane({0.05, 0.85, 1.0}, direction, 0.4);
+    ASSERT_EQ(ImagesSeeing(rig, cane.polyline.points.back()), 3);
+    const std::vector<View2D> views = SyntheticViews(VineWith(cane), rig);
+    VineModel model = VineWith(Truncated(cane, 21));
+    ExtendSummary summary;
+    ASSERT_TRUE(ExtendCanes(views, rig, WorkingVolume{}, On(), &model, &summary).ok());
+    EXPECT_EQ(summary.tips_extended, extended ? 1 : 0) << direction.transpose();
+    // Without the rule the turned cane is extended too (the control).
+    ExtendOptions any = On();
+    any.max_tip_out_of_plane = 1.0;
+    model = VineWith(Truncated(cane, 21));
+    ASSERT_TRUE(ExtendCanes(views, rig, WorkingVolume{}, any, &model, &summary).ok());
+    EXPECT_EQ(summary.tips_extended, 1) << direction.transpose();
+  }
+}
+
+TEST(ExtendCanes, SkipsATipOffTheSkeleton) {
+  const RigCalibration rig = sim::MakeRig().value();
+  const Cane cane = CurvedCane(0.05, 0.6);
+  const std::vector<View2D> views = SyntheticViews(VineWith(cane), rig);
+  // The model's cane 2 mm above the true one: ~2-3 px off the skeleton in every view, within
+  // snap_px of it at the tip.
+  for (const auto& [lift_m, extended] : {std::pair{0.0, true}, std::pair{0.002, false}}) {
+    VineModel model = VineWith(Truncated(cane, 21));
+    for (Eigen::Vector3d& p : model.canes[1].polyline.points) p.z() += lift_m;
+    ExtendSummary summary;
+    ASSERT_TRUE(ExtendCanes(views, rig, WorkingVolume{}, On(), &model, &summary).ok());
+    EXPECT_EQ(summary.tips_extended, extended ? 1 : 0) << lift_m;
+    EXPECT_EQ(summary.tips_skipped, extended ? 0 : 1) << lift_m;
+  }
+  // Without the rule the lifted cane is extended (the control).
+  VineModel model = VineWith(Truncated(cane, 21));
+  for (Eigen::Vector3d& p : model.canes[1].polyline.points) p.z() += 0.002;
+  ExtendOptions any = On();
+  any.max_support_px = 0;
+  ExtendSummary summary;
+  ASSERT_TRUE(ExtendCanes(views, rig, WorkingVolume{}, any, &model, &summary).ok());
+  EXPECT_EQ(summary.tips_extended, 1);
+}
+
 TEST(ExtendCanes, LeavesTheModelWhenDisabled) {
   const RigCalibration rig = sim::MakeRig().value();
   const Cane cane = CurvedCane(0.05, 0.6);
   const VineModel truth = VineWith(cane);
   VineModel model = VineWith(Truncated(cane, 21));
+  ExtendOptions off;
+  off.enabled = false;
   ExtendSummary summary;
-  ASSERT_TRUE(ExtendCanes(SyntheticViews(truth, rig), rig, WorkingVolume{}, ExtendOptions{}, &model,
-                          &summary)
-                  .ok());
+  ASSERT_TRUE(
+      ExtendCanes(SyntheticViews(truth, rig), rig, WorkingVolume{}, off, &model, &summary).ok());
   EXPECT_EQ(model.canes[1].polyline.points.size(), 21u);
   EXPECT_EQ(summary.tips_tried, 0);
 }
@@ -176,6 +278,14 @@ TEST(ExtendCanes, RejectsBadOptionsNamingTheField) {
   options.anchor_points = 1;
   status = ExtendCanes(views, rig, WorkingVolume{}, options, &model);
   EXPECT_THAT(status.message(), testing::HasSubstr("anchor_points"));
+  options = On();
+  options.max_tip_out_of_plane = -0.1;
+  status = ExtendCanes(views, rig, WorkingVolume{}, options, &model);
+  EXPECT_THAT(status.message(), testing::HasSubstr("max_tip_out_of_plane"));
+  options = On();
+  options.max_support_px = std::nan("");
+  status = ExtendCanes(views, rig, WorkingVolume{}, options, &model);
+  EXPECT_THAT(status.message(), testing::HasSubstr("max_support_px"));
   status = ExtendCanes({views[0]}, rig, WorkingVolume{}, On(), &model);
   EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument);
   EXPECT_THAT(status.message(), testing::HasSubstr("views"));
