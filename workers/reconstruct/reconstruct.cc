@@ -116,6 +116,7 @@ absl::Status ReconstructOptions::Validate() const {
     }
   }
   VB_RETURN_IF_ERROR(assembly.Validate());
+  VB_RETURN_IF_ERROR(grow.Validate());
   VB_RETURN_IF_ERROR(head.Validate());
   VB_RETURN_IF_ERROR(connect.Validate());
   VB_RETURN_IF_ERROR(fit.Validate());
@@ -166,6 +167,11 @@ absl::StatusOr<ReconstructResult> ReconstructFromViews(const std::vector<View2D>
                 [&](const Polyline3& cane) { return options.volume.MostlyOutside(cane); });
   result.assembled_canes = static_cast<int>(canes.size());
   result.timings.assembly_s = SecondsSince(t);
+
+  t = std::chrono::steady_clock::now();
+  VB_RETURN_IF_ERROR(
+      GrowCaneEnds(views, rig, options.volume, options.grow, &canes, &result.grow));
+  result.timings.grow_s = SecondsSince(t);
 
   t = std::chrono::steady_clock::now();
   std::vector<Eigen::Vector3d> depth_hints;
