@@ -231,6 +231,16 @@ class Grower {
     return predicted + best_a * u + best_b * w;
   }
 
+  bool AlongSkeleton(const ViewProbe& probe, const Eigen::Vector3d& p,
+                     const Eigen::Vector3d& step) const {
+    if (options_.support_along_px <= 0) return true;
+    for (const double sign : {-0.5, 0.5}) {
+      const std::optional<Eigen::Vector2d> uv = probe.Inside(p + sign * options_.step_m * step);
+      if (uv && probe.Distance(*uv) > options_.support_along_px) return false;
+    }
+    return true;
+  }
+
   bool EndSupported(const Eigen::Vector3d& p) const {
     int supports = 0;
     for (const ViewProbe& probe : probes_) {
@@ -251,7 +261,7 @@ class Grower {
       if (!uv) continue;
       if (probes_[v].Thick(*uv)) return Stop::kThick;
       if (probes_[v].Distance(*uv) <= options_.support_px) {
-        supports.push_back(static_cast<int>(v));
+        if (AlongSkeleton(probes_[v], p, step)) supports.push_back(static_cast<int>(v));
       } else if (probes_[v].Background(*uv, p, radius)) {
         return Stop::kContradicted;
       }
@@ -309,6 +319,8 @@ absl::Status GrowOptions::Validate() const {
     if (absl::Status s = Positive(value, field); !s.ok()) return s;
   }
   for (const auto& [value, field] : {std::pair{min_cane_length_m, "min_cane_length_m"},
+                                     {trim_m, "trim_m"},
+                                     {support_along_px, "support_along_px"},
                                      {prior_px_per_mm, "prior_px_per_mm"},
                                      {min_length_m, "min_length_m"},
                                      {min_epipolar_angle_deg, "min_epipolar_angle_deg"}}) {
@@ -389,10 +401,20 @@ absl::Status GrowCaneEnds(const std::vector<View2D>& views, const RigCalibration
         case Stop::kOutside: ++summary->outside; break;
         case Stop::kCapped: ++summary->capped; break;
       }
-      if (grown.empty()) continue;
+      std::vector<Eigen::Vector3d> kept = grown;
+      if (stop == Stop::kUnsupported || stop == Stop::kContradicted || stop == Stop::kTurned) {
+        double cut = 0;
+        while (!kept.empty() && cut < options.trim_m - 1e-12) {
+          const Eigen::Vector3d& before =
+              kept.size() >= 2 ? kept[kept.size() - 2] : line.points.back();
+          cut += (kept.back() - before).norm();
+          kept.pop_back();
+        }
+      }
+      if (kept.empty()) continue;
       Polyline3 tail;
       tail.points.push_back(line.points.back());
-      for (const Eigen::Vector3d& p : grown) tail.points.push_back(p);
+      for (const Eigen::Vector3d& p : kept) tail.points.push_back(p);
       tail.radii.assign(tail.points.size(), EndRadius(line, options.tangent_span_m));
       const double added = tail.Length();
       if (added < options.min_length_m) continue;

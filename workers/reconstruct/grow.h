@@ -37,7 +37,7 @@ struct GrowOptions {
   double min_cane_length_m = 0.04;   // shorter canes are not grown
   double max_offset_m = 0.002;       // largest correction of a predicted point, per axis
   double offset_grid_m = 0.0005;     // coarse grid of the correction (refined 4x finer)
-  double prior_px_per_mm = 0.3;      // pull toward the prediction: px of cost per mm of offset
+  double prior_px_per_mm = 0.0;      // pull toward the prediction: px of cost per mm of offset
   double truncate_px = 4.0;          // a view's squared distance is capped at this squared
   double support_px = 2.0;           // a view supports a point within this of its skeleton
   int min_support_views = 2;         // views that must support each accepted point
@@ -45,11 +45,18 @@ struct GrowOptions {
   // of at least min_support_views): an end the views disagree on is misplaced, and growing it
   // continues its error.
   bool require_end_support = true;
+  // A view supports a point only if the skeleton also runs along the step there: the points
+  // half a step before and after project within support_along_px of it too (a skeleton that
+  // crosses the step's projection, or passes by chance, does not support it). 0: off.
+  double support_along_px = 3.0;
   double min_epipolar_angle_deg = 15.0;  // two supports only: tangent vs their epipolar plane
   double max_turn_deg = 35.0;        // largest turn of the grown stretch from the end's tangent
   double other_cane_m = 0.012;       // "alongside another cane": closer than this to it ...
   double along_angle_deg = 30.0;     // ... with directions within this angle
   double max_length_m = 0.15;        // longest growth of one end
+  // Growth that stops on failed evidence (unsupported, contradicted, a sharp turn) is cut back
+  // by this much: its last points tend to have drifted off the cane before the evidence failed.
+  double trim_m = 0.01;
   double min_length_m = 0.01;        // shorter growths are dropped
   int image_margin_px = 3;           // a view must see a point this far inside its image
 

@@ -57,6 +57,8 @@ GrowOptions OptionsFromEnv() {
   get("VB_GROW_OFFSET", &o.max_offset_m);
   get("VB_GROW_MIN_LEN", &o.min_length_m);
   get("VB_GROW_MIN_CANE", &o.min_cane_length_m);
+  get("VB_GROW_ALONG_PX", &o.support_along_px);
+  get("VB_GROW_TRIM", &o.trim_m);
   if (const char* v = std::getenv("VB_GROW_VIEWS")) o.min_support_views = std::atoi(v);
   if (const char* v = std::getenv("VB_GROW_END")) o.require_end_support = std::atoi(v) != 0;
   return o;
@@ -76,7 +78,9 @@ TEST(Grow, DISABLED_Report) {
   ReconstructOptions on;
   on.grow = grow;
   on.grow.enabled = true;
-  double wrong_near_head = 0, wrong_10_20 = 0;
+  double wrong_near_head = 0, wrong_10_20 = 0, end_stretch = 0, end_stretch_right = 0;
+  double by_distance[4] = {}, by_distance_right[4] = {};
+  double by_views[2] = {}, by_views_right[2] = {}, by_length[3] = {}, by_length_right[3] = {};
   double added = 0, right = 0, added_from_wrong_end = 0, right_from_wrong_end = 0, time = 0;
   int ends = 0, grown_ends = 0;
   GrowSummary totals;
@@ -123,12 +127,51 @@ TEST(Grow, DISABLED_Report) {
         if (hi <= lo) continue;
         const Eigen::Vector3d& end = side == 0 ? before.points.front() : before.points.back();
         const bool end_right = DistanceToCanes(end, drawn.canes) <= 0.010;
-        for (size_t i = lo; i < hi; ++i) {
+        int seeing = 0;
+        for (const CameraCalibration& camera : matched->rig.cameras) {
+          const auto uv = camera.Project(end);
+          seeing += uv && camera.InImage(*uv);
+        }
+        const int sv = std::clamp(seeing, 2, 3) - 2;
+        const double cane_length = before.Length();
+        const int lb = cane_length < 0.1 ? 0 : cane_length < 0.2 ? 1 : 2;
+        // The grown end's own last 2 cm, for comparison.
+        {
+          const std::vector<double> arc = before.ArcLengths();
+          for (size_t i = 0; i + 1 < before.points.size(); ++i) {
+            const double from_end = side == 0 ? arc[i] : arc.back() - arc[i + 1];
+            if (from_end >= 0.02) continue;
+            const double step = (before.points[i + 1] - before.points[i]).norm();
+            const bool ok =
+                DistanceToCanes(0.5 * (before.points[i] + before.points[i + 1]), drawn.canes) <= 0.010;
+            end_stretch += step;
+            end_stretch_right += ok * step;
+          }
+        }
+        const bool verbose = std::getenv("VB_VERBOSE") != nullptr;
+        if (verbose) {
+          std::printf("GROW stop %llu cane %zu side %d len %.3f end %.1f mm:",
+                      static_cast<unsigned long long>(first + k), c, side, before.Length(),
+                      1000 * DistanceToCanes(end, drawn.canes));
+        }
+        // Walk from the original end outward, to bucket by the distance grown.
+        double along = 0;
+        for (size_t k2 = 0; k2 < hi - lo; ++k2) {
+          const size_t i = side == 0 ? hi - 1 - k2 : lo + k2;
           const double step = (after.points[i + 1] - after.points[i]).norm();
           const Eigen::Vector3d mid = 0.5 * (after.points[i + 1] + after.points[i]);
           const bool ok = DistanceToCanes(mid, drawn.canes) <= 0.010;
+          if (verbose) std::printf(" %.0f", 1000 * DistanceToCanes(mid, drawn.canes));
           added += step;
           right += ok * step;
+          const int bucket = along < 0.02 ? 0 : along < 0.04 ? 1 : along < 0.08 ? 2 : 3;
+          along += step;
+          by_distance[bucket] += step;
+          by_views[sv] += step;
+          by_views_right[sv] += ok * step;
+          by_length[lb] += step;
+          by_length_right[lb] += ok * step;
+          by_distance_right[bucket] += ok * step;
           if (!ok) {
             double head = 1e9;
             for (const Sphere& sp : drawn.head.spheres)
@@ -142,6 +185,7 @@ TEST(Grow, DISABLED_Report) {
             right_from_wrong_end += ok * step;
           }
         }
+        if (verbose) std::printf("\n");
       }
     }
     if (std::getenv("VB_GROW_QUICK") != nullptr) {
@@ -185,6 +229,21 @@ TEST(Grow, DISABLED_Report) {
               right_from_wrong_end / std::max(added_from_wrong_end, 1e-9), time / count);
   std::printf("wrong within 3 cm of the head %.3f m per stop, 10-20 mm from wood %.3f m per stop\n",
               wrong_near_head / count, wrong_10_20 / count);
+  std::printf("by distance grown 0-2 / 2-4 / 4-8 / 8+ cm: %.3f (%.2f) %.3f (%.2f) %.3f (%.2f) "
+              "%.3f (%.2f) m per stop (right)\n",
+              by_distance[0] / count, by_distance_right[0] / std::max(by_distance[0], 1e-9),
+              by_distance[1] / count, by_distance_right[1] / std::max(by_distance[1], 1e-9),
+              by_distance[2] / count, by_distance_right[2] / std::max(by_distance[2], 1e-9),
+              by_distance[3] / count, by_distance_right[3] / std::max(by_distance[3], 1e-9));
+  std::printf("end seen by 2 / 3 views: %.3f (%.2f) %.3f (%.2f); cane < 10 / 10-20 / 20+ cm: "
+              "%.3f (%.2f) %.3f (%.2f) %.3f (%.2f)\n",
+              by_views[0] / count, by_views_right[0] / std::max(by_views[0], 1e-9),
+              by_views[1] / count, by_views_right[1] / std::max(by_views[1], 1e-9),
+              by_length[0] / count, by_length_right[0] / std::max(by_length[0], 1e-9),
+              by_length[1] / count, by_length_right[1] / std::max(by_length[1], 1e-9),
+              by_length[2] / count, by_length_right[2] / std::max(by_length[2], 1e-9));
+  std::printf("the grown ends' own last 2 cm: %.3f m per stop, right %.2f\n", end_stretch / count,
+              end_stretch_right / std::max(end_stretch, 1e-9));
   std::printf("without: recall %.4f precision %.4f connectivity %.4f\n", recall0 / count,
               precision0 / count, connectivity0 / count);
   std::printf("with - without: recall %+.4f +- %.4f, precision %+.4f +- %.4f, connectivity "
