@@ -31,7 +31,9 @@
 namespace vb::reconstruct {
 
 struct GrowOptions {
-  bool enabled = true;               // run the stage (off: the canes are left as they are)
+  // Run the stage. Off by default: on tuning stops it adds recall and connectivity but costs
+  // precision (docs/reconstruction.md, step 4d); off, the canes are left as they are.
+  bool enabled = false;
   double step_m = 0.005;             // 3D step along the continued tangent
   double tangent_span_m = 0.03;      // the tangent is the chord over this much of the end
   double min_cane_length_m = 0.04;   // shorter canes are not grown

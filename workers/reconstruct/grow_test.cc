@@ -86,6 +86,12 @@ Polyline3 Tail(const Polyline3& line, size_t n) {
   return out;
 }
 
+GrowOptions On() {
+  GrowOptions options;
+  options.enabled = true;
+  return options;
+}
+
 // The cane of the tests: 0.4 m long, crossed at its 20th point (x = -0.1) by a steep cane; the
 // skeleton of every view breaks the cane there (a junction of four segments), and its 3D piece
 // is taken to stop 1 cm before the crossing.
@@ -105,7 +111,7 @@ TEST(GrowCaneEnds, GrowsThroughACrossingWithinTwoMillimetres) {
   std::vector<Polyline3> canes = {Head(scene.cane, 20), scene.crossing};
   const Eigen::Vector3d old_end = canes[0].points.back();
   GrowSummary summary;
-  ASSERT_TRUE(GrowCaneEnds(views, rig, WorkingVolume{}, GrowOptions{}, &canes, &summary).ok());
+  ASSERT_TRUE(GrowCaneEnds(views, rig, WorkingVolume{}, On(), &canes, &summary).ok());
   ASSERT_GT(canes[0].points.size(), 20u);
   // The end grew through the crossing, at least 8 cm beyond it.
   EXPECT_GT(canes[0].points.back().x(), scene.cane.points[20].x() + 0.08);
@@ -129,7 +135,7 @@ TEST(GrowCaneEnds, StopsWhereAViewContradicts) {
   views[1] = ViewsOf({Head(scene.cane, 26), scene.crossing}, rig)[1];
   std::vector<Polyline3> canes = {Head(scene.cane, 20), scene.crossing};
   GrowSummary summary;
-  ASSERT_TRUE(GrowCaneEnds(views, rig, WorkingVolume{}, GrowOptions{}, &canes, &summary).ok());
+  ASSERT_TRUE(GrowCaneEnds(views, rig, WorkingVolume{}, On(), &canes, &summary).ok());
   EXPECT_GE(summary.contradicted, 1);
   EXPECT_LT(canes[0].points.back().x(), scene.cane.points[25].x() + 0.01);
   for (size_t i = 20; i < canes[0].points.size(); ++i)
@@ -143,27 +149,27 @@ TEST(GrowCaneEnds, DoesNotRunAlongAnotherCane) {
   // The control: the first 15 cm alone grows to the end of the cane.
   {
     std::vector<Polyline3> canes = {Head(cane, 16)};
-    ASSERT_TRUE(GrowCaneEnds(views, rig, WorkingVolume{}, GrowOptions{}, &canes).ok());
+    ASSERT_TRUE(GrowCaneEnds(views, rig, WorkingVolume{}, On(), &canes).ok());
     EXPECT_GT(canes[0].points.back().x(), cane.points[16].x() + 0.1);
   }
   // The rest of the cane is in the model already, from 3 cm on: growth stops where it meets it
   // and does not run along it.
   std::vector<Polyline3> canes = {Head(cane, 16), Tail(cane, 18)};
   GrowSummary summary;
-  ASSERT_TRUE(GrowCaneEnds(views, rig, WorkingVolume{}, GrowOptions{}, &canes, &summary).ok());
+  ASSERT_TRUE(GrowCaneEnds(views, rig, WorkingVolume{}, On(), &canes, &summary).ok());
   EXPECT_GE(summary.alongside, 1);
   EXPECT_LT(canes[0].points.back().x(), cane.points[18].x() + 0.012);
   // Nor does the rest grow back along the first piece.
   EXPECT_GT(canes[1].points.front().x(), cane.points[15].x() - 0.012);
 }
 
-TEST(GrowCaneEnds, LeavesTheCanesWhenDisabled) {
+TEST(GrowCaneEnds, LeavesTheCanesWhenDisabledAsByDefault) {
   const RigCalibration rig = sim::MakeRig().value();
   const Crossing scene;
   const std::vector<View2D> views = ViewsOf({scene.cane, scene.crossing}, rig);
   std::vector<Polyline3> canes = {Head(scene.cane, 20), scene.crossing};
-  GrowOptions options;
-  options.enabled = false;
+  const GrowOptions options;
+  EXPECT_FALSE(options.enabled);
   GrowSummary summary;
   ASSERT_TRUE(GrowCaneEnds(views, rig, WorkingVolume{}, options, &canes, &summary).ok());
   EXPECT_EQ(canes[0].points.size(), 20u);
@@ -175,20 +181,20 @@ TEST(GrowCaneEnds, RejectsBadInputNamingTheField) {
   const Crossing scene;
   const std::vector<View2D> views = ViewsOf({scene.cane}, rig);
   std::vector<Polyline3> canes = {Head(scene.cane, 20)};
-  GrowOptions options;
+  GrowOptions options = On();
   options.support_px = -1;
   absl::Status status = GrowCaneEnds(views, rig, WorkingVolume{}, options, &canes);
   EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument);
   EXPECT_THAT(status.message(), testing::HasSubstr("support_px"));
-  options = GrowOptions{};
+  options = On();
   options.min_support_views = 1;
   status = GrowCaneEnds(views, rig, WorkingVolume{}, options, &canes);
   EXPECT_THAT(status.message(), testing::HasSubstr("min_support_views"));
-  options = GrowOptions{};
+  options = On();
   options.max_turn_deg = 120;
   status = GrowCaneEnds(views, rig, WorkingVolume{}, options, &canes);
   EXPECT_THAT(status.message(), testing::HasSubstr("max_turn_deg"));
-  status = GrowCaneEnds({views[0]}, rig, WorkingVolume{}, GrowOptions{}, &canes);
+  status = GrowCaneEnds({views[0]}, rig, WorkingVolume{}, On(), &canes);
   EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument);
   EXPECT_THAT(status.message(), testing::HasSubstr("views"));
 }
