@@ -358,7 +358,8 @@ absl::Status GrowOptions::Validate() const {
 
 absl::Status GrowCaneEnds(const std::vector<View2D>& views, const RigCalibration& rig,
                           const WorkingVolume& volume, const GrowOptions& options,
-                          std::vector<Polyline3>* canes, GrowSummary* summary) {
+                          std::vector<Polyline3>* canes, GrowSummary* summary,
+                          bool tips_only) {
   VB_RETURN_IF_ERROR(options.Validate());
   if (views.size() != rig.cameras.size()) {
     return absl::InvalidArgumentError(absl::StrCat("views: ", views.size(), " views for ",
@@ -386,7 +387,7 @@ absl::Status GrowCaneEnds(const std::vector<View2D>& views, const RigCalibration
     std::vector<OtherCane> others;
     for (size_t o = 0; o < canes->size(); ++o)
       if (o != c) others.push_back({&(*canes)[o], boxes[o]});
-    for (int side = 0; side < 2; ++side) {
+    for (int side = 0; side < (tips_only ? 1 : 2); ++side) {
       Polyline3 line = side == 0 ? (*canes)[c] : Reversed((*canes)[c]);
       ++summary->ends_tried;
       Stop stop = Stop::kCapped;

@@ -56,6 +56,9 @@ struct GrowOptions {
   double other_cane_m = 0.012;       // "alongside another cane": closer than this to it ...
   double along_angle_deg = 30.0;     // ... with directions within this angle
   double max_length_m = 0.15;        // longest growth of one end
+  // Where the pipeline runs the stage (reconstruct.h): on the assembled canes, both ends
+  // (false), or on the connected model's canes, tips only, before the joint refinement (true).
+  bool after_connection = false;
   // Growth that stops on failed evidence (unsupported, contradicted, a sharp turn) is cut back
   // by this much: its last points tend to have drifted off the cane before the evidence failed.
   double trim_m = 0.01;
@@ -80,12 +83,13 @@ struct GrowSummary {
   double added_length_m = 0.0;
 };
 
-// Grows both ends of every cane in `canes` (unoriented polylines, as AssembleCanes returns them)
+// Grows both ends (the last point only when `tips_only`) of every cane in `canes` (unoriented polylines, as AssembleCanes returns them)
 // in place, as described above; grown stretches are appended at the cane's own point spacing.
 // views[i] was seen by rig.cameras[i]. INVALID_ARGUMENT naming "views" if their count differs
 // from the rig's cameras, or the option's field if options are invalid.
 absl::Status GrowCaneEnds(const std::vector<View2D>& views, const RigCalibration& rig,
                           const WorkingVolume& volume, const GrowOptions& options,
-                          std::vector<Polyline3>* canes, GrowSummary* summary = nullptr);
+                          std::vector<Polyline3>* canes, GrowSummary* summary = nullptr,
+                          bool tips_only = false);
 
 }  // namespace vb::reconstruct

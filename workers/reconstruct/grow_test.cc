@@ -163,6 +163,20 @@ TEST(GrowCaneEnds, DoesNotRunAlongAnotherCane) {
   EXPECT_GT(canes[1].points.front().x(), cane.points[15].x() - 0.012);
 }
 
+TEST(GrowCaneEnds, GrowsOnlyTheTipWhenAsked) {
+  const RigCalibration rig = sim::MakeRig().value();
+  const Polyline3 cane = CurvedCane(-0.3, 0.1, 0.95, 0.3);
+  const std::vector<View2D> views = ViewsOf({cane}, rig);
+  const Polyline3 middle = Tail(Head(cane, 30), 10);  // points 10-29 of the cane
+  std::vector<Polyline3> both = {middle}, tip = {middle};
+  ASSERT_TRUE(GrowCaneEnds(views, rig, WorkingVolume{}, On(), &both).ok());
+  ASSERT_TRUE(GrowCaneEnds(views, rig, WorkingVolume{}, On(), &tip, nullptr, true).ok());
+  // Both ends grow by default; with tips_only the base stays where it was.
+  EXPECT_LT(both[0].points.front().x(), middle.points.front().x() - 0.03);
+  EXPECT_EQ(tip[0].points.front(), middle.points.front());
+  EXPECT_GT(tip[0].points.back().x(), middle.points.back().x() + 0.03);
+}
+
 TEST(GrowCaneEnds, LeavesTheCanesWhenDisabledAsByDefault) {
   const RigCalibration rig = sim::MakeRig().value();
   const Crossing scene;
