@@ -102,6 +102,8 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   // --extend on|off: the single-view extension of cane tips (step 4c); default as ExtendOptions.
   VB_ASSIGN_OR_RETURN(const bool extend,
                       flags.Bool("extend", reconstruct::ExtendOptions{}.enabled));
+  // --grow on|off: two-view growth of assembled cane ends (step 4d); default as GrowOptions.
+  VB_ASSIGN_OR_RETURN(const bool grow, flags.Bool("grow", reconstruct::GrowOptions{}.enabled));
   if (rig_refine != "off" && rig_refine != "canes" && rig_refine != "trellis")
     return absl::InvalidArgumentError("--rig-refine must be off, canes or trellis");
   if (input != "images" && input != "labels" && input != "truth")
@@ -128,6 +130,7 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   options.rig_refine.enabled = rig_refine != "off";
   options.rig_refine.use_trellis = rig_refine == "trellis";
   options.extend.enabled = extend;
+  options.grow.enabled = grow;
   const reconstruct::SegmenterModel& segmenter = reconstruct::BuiltinSegmenterModel();
 
   std::vector<ReconstructionMetrics> metrics;
@@ -271,6 +274,7 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   stage("correspondence_s", &reconstruct::StageTimings::correspondence_s);
   stage("rig_refine_s", &reconstruct::StageTimings::rig_refine_s);
   stage("assembly_s", &reconstruct::StageTimings::assembly_s);
+  stage("grow_s", &reconstruct::StageTimings::grow_s);
   stage("head_s", &reconstruct::StageTimings::head_s);
   stage("connect_s", &reconstruct::StageTimings::connect_s);
   stage("refine_s", &reconstruct::StageTimings::refine_s);

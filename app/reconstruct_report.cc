@@ -6,7 +6,7 @@ namespace vb::app {
 nlohmann::json TimingsToJson(const reconstruct::StageTimings& t) {
   return {{"segment_s", t.segment_s},       {"structure_s", t.structure_s},
           {"correspondence_s", t.correspondence_s}, {"rig_refine_s", t.rig_refine_s},
-          {"assembly_s", t.assembly_s},
+          {"assembly_s", t.assembly_s},     {"grow_s", t.grow_s},
           {"head_s", t.head_s},             {"connect_s", t.connect_s},
           {"refine_s", t.refine_s},         {"extend_s", t.extend_s},
           {"trellis_s", t.trellis_s},
@@ -30,6 +30,9 @@ nlohmann::json ReconstructReport(const reconstruct::ReconstructResult& result) {
       {"posts", result.model.posts.size()},
       {"pieces", result.pieces},
       {"assembled_canes", result.assembled_canes},
+      // Step 4d (grow.h): cane ends grown and the length added.
+      {"grown_ends", result.grow.ends_grown},
+      {"grown_length_m", result.grow.added_length_m},
       {"unattached_canes", result.connect.unattached},
       // The seen wood the model leaves out, carried for the planner (left_out_wood.h).
       {"obstacles", result.model.obstacles.size()},

@@ -116,6 +116,7 @@ absl::Status ReconstructOptions::Validate() const {
     }
   }
   VB_RETURN_IF_ERROR(assembly.Validate());
+  VB_RETURN_IF_ERROR(grow.Validate());
   VB_RETURN_IF_ERROR(head.Validate());
   VB_RETURN_IF_ERROR(connect.Validate());
   VB_RETURN_IF_ERROR(fit.Validate());
@@ -168,6 +169,13 @@ absl::StatusOr<ReconstructResult> ReconstructFromViews(const std::vector<View2D>
   result.timings.assembly_s = SecondsSince(t);
 
   t = std::chrono::steady_clock::now();
+  if (!options.grow.after_connection) {
+    VB_RETURN_IF_ERROR(
+        GrowCaneEnds(views, rig, options.volume, options.grow, &canes, &result.grow));
+  }
+  result.timings.grow_s = SecondsSince(t);
+
+  t = std::chrono::steady_clock::now();
   std::vector<Eigen::Vector3d> depth_hints;
   for (const Polyline3& cane : canes)
     depth_hints.insert(depth_hints.end(), cane.points.begin(), cane.points.end());
@@ -184,6 +192,16 @@ absl::StatusOr<ReconstructResult> ReconstructFromViews(const std::vector<View2D>
   VB_ASSIGN_OR_RETURN(result.model, ConnectCanes(canes, head.trunk, head.head, options.connect,
                                                  &result.connect, gap_support));
   result.timings.connect_s = SecondsSince(t);
+
+  if (options.grow.after_connection) {  // step 4d on the tree: tips only (bases are pinned)
+    t = std::chrono::steady_clock::now();
+    std::vector<Polyline3> lines;
+    for (const Cane& cane : result.model.canes) lines.push_back(cane.polyline);
+    VB_RETURN_IF_ERROR(GrowCaneEnds(views, rig, options.volume, options.grow, &lines,
+                                    &result.grow, /*tips_only=*/true));
+    for (size_t i = 0; i < lines.size(); ++i) result.model.canes[i].polyline = lines[i];
+    result.timings.grow_s += SecondsSince(t);
+  }
 
   if (options.refine && !result.model.canes.empty()) {
     t = std::chrono::steady_clock::now();

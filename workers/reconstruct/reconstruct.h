@@ -7,6 +7,8 @@
 //   3. correspondence across views, Gibbs sampling  6. connect canes into one tree (connect.h)
 //      and minimum expected loss (correspondence.h) 7. joint Ceres refinement (cane_fit.h)
 //   4. assemble 3D pieces into canes (cane_assembly.h) 8. wires and posts (trellis3d.h)
+//   4d. optionally (off by default) the assembled canes' ends grown through junctions on
+//       two-view evidence (grow.h), before 5
 //   7b. cane tips continued in one view (extend.h; on by default; "4c" in
 //      docs/reconstruction.md, which numbers by its sections), after 7
 //   9. the stretches of the canes given to step 6 that the model leaves out, as its obstacles
@@ -30,6 +32,7 @@
 #include "workers/reconstruct/correspondence.h"
 #include "workers/reconstruct/extend.h"
 #include "workers/reconstruct/fiducials.h"
+#include "workers/reconstruct/grow.h"
 #include "workers/reconstruct/head.h"
 #include "workers/reconstruct/left_out_wood.h"
 #include "workers/reconstruct/piece3d.h"
@@ -45,6 +48,7 @@ struct ReconstructOptions {
   Structure2DOptions structure;
   CorrespondenceOptions correspondence;
   AssemblyOptions assembly;
+  GrowOptions grow;                      // step 4d: assembled cane ends grown in >= 2 views (grow.h)
   HeadOptions head;
   ConnectOptions connect;
   FitOptions fit;
@@ -64,8 +68,9 @@ struct ReconstructOptions {
 
 // Wall-clock seconds per step (per-view steps: the wall time of all views together).
 struct StageTimings {
-  double segment_s = 0, structure_s = 0, correspondence_s = 0, assembly_s = 0, head_s = 0,
-         connect_s = 0, refine_s = 0, extend_s = 0, rig_refine_s = 0, trellis_s = 0, total_s = 0;
+  double segment_s = 0, structure_s = 0, correspondence_s = 0, assembly_s = 0, grow_s = 0,
+         head_s = 0, connect_s = 0, refine_s = 0, extend_s = 0, rig_refine_s = 0, trellis_s = 0,
+         total_s = 0;
 };
 
 struct ReconstructResult {
@@ -74,6 +79,7 @@ struct ReconstructResult {
   std::string empty_reason;      // why the model has no canes ("" if it has some)
   int pieces = 0;                // 3D pieces from correspondence
   int assembled_canes = 0;       // canes after assembly
+  GrowSummary grow;              // step 4d
   ConnectSummary connect;
   FitSummary fit;
   ExtendSummary extend;

@@ -1,0 +1,438 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "workers/reconstruct/grow.h"
+
+#include <algorithm>
+#include <cmath>
+#include <optional>
+#include <string>
+
+#include "absl/strings/str_cat.h"
+#include "core/status_macros.h"
+
+namespace vb::reconstruct {
+namespace {
+
+constexpr double kDegToRad = M_PI / 180.0;
+
+absl::Status Positive(double value, const char* field) {
+  if (!std::isfinite(value) || value <= 0) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("grow.", field, " must be finite and > 0, is ", value));
+  }
+  return absl::OkStatus();
+}
+
+// One view as the growth reads it: where a 3D point projects, how far that is from the
+// skeleton, and what the pixels around it are.
+class ViewProbe {
+ public:
+  ViewProbe(const View2D& view, const CameraCalibration& camera, int margin_px)
+      : view_(view), camera_(camera), margin_(margin_px),
+        has_distance_(view.centreline_distance_px.size() ==
+                      static_cast<size_t>(view.width) * view.height),
+        has_thick_(view.thick_mask.size() == static_cast<size_t>(view.width) * view.height),
+        has_classes_(view.classes.data.size() == static_cast<size_t>(view.width) * view.height) {}
+
+  // The pixel of p when it lies at least the margin inside the image.
+  std::optional<Eigen::Vector2d> Inside(const Eigen::Vector3d& p) const {
+    const std::optional<Eigen::Vector2d> uv = camera_.Project(p);
+    if (!uv || uv->x() < margin_ || uv->y() < margin_ || uv->x() > view_.width - 1 - margin_ ||
+        uv->y() > view_.height - 1 - margin_) {
+      return std::nullopt;
+    }
+    return uv;
+  }
+
+  // Distance to the skeleton at uv, bilinear between pixel centres (uv inside the image).
+  double Distance(const Eigen::Vector2d& uv) const {
+    if (!has_distance_) return kCentrelineDistanceCapPx;
+    const int x0 = std::clamp(static_cast<int>(std::floor(uv.x())), 0, view_.width - 2);
+    const int y0 = std::clamp(static_cast<int>(std::floor(uv.y())), 0, view_.height - 2);
+    const double fx = std::clamp(uv.x() - x0, 0.0, 1.0), fy = std::clamp(uv.y() - y0, 0.0, 1.0);
+    const auto at = [&](int x, int y) {
+      return static_cast<double>(view_.centreline_distance_px[static_cast<size_t>(y) * view_.width + x]);
+    };
+    return (1 - fy) * ((1 - fx) * at(x0, y0) + fx * at(x0 + 1, y0)) +
+           fy * ((1 - fx) * at(x0, y0 + 1) + fx * at(x0 + 1, y0 + 1));
+  }
+
+  bool Thick(const Eigen::Vector2d& uv) const {
+    if (!has_thick_) return false;
+    const int x = static_cast<int>(std::lround(uv.x())), y = static_cast<int>(std::lround(uv.y()));
+    return view_.thick_mask[static_cast<size_t>(y) * view_.width + x] != 0;
+  }
+
+  // Only background within the point's projected radius (at least one pixel): this view should
+  // see wood there and does not. Wires and posts are in front of canes, so they do not contradict.
+  bool Background(const Eigen::Vector2d& uv, const Eigen::Vector3d& p, double radius_m) const {
+    if (!has_classes_) return false;
+    const double depth = (camera_.rotation_camera_from_platform * p +
+                          camera_.translation_camera_from_platform).z();
+    const double radius_px =
+        std::max(1.0, camera_.camera_matrix(0, 0) * radius_m / std::max(depth, 1e-6));
+    const int r = static_cast<int>(std::ceil(radius_px));
+    const int cx = static_cast<int>(std::lround(uv.x())), cy = static_cast<int>(std::lround(uv.y()));
+    for (int y = std::max(0, cy - r); y <= std::min(view_.height - 1, cy + r); ++y) {
+      for (int x = std::max(0, cx - r); x <= std::min(view_.width - 1, cx + r); ++x) {
+        if ((x - uv.x()) * (x - uv.x()) + (y - uv.y()) * (y - uv.y()) >
+            (radius_px + 0.5) * (radius_px + 0.5)) {
+          continue;
+        }
+        if (view_.classes.at(x, y) != PixelClass::kBackground) return false;
+      }
+    }
+    return true;
+  }
+
+  Eigen::Vector3d Centre() const { return camera_.CentreInPlatform(); }
+
+ private:
+  const View2D& view_;
+  const CameraCalibration& camera_;
+  int margin_;
+  bool has_distance_, has_thick_, has_classes_;
+};
+
+// The other canes, for the "alongside" test, each with a box grown by what growth can add.
+struct OtherCane {
+  const Polyline3* line;
+  Eigen::AlignedBox3d box;
+};
+
+// Mean radius over the last span_m of the line (its end's thickness, less noisy than one point).
+double EndRadius(const Polyline3& line, double span_m) {
+  const std::vector<double> arc = line.ArcLengths();
+  double sum = 0;
+  int count = 0;
+  for (size_t i = 0; i < line.points.size(); ++i) {
+    if (arc[i] >= arc.back() - span_m) {
+      sum += line.radii[i];
+      ++count;
+    }
+  }
+  return count > 0 ? sum / count : line.radii.back();
+}
+
+enum class Stop { kEndUnsupported, kUnsupported, kContradicted, kAlongside, kThick, kTurned, kOutside, kCapped };
+
+class Grower {
+ public:
+  Grower(const std::vector<View2D>& views, const RigCalibration& rig, const WorkingVolume& volume,
+         const GrowOptions& options)
+      : volume_(volume), options_(options) {
+    for (size_t i = 0; i < views.size(); ++i)
+      probes_.emplace_back(views[i], rig.cameras[i], options.image_margin_px);
+  }
+
+  // Grows the end at line.points.back(); returns the grown points (not including the end) and
+  // why growth stopped. `others` excludes `line` itself.
+  std::vector<Eigen::Vector3d> GrowBack(const Polyline3& line, const std::vector<OtherCane>& others,
+                                        Stop* stop) const {
+    std::vector<Eigen::Vector3d> curve = line.points;
+    const double length = line.Length();
+    const std::vector<double> arc = line.ArcLengths();
+    const Eigen::Vector3d end = line.points.back();
+    const Eigen::Vector3d start_tangent =
+        (end - line.PointAt(std::max(0.0, length - options_.tangent_span_m), arc)).normalized();
+    const double radius = EndRadius(line, options_.tangent_span_m);
+
+    std::vector<Eigen::Vector3d> grown;
+    if (options_.require_end_support && !EndSupported(end)) {
+      *stop = Stop::kEndUnsupported;
+      return grown;
+    }
+    const double cos_turn = std::cos(options_.max_turn_deg * kDegToRad);
+    const int max_steps = static_cast<int>(std::floor(options_.max_length_m / options_.step_m));
+    *stop = Stop::kCapped;
+    for (int k = 0; k < max_steps; ++k) {
+      const Eigen::Vector3d tangent = Tangent(curve);
+      const Eigen::Vector3d predicted = curve.back() + options_.step_m * tangent;
+      if (!volume_.Contains(predicted)) {
+        *stop = Stop::kOutside;
+        break;
+      }
+      const Eigen::Vector3d p = Correct(predicted, tangent);
+      if (!volume_.Contains(p)) {
+        *stop = Stop::kOutside;
+        break;
+      }
+      const Eigen::Vector3d step = (p - curve.back()).normalized();
+      if (step.dot(start_tangent) < cos_turn) {
+        *stop = Stop::kTurned;
+        break;
+      }
+      if (const std::optional<Stop> s = Check(p, step, radius); s) {
+        *stop = *s;
+        break;
+      }
+      if (Alongside(p, step, others)) {
+        *stop = Stop::kAlongside;
+        break;
+      }
+      curve.push_back(p);
+      grown.push_back(p);
+    }
+    return grown;
+  }
+
+ private:
+  // Unit chord over the last tangent_span_m of the curve.
+  Eigen::Vector3d Tangent(const std::vector<Eigen::Vector3d>& curve) const {
+    const Eigen::Vector3d& end = curve.back();
+    double s = 0;
+    for (size_t i = curve.size() - 1; i > 0; --i) {
+      s += (curve[i] - curve[i - 1]).norm();
+      if (s >= options_.tangent_span_m || i == 1) return (end - curve[i - 1]).normalized();
+    }
+    return Eigen::Vector3d::UnitX();
+  }
+
+  double Cost(const Eigen::Vector3d& p) const {
+    const double cap = options_.truncate_px * options_.truncate_px;
+    double cost = 0;
+    for (const ViewProbe& probe : probes_) {
+      const std::optional<Eigen::Vector2d> uv = probe.Inside(p);
+      const double d = uv ? probe.Distance(*uv) : options_.truncate_px;
+      cost += std::min(d * d, cap);
+    }
+    return cost;
+  }
+
+  // The point near `predicted`, on the plane normal to the tangent, that best fits the skeletons
+  // of all views: a coarse grid of offsets, then a 4x finer one around the best.
+  Eigen::Vector3d Correct(const Eigen::Vector3d& predicted, const Eigen::Vector3d& tangent) const {
+    const Eigen::Vector3d u = tangent.unitOrthogonal();
+    const Eigen::Vector3d w = tangent.cross(u).normalized();
+    const double prior = options_.prior_px_per_mm * 1000.0;  // px per metre of offset
+    double best_a = 0, best_b = 0, best = Cost(predicted);
+    const auto search = [&](double centre_a, double centre_b, double grid, int half) {
+      double ba = centre_a, bb = centre_b;
+      for (int i = -half; i <= half; ++i) {
+        for (int j = -half; j <= half; ++j) {
+          const double a = centre_a + i * grid, b = centre_b + j * grid;
+          if (std::abs(a) > options_.max_offset_m + 1e-12 ||
+              std::abs(b) > options_.max_offset_m + 1e-12) {
+            continue;
+          }
+          const double c = Cost(predicted + a * u + b * w) + prior * prior * (a * a + b * b);
+          if (c < best) {
+            best = c;
+            ba = a;
+            bb = b;
+          }
+        }
+      }
+      best_a = ba;
+      best_b = bb;
+    };
+    const int half = static_cast<int>(std::lround(options_.max_offset_m / options_.offset_grid_m));
+    search(0, 0, options_.offset_grid_m, half);
+    search(best_a, best_b, options_.offset_grid_m / 4, 4);
+    return predicted + best_a * u + best_b * w;
+  }
+
+  bool AlongSkeleton(const ViewProbe& probe, const Eigen::Vector3d& p,
+                     const Eigen::Vector3d& step) const {
+    if (options_.support_along_px <= 0) return true;
+    for (const double sign : {-0.5, 0.5}) {
+      const std::optional<Eigen::Vector2d> uv = probe.Inside(p + sign * options_.step_m * step);
+      if (uv && probe.Distance(*uv) > options_.support_along_px) return false;
+    }
+    return true;
+  }
+
+  bool EndSupported(const Eigen::Vector3d& p) const {
+    int supports = 0;
+    for (const ViewProbe& probe : probes_) {
+      const std::optional<Eigen::Vector2d> uv = probe.Inside(p);
+      if (!uv) continue;
+      if (probe.Distance(*uv) > options_.support_px) return false;
+      ++supports;
+    }
+    return supports >= options_.min_support_views;
+  }
+
+  // Why p is not accepted, if it is not: the views' evidence at the corrected point.
+  std::optional<Stop> Check(const Eigen::Vector3d& p, const Eigen::Vector3d& step,
+                            double radius) const {
+    std::vector<int> supports;
+    for (size_t v = 0; v < probes_.size(); ++v) {
+      const std::optional<Eigen::Vector2d> uv = probes_[v].Inside(p);
+      if (!uv) continue;
+      if (probes_[v].Thick(*uv)) return Stop::kThick;
+      if (probes_[v].Distance(*uv) <= options_.support_px) {
+        if (AlongSkeleton(probes_[v], p, step)) supports.push_back(static_cast<int>(v));
+      } else if (probes_[v].Background(*uv, p, radius)) {
+        return Stop::kContradicted;
+      }
+    }
+    if (static_cast<int>(supports.size()) < options_.min_support_views) return Stop::kUnsupported;
+    if (supports.size() == 2) {
+      // Two views fix a point along the cane only if the cane crosses their epipolar planes.
+      const Eigen::Vector3d ca = probes_[supports[0]].Centre(), cb = probes_[supports[1]].Centre();
+      const Eigen::Vector3d normal = (cb - ca).cross(p - ca).normalized();
+      if (std::abs(normal.dot(step)) < std::sin(options_.min_epipolar_angle_deg * kDegToRad))
+        return Stop::kUnsupported;
+    }
+    return std::nullopt;
+  }
+
+  bool Alongside(const Eigen::Vector3d& p, const Eigen::Vector3d& step,
+                 const std::vector<OtherCane>& others) const {
+    const double cos_along = std::cos(options_.along_angle_deg * kDegToRad);
+    for (const OtherCane& other : others) {
+      if (!other.box.contains(p)) continue;
+      const std::vector<Eigen::Vector3d>& q = other.line->points;
+      for (size_t i = 0; i + 1 < q.size(); ++i) {
+        double t = 0;
+        if (PointSegmentDistance(p, q[i], q[i + 1], &t) > options_.other_cane_m) continue;
+        const Eigen::Vector3d dir = (q[i + 1] - q[i]).normalized();
+        if (std::abs(dir.dot(step)) >= cos_along) return true;
+      }
+    }
+    return false;
+  }
+
+  const WorkingVolume& volume_;
+  const GrowOptions& options_;
+  std::vector<ViewProbe> probes_;
+};
+
+Polyline3 Reversed(const Polyline3& line) {
+  Polyline3 out = line;
+  std::reverse(out.points.begin(), out.points.end());
+  std::reverse(out.radii.begin(), out.radii.end());
+  return out;
+}
+
+}  // namespace
+
+absl::Status GrowOptions::Validate() const {
+  for (const auto& [value, field] : {std::pair{step_m, "step_m"},
+                                     {tangent_span_m, "tangent_span_m"},
+                                     {max_offset_m, "max_offset_m"},
+                                     {offset_grid_m, "offset_grid_m"},
+                                     {truncate_px, "truncate_px"},
+                                     {support_px, "support_px"},
+                                     {max_length_m, "max_length_m"},
+                                     {other_cane_m, "other_cane_m"}}) {
+    if (absl::Status s = Positive(value, field); !s.ok()) return s;
+  }
+  for (const auto& [value, field] : {std::pair{min_cane_length_m, "min_cane_length_m"},
+                                     {trim_m, "trim_m"},
+                                     {support_along_px, "support_along_px"},
+                                     {prior_px_per_mm, "prior_px_per_mm"},
+                                     {min_length_m, "min_length_m"},
+                                     {min_epipolar_angle_deg, "min_epipolar_angle_deg"}}) {
+    if (!std::isfinite(value) || value < 0) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("grow.", field, " must be finite and >= 0, is ", value));
+    }
+  }
+  for (const auto& [value, field] : {std::pair{max_turn_deg, "max_turn_deg"},
+                                     {along_angle_deg, "along_angle_deg"}}) {
+    if (!std::isfinite(value) || value <= 0 || value >= 90) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("grow.", field, " must be in (0, 90) degrees, is ", value));
+    }
+  }
+  if (min_epipolar_angle_deg >= 90) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "grow.min_epipolar_angle_deg must be < 90 degrees, is ", min_epipolar_angle_deg));
+  }
+  if (offset_grid_m > max_offset_m) {
+    return absl::InvalidArgumentError(absl::StrCat("grow.offset_grid_m (", offset_grid_m,
+                                                   ") must not exceed max_offset_m (",
+                                                   max_offset_m, ")"));
+  }
+  if (min_support_views < 2) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("grow.min_support_views must be >= 2, is ", min_support_views));
+  }
+  if (image_margin_px < 0) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("grow.image_margin_px must be >= 0, is ", image_margin_px));
+  }
+  return absl::OkStatus();
+}
+
+absl::Status GrowCaneEnds(const std::vector<View2D>& views, const RigCalibration& rig,
+                          const WorkingVolume& volume, const GrowOptions& options,
+                          std::vector<Polyline3>* canes, GrowSummary* summary,
+                          bool tips_only) {
+  VB_RETURN_IF_ERROR(options.Validate());
+  if (views.size() != rig.cameras.size()) {
+    return absl::InvalidArgumentError(absl::StrCat("views: ", views.size(), " views for ",
+                                                   rig.cameras.size(), " cameras"));
+  }
+  GrowSummary local;
+  if (summary == nullptr) summary = &local;
+  *summary = GrowSummary();
+  if (!options.enabled || canes == nullptr) return absl::OkStatus();
+
+  const Grower grower(views, rig, volume, options);
+  const double reach = options.max_length_m + options.other_cane_m;
+  std::vector<Eigen::AlignedBox3d> boxes;
+  for (const Polyline3& cane : *canes) {
+    Eigen::AlignedBox3d box;
+    for (const Eigen::Vector3d& p : cane.points) box.extend(p);
+    box.min().array() -= reach;
+    box.max().array() += reach;
+    boxes.push_back(box);
+  }
+
+  for (size_t c = 0; c < canes->size(); ++c) {
+    if ((*canes)[c].points.size() < 2 || (*canes)[c].Length() < options.min_cane_length_m)
+      continue;
+    std::vector<OtherCane> others;
+    for (size_t o = 0; o < canes->size(); ++o)
+      if (o != c) others.push_back({&(*canes)[o], boxes[o]});
+    for (int side = 0; side < (tips_only ? 1 : 2); ++side) {
+      Polyline3 line = side == 0 ? (*canes)[c] : Reversed((*canes)[c]);
+      ++summary->ends_tried;
+      Stop stop = Stop::kCapped;
+      const std::vector<Eigen::Vector3d> grown = grower.GrowBack(line, others, &stop);
+      switch (stop) {
+        case Stop::kEndUnsupported: ++summary->end_unsupported; break;
+        case Stop::kUnsupported: ++summary->unsupported; break;
+        case Stop::kContradicted: ++summary->contradicted; break;
+        case Stop::kAlongside: ++summary->alongside; break;
+        case Stop::kThick: ++summary->thick; break;
+        case Stop::kTurned: ++summary->turned; break;
+        case Stop::kOutside: ++summary->outside; break;
+        case Stop::kCapped: ++summary->capped; break;
+      }
+      std::vector<Eigen::Vector3d> kept = grown;
+      if (stop == Stop::kUnsupported || stop == Stop::kContradicted || stop == Stop::kTurned) {
+        double cut = 0;
+        while (!kept.empty() && cut < options.trim_m - 1e-12) {
+          const Eigen::Vector3d& before =
+              kept.size() >= 2 ? kept[kept.size() - 2] : line.points.back();
+          cut += (kept.back() - before).norm();
+          kept.pop_back();
+        }
+      }
+      if (kept.empty()) continue;
+      Polyline3 tail;
+      tail.points.push_back(line.points.back());
+      for (const Eigen::Vector3d& p : kept) tail.points.push_back(p);
+      tail.radii.assign(tail.points.size(), EndRadius(line, options.tangent_span_m));
+      const double added = tail.Length();
+      if (added < options.min_length_m) continue;
+      // Appended at the cane's own spacing, so later stages see the points they expect.
+      const double spacing =
+          std::max(options.step_m, line.Length() / static_cast<double>(line.points.size() - 1));
+      const Polyline3 resampled = tail.Resampled(spacing);
+      for (size_t i = 1; i < resampled.points.size(); ++i) {
+        line.points.push_back(resampled.points[i]);
+        line.radii.push_back(resampled.radii[i]);
+      }
+      ++summary->ends_grown;
+      summary->added_length_m += added;
+      (*canes)[c] = side == 0 ? line : Reversed(line);
+    }
+  }
+  return absl::OkStatus();
+}
+
+}  // namespace vb::reconstruct

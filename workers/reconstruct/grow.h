@@ -1,0 +1,95 @@
+// SPDX-License-Identifier: Apache-2.0
+// Two-view growth of cane ends (docs/reconstruction.md, step 4d; beyond the paper). The 2D
+// skeleton breaks every cane at junctions and crossings, and correspondence only reconstructs
+// what a matched pair of 2D segments covers: the short remainder of a cane beyond a junction
+// often gets no 3D piece of its own, so the assembled cane stops at the junction. This stage
+// steps each end of each assembled cane outward in 3D along its continued tangent and corrects
+// every predicted point by triangulating it against the skeletons of all views at once: it
+// minimises, over offsets perpendicular to the step, the sum over views of the truncated squared
+// distance of the point's projection to the nearest skeleton point (View2D::centreline_distance_px,
+// which has no breaks at junctions), plus a small pull toward the prediction. A step is accepted
+// when at least `min_support_views` views hold the corrected point within `support_px` of their
+// skeleton and, when only two do, the cane's tangent is not nearly inside their epipolar plane
+// (where the pair cannot fix the depth). Growth of an end stops at the first step that fails
+// that, or where a view that should see the point (inside its image by `image_margin_px`) shows
+// only background around it (a contradiction), where the point lies in a view's thick (head or
+// trunk) region, leaves the working volume, turns more than `max_turn_deg` from the end's
+// tangent, runs alongside another cane (within `other_cane_m`, directions within
+// `along_angle_deg`: that wood is reconstructed already, or the path has switched canes), or
+// after `max_length_m`. Grown points take the end's radius.
+// Thread-safe (pure function of its inputs).
+#pragma once
+
+#include <vector>
+
+#include "absl/status/status.h"
+#include "core/calibration.h"
+#include "core/geometry.h"
+#include "workers/reconstruct/piece3d.h"
+#include "workers/reconstruct/view2d.h"
+
+namespace vb::reconstruct {
+
+struct GrowOptions {
+  // Run the stage. Off by default: on tuning stops it adds recall and connectivity but costs
+  // precision (docs/reconstruction.md, step 4d); off, the canes are left as they are.
+  bool enabled = false;
+  double step_m = 0.005;             // 3D step along the continued tangent
+  double tangent_span_m = 0.03;      // the tangent is the chord over this much of the end
+  double min_cane_length_m = 0.04;   // shorter canes are not grown
+  double max_offset_m = 0.002;       // largest correction of a predicted point, per axis
+  double offset_grid_m = 0.0005;     // coarse grid of the correction (refined 4x finer)
+  double prior_px_per_mm = 0.0;      // pull toward the prediction: px of cost per mm of offset
+  double truncate_px = 4.0;          // a view's squared distance is capped at this squared
+  double support_px = 2.0;           // a view supports a point within this of its skeleton
+  int min_support_views = 2;         // views that must support each accepted point
+  // The end itself must lie within support_px of the skeleton of every view that sees it (and
+  // of at least min_support_views): an end the views disagree on is misplaced, and growing it
+  // continues its error.
+  bool require_end_support = true;
+  // A view supports a point only if the skeleton also runs along the step there: the points
+  // half a step before and after project within support_along_px of it too (a skeleton that
+  // crosses the step's projection, or passes by chance, does not support it). 0: off.
+  double support_along_px = 3.0;
+  double min_epipolar_angle_deg = 15.0;  // two supports only: tangent vs their epipolar plane
+  double max_turn_deg = 35.0;        // largest turn of the grown stretch from the end's tangent
+  double other_cane_m = 0.012;       // "alongside another cane": closer than this to it ...
+  double along_angle_deg = 30.0;     // ... with directions within this angle
+  double max_length_m = 0.15;        // longest growth of one end
+  // Where the pipeline runs the stage (reconstruct.h): on the assembled canes, both ends
+  // (false), or on the connected model's canes, tips only, before the joint refinement (true).
+  bool after_connection = false;
+  // Growth that stops on failed evidence (unsupported, contradicted, a sharp turn) is cut back
+  // by this much: its last points tend to have drifted off the cane before the evidence failed.
+  double trim_m = 0.01;
+  double min_length_m = 0.01;        // shorter growths are dropped
+  int image_margin_px = 3;           // a view must see a point this far inside its image
+
+  // INVALID_ARGUMENT naming the field for non-finite or out-of-range values.
+  absl::Status Validate() const;
+};
+
+struct GrowSummary {
+  int ends_tried = 0;      // cane ends looked at
+  int ends_grown = 0;      // ends given at least min_length_m
+  int contradicted = 0;    // growths stopped by a view's background
+  int unsupported = 0;     // ... by fewer than min_support_views supporting views
+  int end_unsupported = 0; // ends not grown because the views disagree on the end itself
+  int alongside = 0;       // ... by running alongside another cane
+  int thick = 0;           // ... by the thick (head/trunk) region
+  int turned = 0;          // ... by a sharp turn
+  int outside = 0;         // ... by leaving the working volume
+  int capped = 0;          // ... by max_length_m
+  double added_length_m = 0.0;
+};
+
+// Grows both ends (the last point only when `tips_only`) of every cane in `canes` (unoriented polylines, as AssembleCanes returns them)
+// in place, as described above; grown stretches are appended at the cane's own point spacing.
+// views[i] was seen by rig.cameras[i]. INVALID_ARGUMENT naming "views" if their count differs
+// from the rig's cameras, or the option's field if options are invalid.
+absl::Status GrowCaneEnds(const std::vector<View2D>& views, const RigCalibration& rig,
+                          const WorkingVolume& volume, const GrowOptions& options,
+                          std::vector<Polyline3>* canes, GrowSummary* summary = nullptr,
+                          bool tips_only = false);
+
+}  // namespace vb::reconstruct

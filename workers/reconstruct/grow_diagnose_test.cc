@@ -1,0 +1,255 @@
+// SPDX-License-Identifier: Apache-2.0
+// Diagnosis tool, not a test: what the two-view growth of cane ends (grow.h) adds on rendered
+// stops (VB_SEED, VB_STOPS, VB_INPUT as ReportStopsFromEnv; images by default). Run with
+// --gtest_also_run_disabled_tests --gtest_filter='Grow.DISABLED_Report'. Tuning seeds only
+// (1100-1999).
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <vector>
+
+#include "core/geometry.h"
+#include "core/model_metrics.h"
+#include "gtest/gtest.h"
+#include "workers/reconstruct/cane_assembly.h"
+#include "workers/reconstruct/correspondence_test_util.h"
+#include "workers/reconstruct/grow.h"
+#include "workers/reconstruct/reconstruct.h"
+
+namespace vb::reconstruct {
+namespace {
+
+double DistanceToCanes(const Eigen::Vector3d& p, const std::vector<Cane>& canes) {
+  double best = 1e9;
+  for (const Cane& c : canes) {
+    const std::vector<Eigen::Vector3d>& q = c.polyline.points;
+    for (size_t i = 0; i + 1 < q.size(); ++i) {
+      double t = 0;
+      best = std::min(best, PointSegmentDistance(p, q[i], q[i + 1], &t));
+    }
+  }
+  return best;
+}
+
+double MeanSe(const std::vector<double>& v, double* se) {
+  double mean = 0;
+  for (double x : v) mean += x;
+  mean /= std::max<size_t>(1, v.size());
+  double var = 0;
+  for (double x : v) var += (x - mean) * (x - mean);
+  *se = v.size() > 1 ? std::sqrt(var / (v.size() - 1) / v.size()) : 0.0;
+  return mean;
+}
+
+GrowOptions OptionsFromEnv() {
+  GrowOptions o;
+  const auto get = [](const char* name, double* field) {
+    if (const char* text = std::getenv(name)) *field = std::atof(text);
+  };
+  get("VB_GROW_SUPPORT_PX", &o.support_px);
+  get("VB_GROW_LEN", &o.max_length_m);
+  get("VB_GROW_EPI", &o.min_epipolar_angle_deg);
+  get("VB_GROW_TURN", &o.max_turn_deg);
+  get("VB_GROW_OTHER", &o.other_cane_m);
+  get("VB_GROW_PRIOR", &o.prior_px_per_mm);
+  get("VB_GROW_OFFSET", &o.max_offset_m);
+  get("VB_GROW_MIN_LEN", &o.min_length_m);
+  get("VB_GROW_MIN_CANE", &o.min_cane_length_m);
+  get("VB_GROW_ALONG_PX", &o.support_along_px);
+  get("VB_GROW_TRIM", &o.trim_m);
+  if (const char* v = std::getenv("VB_GROW_VIEWS")) o.min_support_views = std::atoi(v);
+  if (const char* v = std::getenv("VB_GROW_END")) o.require_end_support = std::atoi(v) != 0;
+  return o;
+}
+
+// Per stop: the assembled canes (as the pipeline gives them to step 4d), grown with the options
+// from the environment: the added length and its share within 10 mm of drawn wood (this vine's
+// or a neighbour's: connect sorts them; the metrics' tolerance), split by whether the end it grows from is itself within 10 mm; then the
+// whole pipeline with and without the stage: recall, precision and connectivity, their paired
+// change (mean +- standard error over stops), and the stage's time.
+TEST(Grow, DISABLED_Report) {
+  const auto [first, count, images, fiducials] = ReportStopsFromEnv(1300, 10, true);
+  const GrowOptions grow = OptionsFromEnv();
+  ASSERT_TRUE(grow.Validate().ok());
+  ReconstructOptions off;
+  off.grow.enabled = false;
+  ReconstructOptions on;
+  on.grow = grow;
+  on.grow.enabled = true;
+  double wrong_near_head = 0, wrong_10_20 = 0, end_stretch = 0, end_stretch_right = 0;
+  double by_distance[4] = {}, by_distance_right[4] = {};
+  double by_views[2] = {}, by_views_right[2] = {}, by_length[3] = {}, by_length_right[3] = {};
+  double added = 0, right = 0, added_from_wrong_end = 0, right_from_wrong_end = 0, time = 0;
+  int ends = 0, grown_ends = 0;
+  GrowSummary totals;
+  std::vector<double> d_recall, d_precision, d_connectivity;
+  double recall0 = 0, precision0 = 0, connectivity0 = 0;
+  for (int k = 0; k < count; ++k) {
+    const SimulatedStop stop = MakeRenderedStop(first + k, images, fiducials);
+    ASSERT_FALSE(stop.views.empty());
+    const VineModel& truth = stop.scene.vine;
+    // Growth is right where it follows wood, this vine's or a neighbour's (connect sorts them).
+    const VineModel& drawn = stop.drawn;
+    const auto matched = MatchWithRigRefinement(stop.views, stop.rig, off, Deadline::Infinite());
+    ASSERT_TRUE(matched.ok()) << matched.status();
+    auto canes = AssembleCanes(matched->pieces, off.assembly, Deadline::Infinite());
+    ASSERT_TRUE(canes.ok());
+    std::erase_if(*canes, [&](const Polyline3& c) { return off.volume.MostlyOutside(c); });
+    std::vector<Polyline3> grown = *canes;
+    GrowSummary summary;
+    const auto t0 = std::chrono::steady_clock::now();
+    ASSERT_TRUE(GrowCaneEnds(stop.views, matched->rig, off.volume, on.grow, &grown, &summary).ok());
+    time += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    ends += summary.ends_tried;
+    grown_ends += summary.ends_grown;
+    totals.contradicted += summary.contradicted;
+    totals.unsupported += summary.unsupported;
+    totals.end_unsupported += summary.end_unsupported;
+    totals.alongside += summary.alongside;
+    totals.thick += summary.thick;
+    totals.turned += summary.turned;
+    totals.outside += summary.outside;
+    totals.capped += summary.capped;
+    const double added_before = added, right_before = right;
+    for (size_t c = 0; c < grown.size(); ++c) {
+      const Polyline3& before = (*canes)[c];
+      const Polyline3& after = grown[c];
+      // The original points are kept as a contiguous run; what lies outside it was added.
+      size_t offset = 0;
+      while (offset < after.points.size() && after.points[offset] != before.points.front())
+        ++offset;
+      ASSERT_LT(offset, after.points.size());
+      for (int side = 0; side < 2; ++side) {
+        const size_t lo = side == 0 ? 0 : offset + before.points.size() - 1;
+        const size_t hi = side == 0 ? offset : after.points.size() - 1;
+        if (hi <= lo) continue;
+        const Eigen::Vector3d& end = side == 0 ? before.points.front() : before.points.back();
+        const bool end_right = DistanceToCanes(end, drawn.canes) <= 0.010;
+        int seeing = 0;
+        for (const CameraCalibration& camera : matched->rig.cameras) {
+          const auto uv = camera.Project(end);
+          seeing += uv && camera.InImage(*uv);
+        }
+        const int sv = std::clamp(seeing, 2, 3) - 2;
+        const double cane_length = before.Length();
+        const int lb = cane_length < 0.1 ? 0 : cane_length < 0.2 ? 1 : 2;
+        // The grown end's own last 2 cm, for comparison.
+        {
+          const std::vector<double> arc = before.ArcLengths();
+          for (size_t i = 0; i + 1 < before.points.size(); ++i) {
+            const double from_end = side == 0 ? arc[i] : arc.back() - arc[i + 1];
+            if (from_end >= 0.02) continue;
+            const double step = (before.points[i + 1] - before.points[i]).norm();
+            const bool ok =
+                DistanceToCanes(0.5 * (before.points[i] + before.points[i + 1]), drawn.canes) <= 0.010;
+            end_stretch += step;
+            end_stretch_right += ok * step;
+          }
+        }
+        const bool verbose = std::getenv("VB_VERBOSE") != nullptr;
+        if (verbose) {
+          std::printf("GROW stop %llu cane %zu side %d len %.3f end %.1f mm:",
+                      static_cast<unsigned long long>(first + k), c, side, before.Length(),
+                      1000 * DistanceToCanes(end, drawn.canes));
+        }
+        // Walk from the original end outward, to bucket by the distance grown.
+        double along = 0;
+        for (size_t k2 = 0; k2 < hi - lo; ++k2) {
+          const size_t i = side == 0 ? hi - 1 - k2 : lo + k2;
+          const double step = (after.points[i + 1] - after.points[i]).norm();
+          const Eigen::Vector3d mid = 0.5 * (after.points[i + 1] + after.points[i]);
+          const bool ok = DistanceToCanes(mid, drawn.canes) <= 0.010;
+          if (verbose) std::printf(" %.0f", 1000 * DistanceToCanes(mid, drawn.canes));
+          added += step;
+          right += ok * step;
+          const int bucket = along < 0.02 ? 0 : along < 0.04 ? 1 : along < 0.08 ? 2 : 3;
+          along += step;
+          by_distance[bucket] += step;
+          by_views[sv] += step;
+          by_views_right[sv] += ok * step;
+          by_length[lb] += step;
+          by_length_right[lb] += ok * step;
+          by_distance_right[bucket] += ok * step;
+          if (!ok) {
+            double head = 1e9;
+            for (const Sphere& sp : drawn.head.spheres)
+              head = std::min(head, (mid - sp.center).norm() - sp.radius);
+            const double d = DistanceToCanes(mid, drawn.canes);
+            wrong_near_head += (head < 0.03) * step;
+            wrong_10_20 += (d < 0.02) * step;
+          }
+          if (!end_right) {
+            added_from_wrong_end += step;
+            right_from_wrong_end += ok * step;
+          }
+        }
+        if (verbose) std::printf("\n");
+      }
+    }
+    if (std::getenv("VB_GROW_QUICK") != nullptr) {
+      std::printf("stop %llu: added %.3f m (right %.2f)\n", static_cast<unsigned long long>(first + k),
+                  added - added_before,
+                  (right - right_before) / std::max(added - added_before, 1e-9));
+      d_recall.push_back(0);
+      d_precision.push_back(0);
+      d_connectivity.push_back(0);
+      continue;
+    }
+    const auto a = ReconstructFromViews(stop.views, stop.rig, off, Deadline::Infinite());
+    const auto b = ReconstructFromViews(stop.views, stop.rig, on, Deadline::Infinite());
+    ASSERT_TRUE(a.ok() && b.ok());
+    const auto ma = EvaluateReconstruction(a->model, truth);
+    const auto mb = EvaluateReconstruction(b->model, truth);
+    ASSERT_TRUE(ma.ok() && mb.ok());
+    recall0 += ma->cane_recall;
+    precision0 += ma->cane_precision;
+    connectivity0 += ma->connectivity;
+    d_recall.push_back(mb->cane_recall - ma->cane_recall);
+    d_precision.push_back(mb->cane_precision - ma->cane_precision);
+    d_connectivity.push_back(mb->connectivity - ma->connectivity);
+    std::printf("stop %llu: added %.3f m (right %.2f), recall %+.4f precision %+.4f "
+                "connectivity %+.4f\n",
+                static_cast<unsigned long long>(first + k), added - added_before,
+                (right - right_before) / std::max(added - added_before, 1e-9), d_recall.back(), d_precision.back(), d_connectivity.back());
+  }
+  double se_r = 0, se_p = 0, se_c = 0;
+  const double dr = MeanSe(d_recall, &se_r), dp = MeanSe(d_precision, &se_p),
+               dc = MeanSe(d_connectivity, &se_c);
+  std::printf("stops %llu-%llu (%s): ends %d grown %d; end unsupported %d; stopped: unsupported %d contradicted %d "
+              "alongside %d thick %d turned %d outside %d capped %d\n",
+              static_cast<unsigned long long>(first),
+              static_cast<unsigned long long>(first + count - 1), images ? "images" : "views",
+              ends, grown_ends, totals.end_unsupported, totals.unsupported, totals.contradicted, totals.alongside,
+              totals.thick, totals.turned, totals.outside, totals.capped);
+  std::printf("added %.3f m per stop, right %.3f; from ends already > 10 mm off: %.3f m per stop, "
+              "right %.3f; stage %.4f s per stop\n",
+              added / count, right / std::max(added, 1e-9), added_from_wrong_end / count,
+              right_from_wrong_end / std::max(added_from_wrong_end, 1e-9), time / count);
+  std::printf("wrong within 3 cm of the head %.3f m per stop, 10-20 mm from wood %.3f m per stop\n",
+              wrong_near_head / count, wrong_10_20 / count);
+  std::printf("by distance grown 0-2 / 2-4 / 4-8 / 8+ cm: %.3f (%.2f) %.3f (%.2f) %.3f (%.2f) "
+              "%.3f (%.2f) m per stop (right)\n",
+              by_distance[0] / count, by_distance_right[0] / std::max(by_distance[0], 1e-9),
+              by_distance[1] / count, by_distance_right[1] / std::max(by_distance[1], 1e-9),
+              by_distance[2] / count, by_distance_right[2] / std::max(by_distance[2], 1e-9),
+              by_distance[3] / count, by_distance_right[3] / std::max(by_distance[3], 1e-9));
+  std::printf("end seen by 2 / 3 views: %.3f (%.2f) %.3f (%.2f); cane < 10 / 10-20 / 20+ cm: "
+              "%.3f (%.2f) %.3f (%.2f) %.3f (%.2f)\n",
+              by_views[0] / count, by_views_right[0] / std::max(by_views[0], 1e-9),
+              by_views[1] / count, by_views_right[1] / std::max(by_views[1], 1e-9),
+              by_length[0] / count, by_length_right[0] / std::max(by_length[0], 1e-9),
+              by_length[1] / count, by_length_right[1] / std::max(by_length[1], 1e-9),
+              by_length[2] / count, by_length_right[2] / std::max(by_length[2], 1e-9));
+  std::printf("the grown ends' own last 2 cm: %.3f m per stop, right %.2f\n", end_stretch / count,
+              end_stretch_right / std::max(end_stretch, 1e-9));
+  std::printf("without: recall %.4f precision %.4f connectivity %.4f\n", recall0 / count,
+              precision0 / count, connectivity0 / count);
+  std::printf("with - without: recall %+.4f +- %.4f, precision %+.4f +- %.4f, connectivity "
+              "%+.4f +- %.4f\n",
+              dr, se_r, dp, se_p, dc, se_c);
+}
+
+}  // namespace
+}  // namespace vb::reconstruct

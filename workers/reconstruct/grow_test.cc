@@ -1,0 +1,217 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "workers/reconstruct/grow.h"
+
+#include <cmath>
+
+#include "core/geometry.h"
+#include "core/vine_model.h"
+#include "gmock/gmock.h"
+#include "gtest/gtest.h"
+#include "sim/rig.h"
+#include "workers/reconstruct/synthetic_views.h"
+
+namespace vb::reconstruct {
+namespace {
+
+// A smooth cane near the vine plane (y ~ 0.8 m), in front of all three cameras, from x0 to x1
+// along the row, rising and bending a little out of the plane, every 1 cm.
+Polyline3 CurvedCane(double x0, double x1, double z0, double slope) {
+  Polyline3 line;
+  for (double x = x0; x <= x1 + 1e-9; x += 0.01) {
+    const double u = x - x0;
+    line.points.emplace_back(x, 0.8 + 0.04 * u * u, z0 + slope * u - 0.1 * u * u);
+    line.radii.push_back(0.004);
+  }
+  return line;
+}
+
+// A straight cane from a to b, every 1 cm.
+Polyline3 Straight(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  Polyline3 line;
+  const int n = static_cast<int>(std::ceil((b - a).norm() / 0.01));
+  for (int i = 0; i <= n; ++i) {
+    line.points.push_back(a + (b - a) * (static_cast<double>(i) / n));
+    line.radii.push_back(0.004);
+  }
+  return line;
+}
+
+VineModel ModelOf(const std::vector<Polyline3>& lines) {
+  VineModel model;
+  Cane trunk;
+  trunk.id = CaneId(1);
+  trunk.kind = CaneKind::kTrunk;
+  trunk.polyline = Straight({0.0, 0.8, 0.3}, {0.0, 0.8, 0.6});
+  model.canes.push_back(trunk);
+  for (size_t i = 0; i < lines.size(); ++i) {
+    Cane cane;
+    cane.id = CaneId(static_cast<int>(i) + 2);
+    cane.parent_id = CaneId(1);
+    cane.kind = CaneKind::kCane;
+    cane.polyline = lines[i];
+    model.canes.push_back(cane);
+  }
+  return model;
+}
+
+// Views drawn from the truth; the thick region is left to the trunk (no cane is that wide).
+std::vector<View2D> ViewsOf(const std::vector<Polyline3>& lines, const RigCalibration& rig) {
+  SyntheticViewOptions options;
+  options.draw_head = false;
+  return SyntheticViews(ModelOf(lines), rig, options, 40.0);
+}
+
+double DistanceToLine(const Eigen::Vector3d& p, const Polyline3& line) {
+  double best = 1e9;
+  for (size_t i = 0; i + 1 < line.points.size(); ++i) {
+    double t = 0;
+    best = std::min(best, PointSegmentDistance(p, line.points[i], line.points[i + 1], &t));
+  }
+  return best;
+}
+
+// The first `n` points of a line.
+Polyline3 Head(const Polyline3& line, size_t n) {
+  Polyline3 out = line;
+  out.points.resize(n);
+  out.radii.resize(n);
+  return out;
+}
+
+// From point `n` on.
+Polyline3 Tail(const Polyline3& line, size_t n) {
+  Polyline3 out;
+  out.points.assign(line.points.begin() + n, line.points.end());
+  out.radii.assign(line.radii.begin() + n, line.radii.end());
+  return out;
+}
+
+GrowOptions On() {
+  GrowOptions options;
+  options.enabled = true;
+  return options;
+}
+
+// The cane of the tests: 0.4 m long, crossed at its 20th point (x = -0.1) by a steep cane; the
+// skeleton of every view breaks the cane there (a junction of four segments), and its 3D piece
+// is taken to stop 1 cm before the crossing.
+struct Crossing {
+  Polyline3 cane = CurvedCane(-0.3, 0.1, 0.95, 0.3);
+  Polyline3 crossing;
+  Crossing() {
+    const Eigen::Vector3d c = cane.points[20];
+    crossing = Straight(c + Eigen::Vector3d(-0.06, 0.0, -0.12), c + Eigen::Vector3d(0.06, 0.0, 0.12));
+  }
+};
+
+TEST(GrowCaneEnds, GrowsThroughACrossingWithinTwoMillimetres) {
+  const RigCalibration rig = sim::MakeRig().value();
+  const Crossing scene;
+  const std::vector<View2D> views = ViewsOf({scene.cane, scene.crossing}, rig);
+  std::vector<Polyline3> canes = {Head(scene.cane, 20), scene.crossing};
+  const Eigen::Vector3d old_end = canes[0].points.back();
+  GrowSummary summary;
+  ASSERT_TRUE(GrowCaneEnds(views, rig, WorkingVolume{}, On(), &canes, &summary).ok());
+  ASSERT_GT(canes[0].points.size(), 20u);
+  // The end grew through the crossing, at least 8 cm beyond it.
+  EXPECT_GT(canes[0].points.back().x(), scene.cane.points[20].x() + 0.08);
+  for (size_t i = 20; i < canes[0].points.size(); ++i)
+    EXPECT_LT(DistanceToLine(canes[0].points[i], scene.cane), 0.002) << i;
+  // The other end of the cane ran out of the skeleton (the cane's true base) and did not grow.
+  EXPECT_LT((canes[0].points.front() - scene.cane.points.front()).norm(), 0.006);
+  EXPECT_GE(summary.ends_grown, 1);
+  EXPECT_GT(summary.added_length_m, 0.08);
+  EXPECT_LT((canes[0].points.back() - old_end).norm(), summary.added_length_m + 1e-9);
+  // The crossing cane is whole in the views at both ends: nothing to grow onto.
+  for (const Eigen::Vector3d& p : canes[1].points)
+    EXPECT_LT(DistanceToLine(p, scene.crossing), 0.004);
+}
+
+TEST(GrowCaneEnds, StopsWhereAViewContradicts) {
+  const RigCalibration rig = sim::MakeRig().value();
+  const Crossing scene;
+  // Camera 1 shows nothing of the cane beyond its 25th point: growth must stop there.
+  std::vector<View2D> views = ViewsOf({scene.cane, scene.crossing}, rig);
+  views[1] = ViewsOf({Head(scene.cane, 26), scene.crossing}, rig)[1];
+  std::vector<Polyline3> canes = {Head(scene.cane, 20), scene.crossing};
+  GrowSummary summary;
+  ASSERT_TRUE(GrowCaneEnds(views, rig, WorkingVolume{}, On(), &canes, &summary).ok());
+  EXPECT_GE(summary.contradicted, 1);
+  EXPECT_LT(canes[0].points.back().x(), scene.cane.points[25].x() + 0.01);
+  for (size_t i = 20; i < canes[0].points.size(); ++i)
+    EXPECT_LT(DistanceToLine(canes[0].points[i], scene.cane), 0.002) << i;
+}
+
+TEST(GrowCaneEnds, DoesNotRunAlongAnotherCane) {
+  const RigCalibration rig = sim::MakeRig().value();
+  const Polyline3 cane = CurvedCane(-0.3, 0.1, 0.95, 0.3);
+  const std::vector<View2D> views = ViewsOf({cane}, rig);
+  // The control: the first 15 cm alone grows to the end of the cane.
+  {
+    std::vector<Polyline3> canes = {Head(cane, 16)};
+    ASSERT_TRUE(GrowCaneEnds(views, rig, WorkingVolume{}, On(), &canes).ok());
+    EXPECT_GT(canes[0].points.back().x(), cane.points[16].x() + 0.1);
+  }
+  // The rest of the cane is in the model already, from 3 cm on: growth stops where it meets it
+  // and does not run along it.
+  std::vector<Polyline3> canes = {Head(cane, 16), Tail(cane, 18)};
+  GrowSummary summary;
+  ASSERT_TRUE(GrowCaneEnds(views, rig, WorkingVolume{}, On(), &canes, &summary).ok());
+  EXPECT_GE(summary.alongside, 1);
+  EXPECT_LT(canes[0].points.back().x(), cane.points[18].x() + 0.012);
+  // Nor does the rest grow back along the first piece.
+  EXPECT_GT(canes[1].points.front().x(), cane.points[15].x() - 0.012);
+}
+
+TEST(GrowCaneEnds, GrowsOnlyTheTipWhenAsked) {
+  const RigCalibration rig = sim::MakeRig().value();
+  const Polyline3 cane = CurvedCane(-0.3, 0.1, 0.95, 0.3);
+  const std::vector<View2D> views = ViewsOf({cane}, rig);
+  const Polyline3 middle = Tail(Head(cane, 30), 10);  // points 10-29 of the cane
+  std::vector<Polyline3> both = {middle}, tip = {middle};
+  ASSERT_TRUE(GrowCaneEnds(views, rig, WorkingVolume{}, On(), &both).ok());
+  ASSERT_TRUE(GrowCaneEnds(views, rig, WorkingVolume{}, On(), &tip, nullptr, true).ok());
+  // Both ends grow by default; with tips_only the base stays where it was.
+  EXPECT_LT(both[0].points.front().x(), middle.points.front().x() - 0.03);
+  EXPECT_EQ(tip[0].points.front(), middle.points.front());
+  EXPECT_GT(tip[0].points.back().x(), middle.points.back().x() + 0.03);
+}
+
+TEST(GrowCaneEnds, LeavesTheCanesWhenDisabledAsByDefault) {
+  const RigCalibration rig = sim::MakeRig().value();
+  const Crossing scene;
+  const std::vector<View2D> views = ViewsOf({scene.cane, scene.crossing}, rig);
+  std::vector<Polyline3> canes = {Head(scene.cane, 20), scene.crossing};
+  const GrowOptions options;
+  EXPECT_FALSE(options.enabled);
+  GrowSummary summary;
+  ASSERT_TRUE(GrowCaneEnds(views, rig, WorkingVolume{}, options, &canes, &summary).ok());
+  EXPECT_EQ(canes[0].points.size(), 20u);
+  EXPECT_EQ(summary.ends_tried, 0);
+}
+
+TEST(GrowCaneEnds, RejectsBadInputNamingTheField) {
+  const RigCalibration rig = sim::MakeRig().value();
+  const Crossing scene;
+  const std::vector<View2D> views = ViewsOf({scene.cane}, rig);
+  std::vector<Polyline3> canes = {Head(scene.cane, 20)};
+  GrowOptions options = On();
+  options.support_px = -1;
+  absl::Status status = GrowCaneEnds(views, rig, WorkingVolume{}, options, &canes);
+  EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(status.message(), testing::HasSubstr("support_px"));
+  options = On();
+  options.min_support_views = 1;
+  status = GrowCaneEnds(views, rig, WorkingVolume{}, options, &canes);
+  EXPECT_THAT(status.message(), testing::HasSubstr("min_support_views"));
+  options = On();
+  options.max_turn_deg = 120;
+  status = GrowCaneEnds(views, rig, WorkingVolume{}, options, &canes);
+  EXPECT_THAT(status.message(), testing::HasSubstr("max_turn_deg"));
+  status = GrowCaneEnds({views[0]}, rig, WorkingVolume{}, On(), &canes);
+  EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(status.message(), testing::HasSubstr("views"));
+}
+
+}  // namespace
+}  // namespace vb::reconstruct
