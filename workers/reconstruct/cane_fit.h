@@ -81,7 +81,7 @@ struct FitOptions {
   double foreground_tolerance_px = 1.5; // a projection this close to foreground counts as on it
   int min_visible_points = 3;           // fewer (point, view) projections in images: no verdict
   int trunk_min_views = 2;              // the trunk's base stretch fewer images see is cut (0: off)
-  double trunk_unseen_keep_m = 0.10;    // ... but for this much of it next to the seen trunk
+  double trunk_unseen_keep_m = 0.20;    // ... but for this much of it next to the seen trunk
 
   // INVALID_ARGUMENT naming the field: non-finite or non-positive sizes and sds, fractions
   // outside [0, 1], max_iterations < 1, min_visible_points < 1, trunk_min_views < 0, a negative
