@@ -50,7 +50,8 @@ std::pair<double, int> WorstResidual(const Eigen::Vector3d& p, const std::vector
     if (!uv || !rig.cameras[v].InImage(*uv)) continue;
     const int x = std::clamp(static_cast<int>(std::lround(uv->x())), 0, views[v].width - 1);
     const int y = std::clamp(static_cast<int>(std::lround(uv->y())), 0, views[v].height - 1);
-    worst = std::max<double>(worst, views[v].centreline_distance_px[static_cast<size_t>(y) * views[v].width + x]);
+    const size_t pixel = static_cast<size_t>(y) * views[v].width + x;
+    worst = std::max<double>(worst, views[v].centreline_distance_px[pixel]);
     ++seen;
   }
   return {worst, seen};
@@ -64,7 +65,8 @@ int ViewsOnBackground(const Eigen::Vector3d& p, const std::vector<View2D>& views
   for (size_t v = 0; v < views.size(); ++v) {
     const std::optional<Eigen::Vector2d> uv = rig.cameras[v].Project(p);
     if (!uv || !rig.cameras[v].InImage(*uv)) continue;
-    const int x0 = static_cast<int>(std::lround(uv->x())), y0 = static_cast<int>(std::lround(uv->y()));
+    const int x0 = static_cast<int>(std::lround(uv->x()));
+    const int y0 = static_cast<int>(std::lround(uv->y()));
     bool any = false;
     for (int dy = -1; dy <= 1 && !any; ++dy)
       for (int dx = -1; dx <= 1 && !any; ++dx) {
@@ -344,8 +346,9 @@ TEST(PrecisionLoss, DISABLED_Report) {
   std::printf("the trunk before refinement below its first point inside two images, by distance "
               "below it (m): right / false\n");
   for (int b = 0; b < kBelowBins; ++b)
-    std::printf("  %2d-%s cm %7.3f %7.3f\n", 5 * b, b + 1 < kBelowBins ? std::to_string(5 * b + 5).c_str() : "",
-                below_right[b], below_false[b]);
+    std::printf("  %2d-%s cm %7.3f %7.3f\n", 5 * b,
+                b + 1 < kBelowBins ? std::to_string(5 * b + 5).c_str() : "", below_right[b],
+                below_false[b]);
   if (misdepth_m > 0)
     std::printf("10-30 mm: mean |dy| (depth) %.1f mm, across (x, z) %.1f mm\n",
                 1000 * misdepth_dy / misdepth_m, 1000 * misdepth_dxz / misdepth_m);
