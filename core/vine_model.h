@@ -48,8 +48,10 @@ struct Post {
 };
 
 // Wood the cameras saw that is in no cane of the model: canes the reconstruction left out (a
-// neighbour's canes, canes it could not connect to the vine). Not a cane: phenomics, decisions and
-// the accuracy metrics never see it; the planner avoids it as it avoids canes, and cuts none.
+// neighbour's canes, canes it could not connect to the vine); also the trunk below the images,
+// which no camera saw and the reconstruction guesses (workers/reconstruct/cane_fit.h). Not a
+// cane: phenomics, decisions and the accuracy metrics never see it; the planner avoids it as it
+// avoids canes, and cuts none.
 struct WoodObstacle {
   Polyline3 polyline;  // >= 2 points, one radius per point
 };

@@ -177,6 +177,53 @@ std::pair<double, int> ForegroundFraction(const Polyline3& line, const std::vect
   return {in_image > 0 ? static_cast<double>(on_wood) / in_image : 0.0, in_image};
 }
 
+// How many cameras have p inside their image.
+int ViewsSeeing(const Eigen::Vector3d& p, const RigCalibration& rig) {
+  int n = 0;
+  for (const CameraCalibration& camera : rig.cameras) {
+    const std::optional<Eigen::Vector2d> uv = camera.Project(p);
+    n += uv && camera.InImage(*uv);
+  }
+  return n;
+}
+
+// The arc length along `trunk` (base first) from which on it lies inside at least `min_views`
+// images, sampled every `step_m` (0 if its base already does; its length if no sample does).
+double FirstSeenArc(const Polyline3& trunk, const RigCalibration& rig, int min_views,
+                    double step_m) {
+  const std::vector<double> arc = trunk.ArcLengths();
+  const double length = arc.back();
+  for (double s = 0.0; s < length; s += step_m) {
+    if (ViewsSeeing(trunk.PointAt(s, arc), rig) < min_views) continue;
+    // Refine the boundary between the last unseen sample and this one.
+    double lo = std::max(0.0, s - step_m), hi = s;
+    if (s == 0.0) return 0.0;
+    for (int k = 0; k < 12; ++k) {
+      const double mid = 0.5 * (lo + hi);
+      (ViewsSeeing(trunk.PointAt(mid, arc), rig) >= min_views ? hi : lo) = mid;
+    }
+    return hi;
+  }
+  return length;
+}
+
+// Splits `line` at arc length s into [0, s] and [s, end], the point at s in both.
+std::pair<Polyline3, Polyline3> SplitAt(const Polyline3& line, double s) {
+  const std::vector<double> arc = line.ArcLengths();
+  Polyline3 below, above;
+  const Eigen::Vector3d at = line.PointAt(s, arc);
+  const double r = line.RadiusAt(s, arc);
+  for (size_t i = 0; i < line.points.size(); ++i) {
+    if (arc[i] < s) below.points.push_back(line.points[i]), below.radii.push_back(line.radii[i]);
+  }
+  below.points.push_back(at), below.radii.push_back(r);
+  above.points.push_back(at), above.radii.push_back(r);
+  for (size_t i = 0; i < line.points.size(); ++i) {
+    if (arc[i] > s) above.points.push_back(line.points[i]), above.radii.push_back(line.radii[i]);
+  }
+  return {below, above};
+}
+
 }  // namespace
 
 absl::Status FitOptions::Validate() const {
@@ -193,6 +240,7 @@ absl::Status FitOptions::Validate() const {
     }
   }
   for (const auto& [name, value] : {std::pair{"attach_distance_m", attach_distance_m},
+                                    std::pair{"trunk_unseen_keep_m", trunk_unseen_keep_m},
                                     std::pair{"ground_snap_m", ground_snap_m}}) {
     if (!(std::isfinite(value) && value >= 0.0)) {
       return absl::InvalidArgumentError(absl::StrCat(name, ": must be finite and >= 0, is ", value));
@@ -208,6 +256,10 @@ absl::Status FitOptions::Validate() const {
   if (max_iterations < 1) {
     return absl::InvalidArgumentError(
         absl::StrCat("max_iterations: must be >= 1, is ", max_iterations));
+  }
+  if (trunk_min_views < 0) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("trunk_min_views: must be >= 0, is ", trunk_min_views));
   }
   if (min_visible_points < 1) {
     return absl::InvalidArgumentError(
@@ -239,8 +291,24 @@ absl::Status RefineModel(VineModel* model, const std::vector<View2D>& views,
   // Parameters: every resampled point is its own block of 3.
   const size_t cane_count = model->canes.size();
   std::vector<Polyline3> lines(cane_count);
+  // The trunk's base stretch no trunk_min_views images see is a straight guess (head.h): it
+  // goes to the obstacles at the end (the model is untouched until then). Without it the
+  // ground pin below no longer applies.
+  std::vector<WoodObstacle> unseen;
   for (size_t c = 0; c < cane_count; ++c) {
-    lines[c] = model->canes[c].polyline.Resampled(options.point_spacing_m);
+    const Polyline3& source = model->canes[c].polyline;
+    const double s = options.trunk_min_views > 0 && !model->canes[c].parent_id.has_value()
+                         ? FirstSeenArc(source, rig, options.trunk_min_views, 0.005) -
+                               options.trunk_unseen_keep_m
+                         : 0.0;
+    if (s > 1e-6 && s < source.Length() - 0.01) {
+      auto [below, above] = SplitAt(source, s);
+      out.trunk_unseen_m += below.Length();
+      unseen.push_back(WoodObstacle{std::move(below)});
+      lines[c] = above.Resampled(options.point_spacing_m);
+    } else {
+      lines[c] = source.Resampled(options.point_spacing_m);
+    }
   }
   std::vector<std::vector<double>> params(cane_count);
   for (size_t c = 0; c < cane_count; ++c) {
@@ -413,6 +481,7 @@ absl::Status RefineModel(VineModel* model, const std::vector<View2D>& views,
     kept.push_back(std::move(cane));
   }
   model->canes = std::move(kept);
+  model->obstacles.insert(model->obstacles.end(), unseen.begin(), unseen.end());
   out.canes_out = static_cast<int>(model->canes.size());
   out.solve_time_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start_time).count();

@@ -32,6 +32,14 @@
 // cameras do not see the ground: a trunk reconstructed from the images alone ends where they do,
 // and is left there for the connect step).
 //
+// Before anything else, the trunk's base stretch (from its base up to trunk_unseen_keep_m below
+// its first point inside at least trunk_min_views images, sampled every 5 mm) is cut off: below
+// the images the trunk is a straight line guessed down to the ground (head.h), rarely within
+// 10 mm of the true trunk, which bends. The cut stretch is appended to model->obstacles (a
+// WoodObstacle: the planner still avoids it; phenomics and the metrics do not count it) when
+// the call succeeds. A trunk no sample of which is seen so, or whose kept part would be under
+// 1 cm, is left whole. The trunk's base is then above ground_snap_m and not pinned.
+//
 // Before the fit (so that a ghost near real structure is not pulled onto it) and again after it,
 // a cane (never the trunk) is rejected if more than max_outside_fraction of its
 // points lie outside `working_volume`, or if, over the (point, view) pairs where its points
@@ -72,9 +80,12 @@ struct FitOptions {
   double min_foreground_fraction = 0.5; // reject a cane with less of its projections on wood
   double foreground_tolerance_px = 1.5; // a projection this close to foreground counts as on it
   int min_visible_points = 3;           // fewer (point, view) projections in images: no verdict
+  int trunk_min_views = 2;              // the trunk's base stretch fewer images see is cut (0: off)
+  double trunk_unseen_keep_m = 0.20;    // ... but for this much of it next to the seen trunk
 
   // INVALID_ARGUMENT naming the field: non-finite or non-positive sizes and sds, fractions
-  // outside [0, 1], max_iterations < 1, min_visible_points < 1, an empty working volume.
+  // outside [0, 1], max_iterations < 1, min_visible_points < 1, trunk_min_views < 0, a negative
+  // or non-finite trunk_unseen_keep_m, an empty working volume.
   absl::Status Validate() const;
 };
 
@@ -94,6 +105,7 @@ struct FitSummary {
   int rejected_outside = 0;             // canes mostly outside the working volume
   int rejected_background = 0;          // canes projecting mostly onto background
   int removed_with_parent = 0;          // descendants of rejected canes, removed with them
+  double trunk_unseen_m = 0.0;          // trunk length moved to the obstacles (unseen base)
   int canes_out = 0;
   double solve_time_s = 0.0;
   std::string message;                  // Ceres' one-line report

@@ -72,8 +72,10 @@ TEST(RefineModel, PullsAPerturbedVineBackOntoItsViews) {
   const double before = MeanPointError(model, truth, rig);
 
   FitSummary summary;
+  FitOptions options;
+  options.trunk_min_views = 0;  // the whole trunk, so that its base stays on the ground
   const auto start = std::chrono::steady_clock::now();
-  ASSERT_TRUE(RefineModel(&model, views, rig, FitOptions(), Deadline::Infinite(), &summary).ok());
+  ASSERT_TRUE(RefineModel(&model, views, rig, options, Deadline::Infinite(), &summary).ok());
   const double elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const double after = MeanPointError(model, truth, rig);
   std::printf("RefineModel: %zu canes, mean point error %.2f mm -> %.2f mm, %d iterations, %.0f ms"
@@ -238,6 +240,55 @@ TEST(RefineModel, RejectsCanesOnBackgroundOrOutsideTheVolume) {
   EXPECT_TRUE(model.Validate().ok());
 }
 
+int CamerasSeeing(const Eigen::Vector3d& p, const RigCalibration& rig) {
+  int n = 0;
+  for (const CameraCalibration& camera : rig.cameras) {
+    const auto uv = camera.Project(p);
+    n += uv && camera.InImage(*uv);
+  }
+  return n;
+}
+
+TEST(RefineModel, TrunkBelowTheImagesMovesToTheObstacles) {
+  const RigCalibration rig = sim::MakeRig().value();
+  const VineModel truth = TrunkAndCane();  // the trunk from the ground up to 1 m
+  const std::vector<View2D> views = SyntheticViews(truth, rig);
+  ASSERT_LT(CamerasSeeing(truth.canes[0].polyline.points[0], rig), 2);  // the premise
+  for (const double keep_m : {0.0, 0.1}) {
+    VineModel model = truth;
+    FitOptions options;
+    options.trunk_unseen_keep_m = keep_m;
+    FitSummary summary;
+    ASSERT_TRUE(RefineModel(&model, views, rig, options, Deadline::Infinite(), &summary).ok());
+    ASSERT_EQ(model.canes.size(), 2u);
+    ASSERT_TRUE(model.Validate().ok());
+    const Polyline3& trunk = model.canes[0].polyline;
+    ASSERT_EQ(model.obstacles.size(), 1u) << keep_m;
+    const Polyline3& cut = model.obstacles[0].polyline;
+    // The cut stretch runs from the ground to where the trunk now starts: keep_m below the
+    // first point two cameras see.
+    EXPECT_NEAR(cut.points.front().z(), 0.0, 1e-9);
+    EXPECT_NEAR((cut.points.back() - trunk.points.front()).norm(), 0.0, 0.003) << keep_m;
+    EXPECT_NEAR(summary.trunk_unseen_m, cut.Length(), 1e-9);
+    EXPECT_NEAR(cut.Length() + trunk.Length(), 1.0, 0.01);
+    const Eigen::Vector3d step(0.0, 0.0, 0.005);
+    const Eigen::Vector3d first_seen = trunk.points.front() + Eigen::Vector3d(0, 0, keep_m);
+    EXPECT_GE(CamerasSeeing(first_seen + step, rig), 2) << keep_m;
+    EXPECT_LT(CamerasSeeing(first_seen - step, rig), 2) << keep_m;
+    // The cane on the trunk's top is untouched by the cut.
+    EXPECT_LT(DistanceToPolyline(model.canes[1].polyline.points[0], trunk), 0.001);
+  }
+  // Off: the whole trunk stays a cane, on the ground.
+  VineModel model = truth;
+  FitOptions options;
+  options.trunk_min_views = 0;
+  FitSummary summary;
+  ASSERT_TRUE(RefineModel(&model, views, rig, options, Deadline::Infinite(), &summary).ok());
+  EXPECT_TRUE(model.obstacles.empty());
+  EXPECT_EQ(summary.trunk_unseen_m, 0.0);
+  EXPECT_NEAR(model.canes[0].polyline.points.front().z(), 0.0, 0.001);
+}
+
 TEST(RefineModel, ExpiredDeadlineFailsAndLeavesTheModel) {
   const RigCalibration rig = sim::MakeRig().value();
   const VineModel truth = TrunkAndCane();
@@ -263,6 +314,12 @@ TEST(FitOptions, ValidateRejectsBadFields) {
   options = FitOptions();
   options.min_foreground_fraction = 1.5;
   EXPECT_EQ(options.Validate().code(), absl::StatusCode::kInvalidArgument);
+  options = FitOptions();
+  options.trunk_min_views = -1;
+  EXPECT_NE(options.Validate().message().find("trunk_min_views"), std::string::npos);
+  options = FitOptions();
+  options.trunk_unseen_keep_m = -0.1;
+  EXPECT_NE(options.Validate().message().find("trunk_unseen_keep_m"), std::string::npos);
 }
 
 }  // namespace

@@ -223,9 +223,11 @@ absl::StatusOr<ReconstructResult> ReconstructFromViews(const std::vector<View2D>
   result.timings.trellis_s = SecondsSince(t);
 
   // Step 9: what connect was given and the model does not hold is wood the cameras saw and the
-  // arm must still avoid; the model's canes, and so every metric, stay as they are.
-  VB_ASSIGN_OR_RETURN(result.model.obstacles,
+  // arm must still avoid; the model's canes, and so every metric, stay as they are. (The
+  // obstacles already hold the trunk below the images, cane_fit.h.)
+  VB_ASSIGN_OR_RETURN(std::vector<WoodObstacle> left_out,
                       LeftOutWood(canes, result.model, options.left_out_wood));
+  result.model.obstacles.insert(result.model.obstacles.end(), left_out.begin(), left_out.end());
 
   if (result.model.canes.empty()) {
     result.empty_reason = pieces.empty() ? "no cane was matched across the views"
