@@ -159,7 +159,13 @@ absl::StatusOr<Phenomics> ComputePhenomics(const VineModel& model, const CutPlan
     // Equal arc-length samples, so the median is over the trunk's length, not its vertices.
     const Polyline3 samples = cane.polyline.Resampled(options.trunk_sample_step_m);
     p.trunk_diameter_mm = 2000.0 * Median(samples.radii);
-    p.trunk_length_m = cane.polyline.Length();
+    // A reconstruction leaves the trunk below the images out of its canes (an obstacle): the
+    // stretch from the trunk's lowest point down to the ground (platform z = 0) counts as vertical.
+    double lowest_z = std::numeric_limits<double>::infinity();
+    for (const Eigen::Vector3d& point : cane.polyline.points) {
+      lowest_z = std::min(lowest_z, point.z());
+    }
+    p.trunk_length_m = cane.polyline.Length() + std::max(0.0, lowest_z);
   }
   p.head_volume_m3 = SphereUnionVolume(model.head.spheres, options.head_grid_m);
   if (plan != nullptr) ApplyPlan(model, *plan, options, &p);

@@ -54,7 +54,9 @@ struct Phenomics {
   double cane_diameter_p10_mm = 0.0;
   double cane_diameter_p90_mm = 0.0;
   DiameterHistogram cane_diameter_histogram;
-  // Median of the trunk's diameter sampled every trunk_sample_step_m along it; its length.
+  // Median of the trunk's diameter sampled every trunk_sample_step_m along it; its length, plus
+  // the height of its lowest point above the ground (a reconstruction's trunk stops 20 cm below
+  // the images: the unseen part below is an obstacle, counted here as vertical).
   double trunk_diameter_mm = 0.0;
   double trunk_length_m = 0.0;
   // Volume of the union of the head spheres (grid integral, head_grid_m cells); 0 without a head.

@@ -74,6 +74,17 @@ TEST(ComputePhenomics, CountsLengthsAndDiametersOfAHandBuiltVine) {
   // Linear taper 40 -> 20 mm: the median over equal arc-length samples is the middle, 30 mm.
   EXPECT_NEAR(p->trunk_diameter_mm, 30.0, 1e-6);
   EXPECT_NEAR(p->trunk_length_m, 1.0, 1e-12);
+  // A reconstruction's trunk that stops 0.4 m above the ground (the unseen part is an obstacle):
+  // the gap counts as vertical trunk.
+  VineModel cut = Vine();
+  for (Cane& cane : cut.canes) {
+    if (cane.kind != CaneKind::kTrunk) continue;
+    cane.polyline.points = {{0, 0, 0.4}, {0, 0, 1}};
+    cane.polyline.radii = {0.016, 0.01};
+  }
+  const auto q = ComputePhenomics(cut, nullptr);
+  ASSERT_TRUE(q.ok()) << q.status();
+  EXPECT_NEAR(q->trunk_length_m, 1.0, 1e-12);
   const double sphere = 4.0 / 3.0 * M_PI * std::pow(0.05, 3);
   EXPECT_NEAR(p->head_volume_m3, sphere, 0.01 * sphere);
   EXPECT_FALSE(p->has_plan);
