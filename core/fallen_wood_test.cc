@@ -3,19 +3,15 @@
 
 #include <optional>
 
+#include "core/vine_model_test_util.h"
 #include "gtest/gtest.h"
 
 namespace vb {
 namespace {
 
-Cane Line(int64_t id, std::optional<int64_t> parent, Eigen::Vector3d a, Eigen::Vector3d b) {
-  Cane c;
-  c.id = CaneId{id};
-  if (parent) c.parent_id = CaneId{*parent};
-  c.kind = parent ? CaneKind::kCane : CaneKind::kTrunk;
-  c.polyline.points = {a, b};
-  c.polyline.radii = {0.02, 0.02};
-  return c;
+Cane Line(int64_t id, std::optional<int> parent, Eigen::Vector3d a, Eigen::Vector3d b) {
+  return StraightCane(static_cast<int>(id), parent, parent ? CaneKind::kCane : CaneKind::kTrunk, a,
+                      b, 0.02);
 }
 
 // Trunk 1 up to z = 1 (radius 2 cm) in a head sphere at z = 0.97; cane 2 grows from the trunk

@@ -1,19 +1,15 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "workers/plan/fallen_wood.h"
 
+#include "core/vine_model_test_util.h"
 #include "gtest/gtest.h"
 
 namespace vb::plan {
 namespace {
 
-Cane Line(int64_t id, std::optional<int64_t> parent, Eigen::Vector3d a, Eigen::Vector3d b) {
-  Cane c;
-  c.id = CaneId{id};
-  if (parent) c.parent_id = CaneId{*parent};
-  c.kind = parent ? CaneKind::kCane : CaneKind::kTrunk;
-  c.polyline.points = {a, b};
-  c.polyline.radii = {0.005, 0.004};
-  return c;
+Cane Line(int64_t id, std::optional<int> parent, Eigen::Vector3d a, Eigen::Vector3d b) {
+  return StraightCane(static_cast<int>(id), parent, parent ? CaneKind::kCane : CaneKind::kTrunk, a,
+                      b);
 }
 
 // Trunk 1 up to z = 1; cane 2 along +x from the top; cane 3 grows from cane 2 at x = 0.3, cane 4

@@ -62,12 +62,9 @@ std::vector<View2D> ViewsOf(const std::vector<Polyline3>& lines, const RigCalibr
 }
 
 double DistanceToLine(const Eigen::Vector3d& p, const Polyline3& line) {
-  double best = 1e9;
-  for (size_t i = 0; i + 1 < line.points.size(); ++i) {
-    double t = 0;
-    best = std::min(best, PointSegmentDistance(p, line.points[i], line.points[i + 1], &t));
-  }
-  return best;
+  double d = 0.0;
+  line.Project(p, &d);
+  return d;
 }
 
 // The first `n` points of a line.
