@@ -177,6 +177,9 @@ std::pair<double, int> ForegroundFraction(const Polyline3& line, const std::vect
   return {in_image > 0 ? static_cast<double>(on_wood) / in_image : 0.0, in_image};
 }
 
+// A trunk's unseen stretch is cut at least this far below the lowest base of a cane on it.
+constexpr double kTrunkChildClearanceM = 0.05;
+
 // How many cameras have p inside their image.
 int ViewsSeeing(const Eigen::Vector3d& p, const RigCalibration& rig) {
   int n = 0;
@@ -188,9 +191,9 @@ int ViewsSeeing(const Eigen::Vector3d& p, const RigCalibration& rig) {
 }
 
 // The arc length along `trunk` (base first) from which on it lies inside at least `min_views`
-// images, sampled every `step_m` (0 if its base already does; its length if no sample does).
-double FirstSeenArc(const Polyline3& trunk, const RigCalibration& rig, int min_views,
-                    double step_m) {
+// images, sampled every `step_m` (0 if its base already does; nullopt if no sample does).
+std::optional<double> FirstSeenArc(const Polyline3& trunk, const RigCalibration& rig,
+                                   int min_views, double step_m) {
   const std::vector<double> arc = trunk.ArcLengths();
   const double length = arc.back();
   for (double s = 0.0; s < length; s += step_m) {
@@ -204,7 +207,7 @@ double FirstSeenArc(const Polyline3& trunk, const RigCalibration& rig, int min_v
     }
     return hi;
   }
-  return length;
+  return std::nullopt;
 }
 
 // Splits `line` at arc length s into [0, s] and [s, end], the point at s in both.
@@ -295,17 +298,29 @@ absl::Status RefineModel(VineModel* model, const std::vector<View2D>& views,
   // goes to the obstacles at the end (the model is untouched until then). Without it the
   // ground pin below no longer applies.
   std::vector<WoodObstacle> unseen;
+  std::vector<size_t> unseen_of;  // the trunk each unseen stretch was cut from
+  std::vector<bool> split(cane_count, false);  // the trunk lost its base stretch: no ground pin
   for (size_t c = 0; c < cane_count; ++c) {
     const Polyline3& source = model->canes[c].polyline;
-    const double s = options.trunk_min_views > 0 && !model->canes[c].parent_id.has_value()
-                         ? FirstSeenArc(source, rig, options.trunk_min_views, 0.005) -
-                               options.trunk_unseen_keep_m
-                         : 0.0;
+    double s = 0.0;
+    if (options.trunk_min_views > 0 && !model->canes[c].parent_id.has_value()) {
+      const std::optional<double> seen =
+          FirstSeenArc(source, rig, options.trunk_min_views, 0.005);
+      if (seen.has_value()) s = *seen - options.trunk_unseen_keep_m;
+      // Wood hanging on the trunk keeps the trunk it hangs on: the cut stays kTrunkChildClearanceM
+      // below the lowest base of a cane on the trunk.
+      for (const Cane& child : model->canes) {
+        if (child.parent_id == model->canes[c].id && !child.polyline.points.empty()) {
+          s = std::min(s, source.Project(child.polyline.points.front()) - kTrunkChildClearanceM);
+        }
+      }
+    }
     if (s > 1e-6 && s < source.Length() - 0.01) {
       auto [below, above] = SplitAt(source, s);
-      out.trunk_unseen_m += below.Length();
       unseen.push_back(WoodObstacle{std::move(below)});
+      unseen_of.push_back(c);
       lines[c] = above.Resampled(options.point_spacing_m);
+      split[c] = true;
     } else {
       lines[c] = source.Resampled(options.point_spacing_m);
     }
@@ -412,7 +427,7 @@ absl::Status RefineModel(VineModel* model, const std::vector<View2D>& views,
     }
     const Cane& cane = model->canes[c];
     if (!cane.parent_id.has_value()) {
-      if (std::abs(line.points[0].z()) > options.ground_snap_m) continue;
+      if (split[c] || std::abs(line.points[0].z()) > options.ground_snap_m) continue;
       problem.AddResidualBlock(
           new ceres::AutoDiffCostFunction<GroundCost, 1, 3>(new GroundCost(1.0 / options.pin_sd_m)),
           nullptr, block(c, 0));
@@ -473,6 +488,13 @@ absl::Status RefineModel(VineModel* model, const std::vector<View2D>& views,
     }
   }
   reject();
+  // Each unseen stretch ends where its trunk now starts (the fit may have moved that point).
+  for (size_t k = 0; k < unseen.size(); ++k) {
+    const size_t c = unseen_of[k];
+    if (!remove[c]) unseen[k].polyline.points.back() = lines[c].points.front();
+  }
+  out.trunk_unseen_m = 0.0;
+  for (const WoodObstacle& stretch : unseen) out.trunk_unseen_m += stretch.polyline.Length();
   std::vector<Cane> kept;
   for (size_t c = 0; c < cane_count; ++c) {
     if (remove[c]) continue;

@@ -37,8 +37,10 @@
 // the images the trunk is a straight line guessed down to the ground (head.h), rarely within
 // 10 mm of the true trunk, which bends. The cut stretch is appended to model->obstacles (a
 // WoodObstacle: the planner still avoids it; phenomics and the metrics do not count it) when
-// the call succeeds. A trunk no sample of which is seen so, or whose kept part would be under
-// 1 cm, is left whole. The trunk's base is then above ground_snap_m and not pinned.
+// the call succeeds. The cut stays 5 cm below the lowest base of a cane hanging on the trunk
+// (wood keeps the trunk it grows from), and the cut stretch's upper end follows the fitted
+// trunk's base. A trunk no sample of which is seen so, or whose kept part would be under 1 cm,
+// is left whole. A trunk that was cut is not pinned to the ground.
 //
 // Before the fit (so that a ghost near real structure is not pulled onto it) and again after it,
 // a cane (never the trunk) is rejected if more than max_outside_fraction of its

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "workers/reconstruct/cane_fit.h"
 
+#include <algorithm>
+
 #include <chrono>
 #include <cstdio>
 #include <limits>
@@ -287,6 +289,41 @@ TEST(RefineModel, TrunkBelowTheImagesMovesToTheObstacles) {
   EXPECT_TRUE(model.obstacles.empty());
   EXPECT_EQ(summary.trunk_unseen_m, 0.0);
   EXPECT_NEAR(model.canes[0].polyline.points.front().z(), 0.0, 0.001);
+}
+
+TEST(RefineModel, TheTrunkCutStaysBelowWoodHangingOnItAndNeedsASeenTrunk) {
+  const RigCalibration rig = sim::MakeRig().value();
+  VineModel truth = TrunkAndCane();
+  // A water shoot from the trunk at z = 0.3 m, below what two cameras see.
+  Cane shoot;
+  shoot.id = CaneId(3);
+  shoot.parent_id = CaneId(1);
+  for (int i = 0; i <= 10; ++i) {
+    shoot.polyline.points.push_back({0.02 + 0.03 * i, 0.8, 0.3 + 0.01 * i});
+    shoot.polyline.radii.push_back(0.004);
+  }
+  truth.canes.push_back(shoot);
+  const std::vector<View2D> views = SyntheticViews(truth, rig);
+  ASSERT_LT(CamerasSeeing({0.0, 0.8, 0.3}, rig), 2);  // the premise
+  VineModel model = truth;
+  FitSummary summary;
+  ASSERT_TRUE(RefineModel(&model, views, rig, FitOptions{}, Deadline::Infinite(), &summary).ok());
+  ASSERT_EQ(model.obstacles.size(), 1u);
+  const auto trunk = std::find_if(model.canes.begin(), model.canes.end(),
+                                  [](const Cane& c) { return c.id == CaneId(1); });
+  ASSERT_NE(trunk, model.canes.end());
+  // Cut 5 cm below the shoot's base, not 20 cm below what the cameras see.
+  EXPECT_NEAR(trunk->polyline.points.front().z(), 0.25, 0.01);
+  EXPECT_NEAR(summary.trunk_unseen_m, 0.25, 0.01);
+  EXPECT_TRUE(model.Validate().ok()) << model.Validate();
+
+  // Asking for more images than the rig has: nothing is seen so, and the trunk stays whole.
+  VineModel whole = truth;
+  FitOptions four;
+  four.trunk_min_views = 4;
+  ASSERT_TRUE(RefineModel(&whole, views, rig, four, Deadline::Infinite(), &summary).ok());
+  EXPECT_TRUE(whole.obstacles.empty());
+  EXPECT_EQ(summary.trunk_unseen_m, 0.0);
 }
 
 TEST(RefineModel, ExpiredDeadlineFailsAndLeavesTheModel) {
