@@ -224,7 +224,8 @@ CutMotion PlanOne(const RobotModel& robot, const VineModel& model, const Collisi
   // given cut: that child falls with the cut as given (its own wood has no cut), and a cut slid
   // past its base would leave it on the vine.
   double slide_end_s = cane.Length();
-  // (Canes from the head do not fall with a cut of the trunk: fallen_wood.h.)
+  // (PlanVine never asks for a cut of the trunk, "cut_on_the_trunk"; called directly, the trunk's
+  // children are not taken as limits.)
   const bool trunk = model.canes[*cane_index].kind == CaneKind::kTrunk;
   for (CaneId child : trunk ? std::vector<CaneId>{} : model.ChildrenOf(cut.cane_id)) {
     const std::optional<size_t> c = model.IndexOf(child);

@@ -126,8 +126,15 @@ absl::StatusOr<std::vector<int>> PlanPass(const VineModel& model, const std::vec
   std::vector<Cut> cuts;
   std::vector<int> pending_here;
   for (int i : pending) {
-    if (!model.IndexOf(p.plan.cuts[i].cane_id)) {
+    const std::optional<size_t> on = model.IndexOf(p.plan.cuts[i].cane_id);
+    if (!on) {
       p.Unplanned(p.plan.cuts[i].id, "cane_fell_with_an_earlier_cut");
+      continue;
+    }
+    // The trunk is never cut (decide never asks): its fall (core/fallen_wood.h) would drop the
+    // head and the canes on it, which the slide limits of cut_motion.cc do not model.
+    if (model.canes[*on].kind == CaneKind::kTrunk) {
+      p.Unplanned(p.plan.cuts[i].id, "cut_on_the_trunk");
       continue;
     }
     cuts.push_back(p.plan.cuts[i]);

@@ -157,6 +157,20 @@ TEST(PlanVine, NoCutsGiveAnEmptyTrajectory) {
   EXPECT_EQ(result->trajectory.duration_s, 0.0);
 }
 
+TEST(PlanVine, ACutOnTheTrunkIsNotPlanned) {
+  Stop stop = SimStop(1104);
+  stop.plan.cuts.resize(1);
+  const Cane& trunk = stop.model.canes.front();
+  ASSERT_EQ(trunk.kind, CaneKind::kTrunk);
+  stop.plan.cuts[0].cane_id = trunk.id;
+  stop.plan.cuts[0].point = trunk.polyline.PointAt(0.5 * trunk.polyline.Length());
+  auto result = PlanVine(stop.model, stop.plan, DefaultUr5(MillEndTool()), DefaultPlatform(),
+                         Options());
+  ASSERT_TRUE(result.ok()) << result.status();
+  ASSERT_EQ(result->trajectory.unplanned.size(), 1u);
+  EXPECT_EQ(result->trajectory.unplanned[0].reason, "cut_on_the_trunk");
+}
+
 TEST(PlanVine, AFarCutIsUnreachable) {
   Stop stop = SimStop(1105);
   ASSERT_FALSE(stop.plan.cuts.empty());
