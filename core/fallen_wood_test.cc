@@ -73,6 +73,14 @@ TEST(FallenWood, AfterCutsTakesTheLowestCutIgnoresUnknownIndicesAndValidates) {
   EXPECT_FALSE(after.IndexOf(CaneId{5}));
   EXPECT_EQ(after.canes.size(), 3u);
   EXPECT_EQ(after.head.spheres.size(), 1u);
+  // Obstacles, wires and posts do not fall.
+  VineModel with_trellis = vine;
+  with_trellis.obstacles.push_back(
+      WoodObstacle{Line(9, std::nullopt, {0, 0, 0}, {0, 0, 0.2}).polyline});
+  with_trellis.wires.push_back(Wire{WireId{1}, {{-1, 0, 1}, {1, 0, 1}}});
+  const VineModel kept = AfterCuts(with_trellis, {{0, 0.97}, {2, 0.0}});
+  EXPECT_EQ(kept.obstacles.size(), 1u);
+  EXPECT_EQ(kept.wires.size(), 1u);
   const VineModel no_trunk_top = AfterCuts(vine, {{0, 0.97}});
   EXPECT_TRUE(no_trunk_top.head.spheres.empty());
   EXPECT_TRUE(no_trunk_top.Validate().ok()) << no_trunk_top.Validate();

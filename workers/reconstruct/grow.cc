@@ -345,6 +345,16 @@ absl::Status GrowOptions::Validate() const {
                                                    ") must not exceed max_offset_m (",
                                                    max_offset_m, ")"));
   }
+  // Bounds on the work per end: the offset grid has (2 max_offset_m / offset_grid_m + 1)^2
+  // points, and an end takes up to max_length_m / step_m steps.
+  if (max_offset_m > 100.0 * offset_grid_m) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "grow.offset_grid_m (", offset_grid_m, ") must be at least max_offset_m / 100"));
+  }
+  if (max_length_m > 1000.0 * step_m) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("grow.max_length_m (", max_length_m, ") must be at most 1000 step_m"));
+  }
   if (min_support_views < 2) {
     return absl::InvalidArgumentError(
         absl::StrCat("grow.min_support_views must be >= 2, is ", min_support_views));

@@ -205,6 +205,14 @@ TEST(GrowCaneEnds, RejectsBadInputNamingTheField) {
   options.max_turn_deg = 120;
   status = GrowCaneEnds(views, rig, WorkingVolume{}, options, &canes);
   EXPECT_THAT(status.message(), testing::HasSubstr("max_turn_deg"));
+  options = On();
+  options.offset_grid_m = 1e-7;
+  status = GrowCaneEnds(views, rig, WorkingVolume{}, options, &canes);
+  EXPECT_THAT(status.message(), testing::HasSubstr("offset_grid_m"));
+  options = On();
+  options.max_length_m = 100.0;
+  status = GrowCaneEnds(views, rig, WorkingVolume{}, options, &canes);
+  EXPECT_THAT(status.message(), testing::HasSubstr("max_length_m"));
   status = GrowCaneEnds({views[0]}, rig, WorkingVolume{}, On(), &canes);
   EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument);
   EXPECT_THAT(status.message(), testing::HasSubstr("views"));
