@@ -174,13 +174,14 @@ TEST(GrowCaneEnds, GrowsOnlyTheTipWhenAsked) {
   EXPECT_GT(tip[0].points.back().x(), middle.points.back().x() + 0.03);
 }
 
-TEST(GrowCaneEnds, LeavesTheCanesWhenDisabledAsByDefault) {
+TEST(GrowCaneEnds, LeavesTheCanesWhenDisabled) {
   const RigCalibration rig = sim::MakeRig().value();
   const Crossing scene;
   const std::vector<View2D> views = ViewsOf({scene.cane, scene.crossing}, rig);
   std::vector<Polyline3> canes = {Head(scene.cane, 20), scene.crossing};
-  const GrowOptions options;
-  EXPECT_FALSE(options.enabled);
+  GrowOptions options;
+  EXPECT_TRUE(options.enabled);  // on by default since session 16
+  options.enabled = false;
   GrowSummary summary;
   ASSERT_TRUE(GrowCaneEnds(views, rig, WorkingVolume{}, options, &canes, &summary).ok());
   EXPECT_EQ(canes[0].points.size(), 20u);

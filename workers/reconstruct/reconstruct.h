@@ -7,8 +7,8 @@
 //   3. correspondence across views, Gibbs sampling  6. connect canes into one tree (connect.h)
 //      and minimum expected loss (correspondence.h) 7. joint Ceres refinement (cane_fit.h)
 //   4. assemble 3D pieces into canes (cane_assembly.h) 8. wires and posts (trellis3d.h)
-//   4d. optionally (off by default) the assembled canes' ends grown through junctions on
-//       two-view evidence (grow.h), before 5
+//   4d. the assembled canes' ends grown through junctions on two-view evidence (grow.h; on by
+//       default), before 5
 //   7b. cane tips continued in one view (extend.h; on by default; "4c" in
 //      docs/reconstruction.md, which numbers by its sections), after 7
 //   9. the stretches of the canes given to step 6 that the model leaves out, as its obstacles
