@@ -2,7 +2,9 @@
 // What falls when a cane is cut: the cane's part beyond the cut and every cane growing from that
 // part, with all their descendants. The one rule behind the simulator's world update
 // (sim/world.h, what a re-capture shows) and the planner's vine after its cuts
-// (workers/plan/fallen_wood.h, what later motions need not avoid). Thread-safe (pure functions).
+// (workers/plan/fallen_wood.h, what later motions need not avoid). Decide keeps its own reading
+// of which canes a decided cut removes (workers/decide: pruning weight, cut placement), which
+// never cuts the trunk. Thread-safe (pure functions).
 #pragma once
 
 #include <cstddef>
