@@ -14,24 +14,13 @@
 #include "core/model_metrics.h"
 #include "gtest/gtest.h"
 #include "workers/reconstruct/cane_assembly.h"
+#include "workers/reconstruct/diagnose_util.h"
 #include "workers/reconstruct/correspondence_test_util.h"
 #include "workers/reconstruct/grow.h"
 #include "workers/reconstruct/reconstruct.h"
 
 namespace vb::reconstruct {
 namespace {
-
-double DistanceToCanes(const Eigen::Vector3d& p, const std::vector<Cane>& canes) {
-  double best = 1e9;
-  for (const Cane& c : canes) {
-    const std::vector<Eigen::Vector3d>& q = c.polyline.points;
-    for (size_t i = 0; i + 1 < q.size(); ++i) {
-      double t = 0;
-      best = std::min(best, PointSegmentDistance(p, q[i], q[i + 1], &t));
-    }
-  }
-  return best;
-}
 
 double MeanSe(const std::vector<double>& v, double* se) {
   double mean = 0;
@@ -45,22 +34,19 @@ double MeanSe(const std::vector<double>& v, double* se) {
 
 GrowOptions OptionsFromEnv() {
   GrowOptions o;
-  const auto get = [](const char* name, double* field) {
-    if (const char* text = std::getenv(name)) *field = std::atof(text);
-  };
-  get("VB_GROW_SUPPORT_PX", &o.support_px);
-  get("VB_GROW_LEN", &o.max_length_m);
-  get("VB_GROW_EPI", &o.min_epipolar_angle_deg);
-  get("VB_GROW_TURN", &o.max_turn_deg);
-  get("VB_GROW_OTHER", &o.other_cane_m);
-  get("VB_GROW_PRIOR", &o.prior_px_per_mm);
-  get("VB_GROW_OFFSET", &o.max_offset_m);
-  get("VB_GROW_MIN_LEN", &o.min_length_m);
-  get("VB_GROW_MIN_CANE", &o.min_cane_length_m);
-  get("VB_GROW_ALONG_PX", &o.support_along_px);
-  get("VB_GROW_TRIM", &o.trim_m);
-  if (const char* v = std::getenv("VB_GROW_VIEWS")) o.min_support_views = std::atoi(v);
-  if (const char* v = std::getenv("VB_GROW_END")) o.require_end_support = std::atoi(v) != 0;
+  OverrideFromEnv("VB_GROW_SUPPORT_PX", &o.support_px);
+  OverrideFromEnv("VB_GROW_LEN", &o.max_length_m);
+  OverrideFromEnv("VB_GROW_EPI", &o.min_epipolar_angle_deg);
+  OverrideFromEnv("VB_GROW_TURN", &o.max_turn_deg);
+  OverrideFromEnv("VB_GROW_OTHER", &o.other_cane_m);
+  OverrideFromEnv("VB_GROW_PRIOR", &o.prior_px_per_mm);
+  OverrideFromEnv("VB_GROW_OFFSET", &o.max_offset_m);
+  OverrideFromEnv("VB_GROW_MIN_LEN", &o.min_length_m);
+  OverrideFromEnv("VB_GROW_MIN_CANE", &o.min_cane_length_m);
+  OverrideFromEnv("VB_GROW_ALONG_PX", &o.support_along_px);
+  OverrideFromEnv("VB_GROW_TRIM", &o.trim_m);
+  OverrideFromEnv("VB_GROW_VIEWS", &o.min_support_views);
+  OverrideFromEnv("VB_GROW_END", &o.require_end_support);
   return o;
 }
 

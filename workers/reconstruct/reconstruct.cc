@@ -199,7 +199,11 @@ absl::StatusOr<ReconstructResult> ReconstructFromViews(const std::vector<View2D>
     for (const Cane& cane : result.model.canes) lines.push_back(cane.polyline);
     VB_RETURN_IF_ERROR(GrowCaneEnds(views, rig, options.volume, options.grow, &lines,
                                     &result.grow, /*tips_only=*/true));
-    for (size_t i = 0; i < lines.size(); ++i) result.model.canes[i].polyline = lines[i];
+    // Only canes take their growth: the trunk and old spurs stay as connection left them (they
+    // were passed so that growth does not run along them).
+    for (size_t i = 0; i < lines.size(); ++i) {
+      if (result.model.canes[i].kind == CaneKind::kCane) result.model.canes[i].polyline = lines[i];
+    }
     result.timings.grow_s += SecondsSince(t);
   }
 
