@@ -36,7 +36,9 @@ FallingWood WoodFallingFromCut(const VineModel& vine, size_t index, double arc_l
   return fall;
 }
 
-VineModel AfterCuts(const VineModel& vine, const std::vector<std::pair<size_t, double>>& cuts) {
+VineModel AfterCuts(const VineModel& vine, const std::vector<std::pair<size_t, double>>& cuts,
+                    std::vector<FallingWood>* falls) {
+  if (falls != nullptr) falls->clear();
   std::unordered_map<size_t, double> lowest;
   for (const auto& [index, arc] : cuts) {
     if (index >= vine.canes.size()) continue;
@@ -49,6 +51,7 @@ VineModel AfterCuts(const VineModel& vine, const std::vector<std::pair<size_t, d
     const FallingWood fall = WoodFallingFromCut(vine, index, arc);
     for (CaneId id : fall.canes) fallen.insert(id.value);
     head = head || fall.head;
+    if (falls != nullptr) falls->push_back(fall);
   }
   VineModel after = vine;
   after.canes.clear();

@@ -37,7 +37,9 @@ FallingWood WoodFallingFromCut(const VineModel& vine, size_t index, double arc_l
 // decides; each cut's falling wood (WoodFallingFromCut on the vine before any cut) is removed, cut
 // canes that do not fall are truncated there (Polyline3::TruncateAt), and the head's spheres are
 // cleared when it falls. Indices outside `vine.canes` are ignored. The result passes
-// VineModel::Validate() if `vine` does.
-VineModel AfterCuts(const VineModel& vine, const std::vector<std::pair<size_t, double>>& cuts);
+// VineModel::Validate() if `vine` does. `falls`, if given, receives each cane's lowest cut's
+// FallingWood (one per cut cane, in no set order).
+VineModel AfterCuts(const VineModel& vine, const std::vector<std::pair<size_t, double>>& cuts,
+                    std::vector<FallingWood>* falls = nullptr);
 
 }  // namespace vb

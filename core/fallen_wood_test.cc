@@ -65,8 +65,11 @@ TEST(FallenWood, CanesOfTheHeadHangOnTheTrunkTopAndATrunkCutDropsTheHead) {
 TEST(FallenWood, AfterCutsTakesTheLowestCutIgnoresUnknownIndicesAndValidates) {
   const VineModel vine = Vine();
   ASSERT_TRUE(vine.Validate().ok()) << vine.Validate();
-  const VineModel after = AfterCuts(vine, {{2, 0.5}, {2, 0.1}, {99, 0.0}});
+  std::vector<FallingWood> falls;
+  const VineModel after = AfterCuts(vine, {{2, 0.5}, {2, 0.1}, {99, 0.0}}, &falls);
   EXPECT_TRUE(after.Validate().ok()) << after.Validate();
+  ASSERT_EQ(falls.size(), 1u);  // one per cut cane, for its lowest cut
+  EXPECT_EQ(Ids(falls[0].canes), (std::vector<int64_t>{4, 5}));
   ASSERT_TRUE(after.IndexOf(CaneId{3}));
   EXPECT_NEAR(after.canes[*after.IndexOf(CaneId{3})].polyline.Length(), 0.1, 1e-12);
   EXPECT_FALSE(after.IndexOf(CaneId{4}));

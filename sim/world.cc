@@ -2,6 +2,8 @@
 #include "sim/world.h"
 
 #include <cmath>
+#include <utility>
+#include <vector>
 
 #include "absl/strings/str_cat.h"
 #include "core/fallen_wood.h"
@@ -38,8 +40,9 @@ absl::StatusOr<CutResult> SimWorld::ApplyCut(CaneId cane_id,
   result.cane_id = cane_id;
   result.arc_length_m = arc;
   result.distance_m = distance;
-  result.removed = WoodFallingFromCut(vine, *index, arc).canes;
-  vine = AfterCuts(vine, {{*index, arc}});
+  std::vector<FallingWood> fall;
+  vine = AfterCuts(vine, {{*index, arc}}, &fall);
+  result.removed = std::move(fall.front().canes);
   return result;
 }
 
