@@ -35,6 +35,31 @@ int FollowParents(const std::vector<int>& parent, std::vector<int>* kept) {
   return count;
 }
 
+// The likeliest join whose child is left out (kept 0) and whose parent is in the tree (kept 1,
+// or the trunk or head), among those `admit(k, join)` accepts; -1 if there is none.
+template <typename Admit>
+int LikeliestJoinToTree(const std::vector<JoinCandidate>& joins,
+                        const std::vector<double>& probability, const std::vector<int>& kept,
+                        Admit admit) {
+  int best = -1;
+  for (size_t k = 0; k < joins.size(); ++k) {
+    const JoinCandidate& c = joins[k];
+    if (kept[c.child] != 0 || (c.parent >= 0 && kept[c.parent] != 1)) continue;
+    if (!admit(k, c)) continue;
+    if (best < 0 || probability[k] > probability[best]) best = static_cast<int>(k);
+  }
+  return best;
+}
+
+// Keeps the child of joins[best], hung on that join's parent.
+void TakeJoin(const std::vector<JoinCandidate>& joins, int best, std::vector<int>* kept,
+              std::vector<int>* parent, std::vector<int>* join) {
+  const int child = joins[best].child;
+  (*kept)[child] = 1;
+  (*parent)[child] = joins[best].parent;
+  (*join)[child] = best;
+}
+
 // Step 3b: while a left-out cane has a candidate join to the tree (a kept cane, the trunk or
 // the head) at least rescue_min_probability likely, the likeliest such join of all is taken, and
 // the canes that hung on that cane follow it (FollowParents). A cane reaching beyond
@@ -52,19 +77,13 @@ void RescueLeftOut(const std::vector<Polyline3>& canes, double centre_x,
                     TaperTowardCentre(canes[i], centre_x) >= options.rescue_min_taper;
     }
   }
+  const auto admit = [&](size_t k, const JoinCandidate& c) {
+    return eligible[c.child] && probability[k] >= options.rescue_min_probability;
+  };
   while (true) {
-    int best = -1;
-    for (size_t k = 0; k < joins.size(); ++k) {
-      const JoinCandidate& c = joins[k];
-      if ((*kept)[c.child] != 0 || (c.parent >= 0 && (*kept)[c.parent] != 1)) continue;
-      if (!eligible[c.child] || probability[k] < options.rescue_min_probability) continue;
-      if (best < 0 || probability[k] > probability[best]) best = static_cast<int>(k);
-    }
+    const int best = LikeliestJoinToTree(joins, probability, *kept, admit);
     if (best < 0) return;
-    const int child = joins[best].child;
-    (*kept)[child] = 1;
-    (*parent)[child] = joins[best].parent;
-    (*join)[child] = best;
+    TakeJoin(joins, best, kept, parent, join);
     sum->rescued += 1 + FollowParents(*parent, kept);
   }
 }
@@ -99,21 +118,13 @@ void KeepNear(const std::vector<Polyline3>& canes, double centre_x, const std::v
     return std::abs(canes[i].points.back().x() - centre_x) <
            std::abs(canes[i].points.front().x() - centre_x);
   };
+  const auto admit = [&](size_t, const JoinCandidate& c) {
+    return near[c.child] == 1 || (near[c.child] == 2 && c.base_is_last == inner_is_last(c.child));
+  };
   while (true) {
-    int best = -1;
-    for (size_t k = 0; k < joins.size(); ++k) {
-      const JoinCandidate& c = joins[k];
-      if ((*kept)[c.child] != 0 || !near[c.child] || (c.parent >= 0 && (*kept)[c.parent] != 1)) {
-        continue;
-      }
-      if (near[c.child] == 2 && c.base_is_last != inner_is_last(c.child)) continue;
-      if (best < 0 || probability[k] > probability[best]) best = static_cast<int>(k);
-    }
+    const int best = LikeliestJoinToTree(joins, probability, *kept, admit);
     if (best < 0) return;
-    const int child = joins[best].child;
-    (*kept)[child] = 1;
-    (*parent)[child] = joins[best].parent;
-    (*join)[child] = best;
+    TakeJoin(joins, best, kept, parent, join);
     ++sum->kept_near;
     if (options.rescue_min_probability > 0.0) sum->rescued += FollowParents(*parent, kept);
   }
