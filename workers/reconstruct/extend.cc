@@ -9,17 +9,10 @@
 
 #include "Eigen/Dense"
 #include "absl/strings/str_cat.h"
+#include "workers/reconstruct/image_probes.h"
 
 namespace vb::reconstruct {
 namespace {
-
-absl::Status Positive(double value, const char* field) {
-  if (!std::isfinite(value) || value <= 0) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("extend.", field, " must be finite and > 0, is ", value));
-  }
-  return absl::OkStatus();
-}
 
 // Per view: which model cane (index into model->canes) each pixel is near, -1 for none. The
 // extension stops where its 2D path runs onto another cane: that wood is reconstructed already
@@ -37,8 +30,7 @@ class CaneLabels {
         const Eigen::Vector3d p = points[i] + (points[i + 1] - points[i]) * (double(k) / steps);
         const std::optional<Eigen::Vector2d> uv = camera.Project(p);
         if (!uv || !camera.InImage(*uv)) continue;
-        const double depth = (camera.camera_from_platform() * p).z();
-        const double r = radius_m * camera.camera_matrix(0, 0) / std::max(depth, 0.05) + margin_px;
+        const double r = ProjectedRadiusPx(camera, p, radius_m) + margin_px;
         const int ri = static_cast<int>(std::ceil(r));
         const int cx = static_cast<int>(std::lround(uv->x()));
         const int cy = static_cast<int>(std::lround(uv->y()));
@@ -182,14 +174,6 @@ std::vector<Eigen::Vector2d> Resample(const std::vector<Eigen::Vector2d>& path, 
   return out;
 }
 
-bool WoodNear(const View2D& view, const Eigen::Vector2d& uv, int r) {
-  const int cx = static_cast<int>(std::lround(uv.x())), cy = static_cast<int>(std::lround(uv.y()));
-  for (int y = std::max(0, cy - r); y <= std::min(view.height - 1, cy + r); ++y)
-    for (int x = std::max(0, cx - r); x <= std::min(view.width - 1, cx + r); ++x)
-      if (view.classes.at(x, y) != PixelClass::kBackground) return true;
-  return false;
-}
-
 // The largest, over the views, of the mean distance (px) from the projections of the cane's
 // last span_m (every 5 mm; those inside the image) to the nearest skeleton point.
 double WorstSupportPx(const Polyline3& line, const std::vector<View2D>& views,
@@ -203,16 +187,13 @@ double WorstSupportPx(const Polyline3& line, const std::vector<View2D>& views,
   for (size_t v = 0; v < views.size(); ++v) {
     const CameraCalibration& camera = rig.cameras[v];
     const View2D& view = views[v];
-    if (view.centreline_distance_px.size() != static_cast<size_t>(view.width) * view.height)
-      continue;
+    if (!HasCentrelineDistance(view)) continue;
     double sum = 0;
     int n = 0;
     for (const Eigen::Vector3d& p : samples) {
       const std::optional<Eigen::Vector2d> uv = camera.Project(p);
       if (!uv || !camera.InImage(*uv)) continue;
-      const int x = std::clamp(static_cast<int>(std::lround(uv->x())), 0, view.width - 1);
-      const int y = std::clamp(static_cast<int>(std::lround(uv->y())), 0, view.height - 1);
-      sum += view.centreline_distance_px[static_cast<size_t>(y) * view.width + x];
+      sum += CentrelineDistanceAt(view, *uv);
       ++n;
     }
     if (n > 0) worst = std::max(worst, sum / n);
@@ -287,7 +268,7 @@ absl::Status ExtendOptions::Validate() const {
                                      {max_depth_sd_m, "max_depth_sd_m"},
                                      {max_length_m, "max_length_m"},
                                      {max_turn_rad, "max_turn_rad"}}) {
-    if (absl::Status s = Positive(value, field); !s.ok()) return s;
+    if (absl::Status s = CheckPositive(value, "extend", field); !s.ok()) return s;
   }
   for (const auto& [value, field] : {std::pair{min_length_m, "min_length_m"},
                                      {anchor_span_m, "anchor_span_m"},
@@ -297,10 +278,7 @@ absl::Status ExtendOptions::Validate() const {
                                      {max_support_px, "max_support_px"},
                                      {max_tip_row_distance_m, "max_tip_row_distance_m"},
                                      {max_tip_out_of_plane, "max_tip_out_of_plane"}}) {
-    if (!std::isfinite(value) || value < 0) {
-      return absl::InvalidArgumentError(
-          absl::StrCat("extend.", field, " must be finite and >= 0, is ", value));
-    }
+    if (absl::Status s = CheckNonNegative(value, "extend", field); !s.ok()) return s;
   }
   if (anchor_points < 3) {
     return absl::InvalidArgumentError(
@@ -465,13 +443,10 @@ absl::Status ExtendCanes(const std::vector<View2D>& views, const RigCalibration&
         for (int w = 0; w < nv && !contradicted; ++w) {
           if (w == v) continue;
           const CameraCalibration& other = rig.cameras[w];
-          const std::optional<Eigen::Vector2d> uv = other.Project(points[i]);
-          const int m = options.image_margin_px;
-          if (!uv || uv->x() < m || uv->y() < m || uv->x() > other.image_width - 1 - m ||
-              uv->y() > other.image_height - 1 - m)
-            continue;
-          const double depth = (other.camera_from_platform() * points[i]).z();
-          const double r_px = tip_radius * other.camera_matrix(0, 0) / std::max(depth, 0.05);
+          const std::optional<Eigen::Vector2d> uv =
+              ProjectInside(other, points[i], options.image_margin_px);
+          if (!uv) continue;
+          const double r_px = ProjectedRadiusPx(other, points[i], tip_radius);
           contradicted =
               !WoodNear(views[w], *uv, static_cast<int>(std::ceil(options.background_px + r_px)));
         }
