@@ -149,6 +149,30 @@ Scored Score(const Truth& truth, const std::vector<Polyline3>& out) {
   return score;
 }
 
+// A piece through `points`, radius `radius_m` everywhere, with `probability` and full support.
+Piece3D PieceThrough(std::vector<Eigen::Vector3d> points, double radius_m, double probability) {
+  Piece3D piece;
+  piece.polyline.radii.assign(points.size(), radius_m);
+  piece.polyline.points = std::move(points);
+  piece.probability = probability;
+  piece.support = 1.0;
+  return piece;
+}
+
+// A straight piece from a to b: 21 points, radius 5 mm, probability 0.9.
+Piece3D StraightPiece(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  std::vector<Eigen::Vector3d> points;
+  for (int i = 0; i <= 20; ++i) points.push_back(a + (b - a) * i / 20.0);
+  return PieceThrough(std::move(points), 0.005, 0.9);
+}
+
+// How many canes AssembleCanes makes of `pieces` (no deadline); -1 if it fails.
+int CaneCount(const std::vector<Piece3D>& pieces, const AssemblyOptions& options = {}) {
+  const absl::StatusOr<std::vector<Polyline3>> canes =
+      AssembleCanes(pieces, options, Deadline::Infinite());
+  return canes.ok() ? static_cast<int>(canes->size()) : -1;
+}
+
 TEST(AssembleCanes, RecoversWholeCanesFromNoisyDuplicatedPieces) {
   int long_canes = 0, whole = 0, outputs = 0, true_canes = 0;
   for (uint64_t seed : {1011u, 1234u, 1777u}) {
@@ -196,12 +220,7 @@ TEST(AssembleCanes, MergesExactDuplicatesIntoOne) {
     cane.points.push_back({-0.2 + 0.01 * i, 0.8, 1.0 + 0.05 * std::sin(0.1 * i)});
     cane.radii.push_back(0.005);
   }
-  std::vector<Piece3D> pieces(3);
-  for (Piece3D& piece : pieces) {
-    piece.polyline = cane;
-    piece.probability = 0.9;
-    piece.support = 1.0;
-  }
+  std::vector<Piece3D> pieces(3, PieceThrough(cane.points, 0.005, 0.9));
   std::reverse(pieces[1].polyline.points.begin(), pieces[1].polyline.points.end());
   const auto canes = AssembleCanes(pieces, AssemblyOptions(), Deadline::Infinite());
   ASSERT_TRUE(canes.ok()) << canes.status();
@@ -211,88 +230,58 @@ TEST(AssembleCanes, MergesExactDuplicatesIntoOne) {
 }
 
 TEST(AssembleCanes, ChainsAcrossAGapButNotAcrossACorner) {
-  auto line = [](Eigen::Vector3d a, Eigen::Vector3d b) {
-    Piece3D piece;
-    for (int i = 0; i <= 20; ++i) {
-      piece.polyline.points.push_back(a + (b - a) * i / 20.0);
-      piece.polyline.radii.push_back(0.005);
-    }
-    piece.probability = 0.9;
-    piece.support = 1.0;
-    return piece;
-  };
   // Collinear with a 2 cm gap: one cane of 0.42 m.
-  std::vector<Piece3D> pieces = {line({0, 0.8, 1}, {0.2, 0.8, 1}), line({0.42, 0.8, 1}, {0.22, 0.8, 1})};
-  auto canes = AssembleCanes(pieces, AssemblyOptions(), Deadline::Infinite());
+  const auto canes = AssembleCanes(
+      {StraightPiece({0, 0.8, 1}, {0.2, 0.8, 1}), StraightPiece({0.42, 0.8, 1}, {0.22, 0.8, 1})},
+      AssemblyOptions(), Deadline::Infinite());
   ASSERT_TRUE(canes.ok());
   ASSERT_EQ(canes->size(), 1u);
   EXPECT_NEAR((*canes)[0].Length(), 0.42, 0.005);
   // At right angles, ends 1 cm apart: two canes (a crossing or a branch, not a continuation).
-  pieces = {line({0, 0.8, 1}, {0.2, 0.8, 1}), line({0.21, 0.8, 1.0}, {0.21, 0.8, 1.2})};
-  canes = AssembleCanes(pieces, AssemblyOptions(), Deadline::Infinite());
-  ASSERT_TRUE(canes.ok());
-  EXPECT_EQ(canes->size(), 2u);
+  EXPECT_EQ(CaneCount({StraightPiece({0, 0.8, 1}, {0.2, 0.8, 1}),
+                       StraightPiece({0.21, 0.8, 1.0}, {0.21, 0.8, 1.2})}),
+            2);
   // Two canes crossing in an X are not merged.
-  pieces = {line({-0.2, 0.8, 1}, {0.2, 0.8, 1}), line({0, 0.8, 0.8}, {0, 0.8, 1.2})};
-  canes = AssembleCanes(pieces, AssemblyOptions(), Deadline::Infinite());
-  ASSERT_TRUE(canes.ok());
-  EXPECT_EQ(canes->size(), 2u);
+  EXPECT_EQ(CaneCount({StraightPiece({-0.2, 0.8, 1}, {0.2, 0.8, 1}),
+                       StraightPiece({0, 0.8, 0.8}, {0, 0.8, 1.2})}),
+            2);
   // Parallel canes 3 cm apart stay apart.
-  pieces = {line({0, 0.8, 1}, {0.3, 0.8, 1}), line({0, 0.8, 1.03}, {0.3, 0.8, 1.03})};
-  canes = AssembleCanes(pieces, AssemblyOptions(), Deadline::Infinite());
-  ASSERT_TRUE(canes.ok());
-  EXPECT_EQ(canes->size(), 2u);
+  EXPECT_EQ(CaneCount({StraightPiece({0, 0.8, 1}, {0.3, 0.8, 1}),
+                       StraightPiece({0, 0.8, 1.03}, {0.3, 0.8, 1.03})}),
+            2);
   // A radius jump (5 mm -> 20 mm) is a different structure, not a continuation.
-  pieces = {line({0, 0.8, 1}, {0.2, 0.8, 1}), line({0.22, 0.8, 1}, {0.42, 0.8, 1})};
+  std::vector<Piece3D> pieces = {StraightPiece({0, 0.8, 1}, {0.2, 0.8, 1}),
+                                 StraightPiece({0.22, 0.8, 1}, {0.42, 0.8, 1})};
   for (double& r : pieces[1].polyline.radii) r = 0.02;
-  canes = AssembleCanes(pieces, AssemblyOptions(), Deadline::Infinite());
-  ASSERT_TRUE(canes.ok());
-  EXPECT_EQ(canes->size(), 2u);
+  EXPECT_EQ(CaneCount(pieces), 2);
 }
 
 TEST(AssembleCanes, ChainsAcrossALongGapOnlyWhenStraight) {
-  auto line = [](Eigen::Vector3d a, Eigen::Vector3d b) {
-    Piece3D piece;
-    for (int i = 0; i <= 20; ++i) {
-      piece.polyline.points.push_back(a + (b - a) * i / 20.0);
-      piece.polyline.radii.push_back(0.005);
-    }
-    piece.probability = 0.9;
-    piece.support = 1.0;
-    return piece;
-  };
   // The second piece starts `gap_m` beyond the first's end, turned by `bend_deg` about the end.
   auto pair = [&](double gap_m, double bend_deg) {
     const double t = bend_deg * 3.14159265358979 / 180.0;
     const Eigen::Vector3d start(0.2 + gap_m * std::cos(t), 0.8, 1.0 + gap_m * std::sin(t));
     const Eigen::Vector3d end = start + 0.2 * Eigen::Vector3d(std::cos(t), 0.0, std::sin(t));
-    return std::vector<Piece3D>{line({0, 0.8, 1}, {0.2, 0.8, 1}), line(start, end)};
+    return std::vector<Piece3D>{StraightPiece({0, 0.8, 1}, {0.2, 0.8, 1}),
+                                StraightPiece(start, end)};
   };
   AssemblyOptions options;
   options.max_gap_m = 0.10;
   options.max_long_gap_m = 0.15;
   options.max_long_gap_angle_deg = 12.0;
   // A post hides 13 cm of a straight cane: one cane across the gap.
-  auto canes = AssembleCanes(pair(0.13, 0.0), options, Deadline::Infinite());
+  const auto canes = AssembleCanes(pair(0.13, 0.0), options, Deadline::Infinite());
   ASSERT_TRUE(canes.ok()) << canes.status();
   ASSERT_EQ(canes->size(), 1u);
   EXPECT_NEAR((*canes)[0].Length(), 0.53, 0.01);
   // The same gap with a 20 degree turn: two canes (20 degrees is within max_chain_angle_deg,
   // which a gap of 8 cm is allowed).
-  canes = AssembleCanes(pair(0.13, 20.0), options, Deadline::Infinite());
-  ASSERT_TRUE(canes.ok());
-  EXPECT_EQ(canes->size(), 2u);
-  canes = AssembleCanes(pair(0.08, 20.0), options, Deadline::Infinite());
-  ASSERT_TRUE(canes.ok());
-  EXPECT_EQ(canes->size(), 1u);
+  EXPECT_EQ(CaneCount(pair(0.13, 20.0), options), 2);
+  EXPECT_EQ(CaneCount(pair(0.08, 20.0), options), 1);
   // Beyond max_long_gap_m, or with long gaps turned off: two canes.
-  canes = AssembleCanes(pair(0.17, 0.0), options, Deadline::Infinite());
-  ASSERT_TRUE(canes.ok());
-  EXPECT_EQ(canes->size(), 2u);
+  EXPECT_EQ(CaneCount(pair(0.17, 0.0), options), 2);
   options.max_long_gap_m = options.max_gap_m;
-  canes = AssembleCanes(pair(0.13, 0.0), options, Deadline::Infinite());
-  ASSERT_TRUE(canes.ok());
-  EXPECT_EQ(canes->size(), 2u);
+  EXPECT_EQ(CaneCount(pair(0.13, 0.0), options), 2);
 }
 
 TEST(AssembleCanes, EmptyInputGivesNoCanes) {
@@ -302,11 +291,7 @@ TEST(AssembleCanes, EmptyInputGivesNoCanes) {
 }
 
 TEST(AssembleCanes, NonFinitePieceRejects) {
-  Piece3D piece;
-  piece.polyline.points = {{0, 0.8, 1}, {0.1, 0.8, std::nan("")}};
-  piece.polyline.radii = {0.004, 0.004};
-  piece.probability = 1.0;
-  piece.support = 1.0;
+  Piece3D piece = PieceThrough({{0, 0.8, 1}, {0.1, 0.8, std::nan("")}}, 0.004, 1.0);
   const auto canes = AssembleCanes({piece, piece}, AssemblyOptions(), Deadline::Infinite());
   ASSERT_EQ(canes.status().code(), absl::StatusCode::kInvalidArgument);
   EXPECT_NE(std::string(canes.status().message()).find("pieces[0]"), std::string::npos);
@@ -337,11 +322,7 @@ TEST(AssembleCanes, InvalidOptionsRejects) {
 }
 
 TEST(AssembleCanes, ExpiredDeadlineFails) {
-  Piece3D piece;
-  piece.polyline.points = {{0, 0.8, 1}, {0.2, 0.8, 1}};
-  piece.polyline.radii = {0.004, 0.004};
-  piece.probability = 1.0;
-  piece.support = 1.0;
+  const Piece3D piece = PieceThrough({{0, 0.8, 1}, {0.2, 0.8, 1}}, 0.004, 1.0);
   EXPECT_EQ(AssembleCanes({piece}, AssemblyOptions(), Deadline::In(0.0)).status().code(),
             absl::StatusCode::kDeadlineExceeded);
 }

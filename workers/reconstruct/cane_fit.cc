@@ -12,13 +12,12 @@
 #include "core/status_macros.h"
 #include "ceres/ceres.h"
 #include "ceres/cubic_interpolation.h"
+#include "workers/reconstruct/cane_fit_internal.h"
 #include "workers/reconstruct/ceres_camera.h"
 
 namespace vb::reconstruct {
 namespace {
 
-// Coordinates beyond this (metres) are garbage, not a vine; they would only produce overflow.
-constexpr double kMaxCoordinateM = 1000.0;
 // Passes of the [1 2 1] / 4 kernel that make the rest shape.
 constexpr int kRestSmoothingPasses = 3;
 
@@ -84,7 +83,6 @@ struct GroundCost {
   double inv_sd;
 };
 
-
 // The rest shape of a cane: its points with the noise smoothed away (three [1 2 1] / 4 passes;
 // a binomial kernel of sd ~1.2 points), which would otherwise inflate its length and curvature.
 std::vector<Eigen::Vector3d> RestShape(const Polyline3& line) {
@@ -97,183 +95,7 @@ std::vector<Eigen::Vector3d> RestShape(const Polyline3& line) {
   return p;
 }
 
-absl::Status ValidateViews(const std::vector<View2D>& views, const RigCalibration& rig) {
-  if (views.size() != rig.cameras.size()) {
-    return absl::InvalidArgumentError(absl::StrCat("views: ", views.size(), " views for ",
-                                                   rig.cameras.size(), " cameras"));
-  }
-  for (size_t v = 0; v < views.size(); ++v) {
-    const View2D& view = views[v];
-    const CameraCalibration& camera = rig.cameras[v];
-    const std::string what = absl::StrCat("views[", v, "]");
-    if (view.width != camera.image_width || view.height != camera.image_height) {
-      return absl::InvalidArgumentError(absl::StrCat(what, ": size ", view.width, "x", view.height,
-                                                     " differs from camera '", camera.name, "' (",
-                                                     camera.image_width, "x", camera.image_height,
-                                                     ")"));
-    }
-    const size_t pixels = static_cast<size_t>(view.width) * view.height;
-    if (view.centreline_distance_px.size() != pixels) {
-      return absl::InvalidArgumentError(absl::StrCat(
-          what, ": centreline_distance_px has ", view.centreline_distance_px.size(),
-          " values, expected ", pixels));
-    }
-    if (view.classes.width != view.width || view.classes.height != view.height ||
-        view.classes.data.size() != pixels) {
-      return absl::InvalidArgumentError(absl::StrCat(what, ": classes image is missing or mis-sized"));
-    }
-    for (size_t i = 0; i < pixels; ++i) {
-      if (!std::isfinite(view.centreline_distance_px[i])) {
-        return absl::InvalidArgumentError(absl::StrCat(
-            what, ": centreline_distance_px is not finite at pixel (", i % view.width, ", ",
-            i / view.width, ")"));
-      }
-    }
-  }
-  return absl::OkStatus();
-}
-
-absl::Status ValidateModel(const VineModel& model) {
-  if (absl::Status s = model.Validate(); !s.ok()) return s;
-  for (size_t i = 0; i < model.canes.size(); ++i) {
-    const Cane& cane = model.canes[i];
-    for (size_t k = 0; k < cane.polyline.points.size(); ++k) {
-      if (cane.polyline.points[k].cwiseAbs().maxCoeff() > kMaxCoordinateM ||
-          cane.polyline.radii[k] > kMaxCoordinateM) {
-        return absl::InvalidArgumentError(absl::StrCat("canes[", i, "] (id ", cane.id.value,
-                                                       "): points[", k, "] is beyond 1 km"));
-      }
-    }
-  }
-  return absl::OkStatus();
-}
-
-// Fraction of a cane's in-image projections that land on (or near) foreground, and how many
-// projections were in an image.
-std::pair<double, int> ForegroundFraction(const Polyline3& line, const std::vector<View2D>& views,
-                                          const RigCalibration& rig, double tolerance_px) {
-  const int reach = static_cast<int>(std::ceil(tolerance_px));
-  int in_image = 0, on_wood = 0;
-  for (size_t v = 0; v < views.size(); ++v) {
-    const View2D& view = views[v];
-    for (const Eigen::Vector3d& p : line.points) {
-      const std::optional<Eigen::Vector2d> uv = rig.cameras[v].Project(p);
-      if (!uv || !rig.cameras[v].InImage(*uv)) continue;
-      ++in_image;
-      const int x0 = static_cast<int>(std::lround(uv->x()));
-      const int y0 = static_cast<int>(std::lround(uv->y()));
-      bool found = false;
-      for (int dy = -reach; dy <= reach && !found; ++dy) {
-        for (int dx = -reach; dx <= reach && !found; ++dx) {
-          const int x = x0 + dx, y = y0 + dy;
-          if (x < 0 || y < 0 || x >= view.width || y >= view.height) continue;
-          if (dx * dx + dy * dy > tolerance_px * tolerance_px) continue;
-          found = view.IsForeground(x, y);
-        }
-      }
-      on_wood += found;
-    }
-  }
-  return {in_image > 0 ? static_cast<double>(on_wood) / in_image : 0.0, in_image};
-}
-
-// A trunk's unseen stretch is cut at least this far below the lowest base of a cane on it.
-constexpr double kTrunkChildClearanceM = 0.05;
-
-// How many cameras have p inside their image.
-int ViewsSeeing(const Eigen::Vector3d& p, const RigCalibration& rig) {
-  int n = 0;
-  for (const CameraCalibration& camera : rig.cameras) {
-    const std::optional<Eigen::Vector2d> uv = camera.Project(p);
-    n += uv && camera.InImage(*uv);
-  }
-  return n;
-}
-
-// The arc length along `trunk` (base first) from which on it lies inside at least `min_views`
-// images, sampled every `step_m` (0 if its base already does; nullopt if no sample does).
-std::optional<double> FirstSeenArc(const Polyline3& trunk, const RigCalibration& rig,
-                                   int min_views, double step_m) {
-  const std::vector<double> arc = trunk.ArcLengths();
-  const double length = arc.back();
-  for (double s = 0.0; s < length; s += step_m) {
-    if (ViewsSeeing(trunk.PointAt(s, arc), rig) < min_views) continue;
-    // Refine the boundary between the last unseen sample and this one.
-    double lo = std::max(0.0, s - step_m), hi = s;
-    if (s == 0.0) return 0.0;
-    for (int k = 0; k < 12; ++k) {
-      const double mid = 0.5 * (lo + hi);
-      (ViewsSeeing(trunk.PointAt(mid, arc), rig) >= min_views ? hi : lo) = mid;
-    }
-    return hi;
-  }
-  return std::nullopt;
-}
-
-// Splits `line` at arc length s into [0, s] and [s, end], the point at s in both.
-std::pair<Polyline3, Polyline3> SplitAt(const Polyline3& line, double s) {
-  const std::vector<double> arc = line.ArcLengths();
-  Polyline3 below, above;
-  const Eigen::Vector3d at = line.PointAt(s, arc);
-  const double r = line.RadiusAt(s, arc);
-  for (size_t i = 0; i < line.points.size(); ++i) {
-    if (arc[i] < s) below.points.push_back(line.points[i]), below.radii.push_back(line.radii[i]);
-  }
-  below.points.push_back(at), below.radii.push_back(r);
-  above.points.push_back(at), above.radii.push_back(r);
-  for (size_t i = 0; i < line.points.size(); ++i) {
-    if (arc[i] > s) above.points.push_back(line.points[i]), above.radii.push_back(line.radii[i]);
-  }
-  return {below, above};
-}
-
 }  // namespace
-
-absl::Status FitOptions::Validate() const {
-  const std::pair<const char*, double> positive[] = {
-      {"point_spacing_m", point_spacing_m},       {"reprojection_sd_px", reprojection_sd_px},
-      {"pseudo_huber_t_sd", pseudo_huber_t_sd},   {"kink_sd_m", kink_sd_m},
-      {"spacing_sd_m", spacing_sd_m},             {"pin_sd_m", pin_sd_m},
-      {"detached_base_sd_m", detached_base_sd_m}, {"function_tolerance", function_tolerance},
-      {"unseen_prior_sd_m", unseen_prior_sd_m},
-      {"foreground_tolerance_px", foreground_tolerance_px}};
-  for (const auto& [name, value] : positive) {
-    if (!(std::isfinite(value) && value > 0.0)) {
-      return absl::InvalidArgumentError(absl::StrCat(name, ": must be finite and > 0, is ", value));
-    }
-  }
-  for (const auto& [name, value] : {std::pair{"attach_distance_m", attach_distance_m},
-                                    std::pair{"trunk_unseen_keep_m", trunk_unseen_keep_m},
-                                    std::pair{"ground_snap_m", ground_snap_m}}) {
-    if (!(std::isfinite(value) && value >= 0.0)) {
-      return absl::InvalidArgumentError(absl::StrCat(name, ": must be finite and >= 0, is ", value));
-    }
-  }
-  for (const auto& [name, value] :
-       {std::pair{"max_outside_fraction", max_outside_fraction},
-        std::pair{"min_foreground_fraction", min_foreground_fraction}}) {
-    if (!(value >= 0.0 && value <= 1.0)) {
-      return absl::InvalidArgumentError(absl::StrCat(name, ": must be in [0, 1], is ", value));
-    }
-  }
-  if (max_iterations < 1) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("max_iterations: must be >= 1, is ", max_iterations));
-  }
-  if (trunk_min_views < 0) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("trunk_min_views: must be >= 0, is ", trunk_min_views));
-  }
-  if (min_visible_points < 1) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("min_visible_points: must be >= 1, is ", min_visible_points));
-  }
-  const Eigen::AlignedBox3d& box = working_volume.box;
-  if (!box.min().allFinite() || !box.max().allFinite() || box.isEmpty()) {
-    return absl::InvalidArgumentError("working_volume: box must be finite and non-empty");
-  }
-  return absl::OkStatus();
-}
 
 absl::Status RefineModel(VineModel* model, const std::vector<View2D>& views,
                          const RigCalibration& rig, const FitOptions& options,
@@ -285,46 +107,21 @@ absl::Status RefineModel(VineModel* model, const std::vector<View2D>& views,
   if (model == nullptr) return absl::InvalidArgumentError("model: null");
   if (absl::Status s = options.Validate(); !s.ok()) return s;
   if (absl::Status s = rig.Validate(); !s.ok()) return s;
-  if (absl::Status s = ValidateViews(views, rig); !s.ok()) return s;
-  if (absl::Status s = ValidateModel(*model); !s.ok()) return s;
+  if (absl::Status s = cane_fit_internal::ValidateViews(views, rig); !s.ok()) return s;
+  if (absl::Status s = cane_fit_internal::ValidateModel(*model); !s.ok()) return s;
   out.canes_in = out.canes_out = static_cast<int>(model->canes.size());
   if (model->canes.empty()) return absl::OkStatus();
   if (absl::Status s = deadline.Check("RefineModel"); !s.ok()) return s;
 
-  // Parameters: every resampled point is its own block of 3.
+  // Parameters: every resampled point is its own block of 3. The trunk's base stretch no
+  // trunk_min_views images see is a straight guess (head.h): it goes to the obstacles at the end
+  // (the model is untouched until then). Without it the ground pin below no longer applies.
   const size_t cane_count = model->canes.size();
-  std::vector<Polyline3> lines(cane_count);
-  // The trunk's base stretch no trunk_min_views images see is a straight guess (head.h): it
-  // goes to the obstacles at the end (the model is untouched until then). Without it the
-  // ground pin below no longer applies.
-  std::vector<WoodObstacle> unseen;
-  std::vector<size_t> unseen_of;  // the trunk each unseen stretch was cut from
-  std::vector<bool> split(cane_count, false);  // the trunk lost its base stretch: no ground pin
-  for (size_t c = 0; c < cane_count; ++c) {
-    const Polyline3& source = model->canes[c].polyline;
-    double s = 0.0;
-    if (options.trunk_min_views > 0 && !model->canes[c].parent_id.has_value()) {
-      const std::optional<double> seen =
-          FirstSeenArc(source, rig, options.trunk_min_views, 0.005);
-      if (seen.has_value()) s = *seen - options.trunk_unseen_keep_m;
-      // Wood hanging on the trunk keeps the trunk it hangs on: the cut stays kTrunkChildClearanceM
-      // below the lowest base of a cane on the trunk.
-      for (const Cane& child : model->canes) {
-        if (child.parent_id == model->canes[c].id && !child.polyline.points.empty()) {
-          s = std::min(s, source.Project(child.polyline.points.front()) - kTrunkChildClearanceM);
-        }
-      }
-    }
-    if (s > 1e-6 && s < source.Length() - 0.01) {
-      auto [below, above] = SplitAt(source, s);
-      unseen.push_back(WoodObstacle{std::move(below)});
-      unseen_of.push_back(c);
-      lines[c] = above.Resampled(options.point_spacing_m);
-      split[c] = true;
-    } else {
-      lines[c] = source.Resampled(options.point_spacing_m);
-    }
-  }
+  cane_fit_internal::FitLines fit_lines = cane_fit_internal::LinesForFit(*model, rig, options);
+  std::vector<Polyline3>& lines = fit_lines.lines;
+  std::vector<WoodObstacle>& unseen = fit_lines.unseen;
+  const std::vector<size_t>& unseen_of = fit_lines.unseen_of;
+  const std::vector<bool>& split = fit_lines.split;
   std::vector<std::vector<double>> params(cane_count);
   for (size_t c = 0; c < cane_count; ++c) {
     for (const Eigen::Vector3d& p : lines[c].points) params[c].insert(params[c].end(), {p.x(), p.y(), p.z()});
@@ -349,7 +146,7 @@ absl::Status RefineModel(VineModel* model, const std::vector<View2D>& views,
         continue;
       }
       const auto [fraction, visible] =
-          ForegroundFraction(lines[c], views, rig, options.foreground_tolerance_px);
+          cane_fit_internal::ForegroundFraction(lines[c], views, rig, options.foreground_tolerance_px);
       if (visible >= options.min_visible_points && fraction < options.min_foreground_fraction) {
         remove[c] = 1;
         ++out.rejected_background;

@@ -163,21 +163,40 @@ bool NearAnyCane(const Eigen::Vector3d& p, const std::vector<Cane>& canes, doubl
   return false;
 }
 
-double DistanceToCanes(const Eigen::Vector3d& p, const std::vector<Cane>& canes,
-                       Eigen::Vector3d* nearest) {
+namespace {
+
+// Distance from p to the nearest segment of the polylines line_of(items[i]), as DistanceToCanes.
+template <typename Item, typename LineOf>
+double DistanceToNearest(const Eigen::Vector3d& p, const std::vector<Item>& items, LineOf line_of,
+                         Eigen::Vector3d* nearest, int* index) {
   double best = 1e9;
-  for (const Cane& c : canes) {
-    const std::vector<Eigen::Vector3d>& q = c.polyline.points;
+  for (size_t k = 0; k < items.size(); ++k) {
+    const std::vector<Eigen::Vector3d>& q = line_of(items[k]).points;
     for (size_t i = 0; i + 1 < q.size(); ++i) {
       double t = 0;
       const double d = PointSegmentDistance(p, q[i], q[i + 1], &t);
       if (d < best) {
         best = d;
         if (nearest) *nearest = q[i] + t * (q[i + 1] - q[i]);
+        if (index) *index = static_cast<int>(k);
       }
     }
   }
   return best;
+}
+
+}  // namespace
+
+double DistanceToCanes(const Eigen::Vector3d& p, const std::vector<Cane>& canes,
+                       Eigen::Vector3d* nearest, int* cane) {
+  return DistanceToNearest(
+      p, canes, [](const Cane& c) -> const Polyline3& { return c.polyline; }, nearest, cane);
+}
+
+double DistanceToLines(const Eigen::Vector3d& p, const std::vector<Polyline3>& lines,
+                       Eigen::Vector3d* nearest, int* line) {
+  return DistanceToNearest(
+      p, lines, [](const Polyline3& l) -> const Polyline3& { return l; }, nearest, line);
 }
 
 VineModel Flat(const std::vector<Polyline3>& lines) {

@@ -125,9 +125,13 @@ bool NearAnyCane(const Eigen::Vector3d& p, const std::vector<Cane>& canes,
                  double radius_m = 0.01);
 
 // Distance from p to the nearest segment of the canes' polylines (1e9 if none); `nearest`, if
-// given, gets that nearest point.
+// given, gets that nearest point and `cane`, if given, the index in `canes` of the cane it lies
+// on (both left as they are when there is no segment).
 double DistanceToCanes(const Eigen::Vector3d& p, const std::vector<Cane>& canes,
-                       Eigen::Vector3d* nearest = nullptr);
+                       Eigen::Vector3d* nearest = nullptr, int* cane = nullptr);
+// The same over bare polylines; `line` gets the index in `lines`.
+double DistanceToLines(const Eigen::Vector3d& p, const std::vector<Polyline3>& lines,
+                       Eigen::Vector3d* nearest = nullptr, int* line = nullptr);
 
 // Every polyline as a cane on a stand-in trunk (the first), so that recall and precision of a bag
 // of unconnected polylines can be scored with the bench's metrics (core/model_metrics.h).

@@ -82,6 +82,19 @@ TEST(DistanceToCanes, NearestPointOfTheNearestCane) {
   EXPECT_FALSE(NearAnyCane({0.5, 0.02, 0}, canes));
   EXPECT_TRUE(NearAnyCane({0.5, 0.02, 0}, canes, 0.03));
   EXPECT_EQ(DistanceToCanes({0, 0, 0}, {}), 1e9);
+  // The index of the nearest cane, and the same over bare polylines.
+  int index = -1;
+  EXPECT_NEAR(DistanceToCanes({0.5, 0.9, 0}, canes, nullptr, &index), 0.1, 1e-12);
+  EXPECT_EQ(index, 1);
+  EXPECT_NEAR(DistanceToCanes({0.5, 0.2, 0}, canes, nullptr, &index), 0.2, 1e-12);
+  EXPECT_EQ(index, 0);
+  const std::vector<Polyline3> lines = {canes[0].polyline, canes[1].polyline};
+  EXPECT_NEAR(DistanceToLines({0.5, 0.995, 0}, lines, &nearest, &index), 0.005, 1e-12);
+  EXPECT_EQ(index, 1);
+  EXPECT_NEAR((nearest - Eigen::Vector3d(0.5, 1, 0)).norm(), 0.0, 1e-12);
+  index = 7;
+  EXPECT_EQ(DistanceToLines({0, 0, 0}, {}, nullptr, &index), 1e9);
+  EXPECT_EQ(index, 7);
 }
 
 TEST(Flat, FirstLineIsTheTrunkTheRestHangOnIt) {

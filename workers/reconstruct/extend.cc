@@ -1,224 +1,23 @@
 // SPDX-License-Identifier: Apache-2.0
+// The single-view extension's depths and the stage itself (extend.h); its 2D paths are in
+// extend_paths.cc, its which-tips rules and anchors in extend_tips.cc.
 #include "workers/reconstruct/extend.h"
 
 #include <algorithm>
 #include <cmath>
 #include <optional>
 #include <string>
-#include <unordered_set>
 
 #include "Eigen/Dense"
 #include "absl/strings/str_cat.h"
+#include "workers/reconstruct/extend_internal.h"
+#include "workers/reconstruct/image_probes.h"
 
 namespace vb::reconstruct {
 namespace {
 
-absl::Status Positive(double value, const char* field) {
-  if (!std::isfinite(value) || value <= 0) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("extend.", field, " must be finite and > 0, is ", value));
-  }
-  return absl::OkStatus();
-}
-
-// Per view: which model cane (index into model->canes) each pixel is near, -1 for none. The
-// extension stops where its 2D path runs onto another cane: that wood is reconstructed already
-// (or the path has switched to a cane it crosses).
-class CaneLabels {
- public:
-  CaneLabels(int width, int height) : width_(width), height_(height), label_(width * height, -1) {}
-
-  void Draw(const CameraCalibration& camera, const std::vector<Eigen::Vector3d>& points,
-            double radius_m, double margin_px, int label) {
-    for (size_t i = 0; i + 1 < points.size(); ++i) {
-      const double length = (points[i + 1] - points[i]).norm();
-      const int steps = std::max(1, static_cast<int>(std::ceil(length / 0.001)));
-      for (int k = 0; k <= steps; ++k) {
-        const Eigen::Vector3d p = points[i] + (points[i + 1] - points[i]) * (double(k) / steps);
-        const std::optional<Eigen::Vector2d> uv = camera.Project(p);
-        if (!uv || !camera.InImage(*uv)) continue;
-        const double depth = (camera.camera_from_platform() * p).z();
-        const double r = radius_m * camera.camera_matrix(0, 0) / std::max(depth, 0.05) + margin_px;
-        const int ri = static_cast<int>(std::ceil(r));
-        const int cx = static_cast<int>(std::lround(uv->x()));
-        const int cy = static_cast<int>(std::lround(uv->y()));
-        for (int y = std::max(0, cy - ri); y <= std::min(height_ - 1, cy + ri); ++y) {
-          for (int x = std::max(0, cx - ri); x <= std::min(width_ - 1, cx + ri); ++x) {
-            if ((x - uv->x()) * (x - uv->x()) + (y - uv->y()) * (y - uv->y()) <= r * r)
-              label_[static_cast<size_t>(y) * width_ + x] = label;
-          }
-        }
-      }
-    }
-  }
-
-  int At(const Eigen::Vector2d& uv) const {
-    const int x = static_cast<int>(std::lround(uv.x()));
-    const int y = static_cast<int>(std::lround(uv.y()));
-    if (x < 0 || y < 0 || x >= width_ || y >= height_) return -1;
-    return label_[static_cast<size_t>(y) * width_ + x];
-  }
-
- private:
-  int width_, height_;
-  std::vector<int> label_;
-};
-
-// Skeleton points of a view in 8 px cells, for finding the path under a projected tip.
-class SkeletonIndex {
- public:
-  explicit SkeletonIndex(const View2D& view) : view_(view) {
-    cols_ = view.width / kCell + 1;
-    rows_ = view.height / kCell + 1;
-    cells_.resize(static_cast<size_t>(cols_) * rows_);
-    for (size_t s = 0; s < view.segments.size(); ++s) {
-      const std::vector<Eigen::Vector2d>& pts = view.segments[s].points;
-      for (size_t k = 0; k < pts.size(); ++k) {
-        const int cx = std::clamp(static_cast<int>(pts[k].x()) / kCell, 0, cols_ - 1);
-        const int cy = std::clamp(static_cast<int>(pts[k].y()) / kCell, 0, rows_ - 1);
-        cells_[static_cast<size_t>(cy) * cols_ + cx].push_back({int(s), int(k)});
-      }
-    }
-  }
-
-  // The skeleton point nearest to uv within r px: (segment, index), or nullopt.
-  std::optional<std::pair<int, int>> Nearest(const Eigen::Vector2d& uv, double r) const {
-    std::optional<std::pair<int, int>> best;
-    double best_d2 = r * r;
-    const int x0 = std::max(0, static_cast<int>((uv.x() - r) / kCell));
-    const int x1 = std::min(cols_ - 1, static_cast<int>((uv.x() + r) / kCell));
-    const int y0 = std::max(0, static_cast<int>((uv.y() - r) / kCell));
-    const int y1 = std::min(rows_ - 1, static_cast<int>((uv.y() + r) / kCell));
-    for (int cy = y0; cy <= y1; ++cy) {
-      for (int cx = x0; cx <= x1; ++cx) {
-        for (const auto& [s, k] : cells_[static_cast<size_t>(cy) * cols_ + cx]) {
-          const double d2 = (view_.segments[s].points[k] - uv).squaredNorm();
-          if (d2 <= best_d2) best_d2 = d2, best = std::make_pair(s, k);
-        }
-      }
-    }
-    return best;
-  }
-
- private:
-  static constexpr int kCell = 8;
-  const View2D& view_;
-  int cols_ = 0, rows_ = 0;
-  std::vector<std::vector<std::pair<int, int>>> cells_;
-};
-
-// Unit direction of a 2D path over its first (from_front) or last ~`span` px.
-Eigen::Vector2d PathDirection(const std::vector<Eigen::Vector2d>& pts, bool from_front,
-                              double span = 6.0) {
-  if (pts.size() < 2) return Eigen::Vector2d::Zero();
-  const int n = static_cast<int>(pts.size());
-  const Eigen::Vector2d anchor = from_front ? pts.front() : pts.back();
-  Eigen::Vector2d other = from_front ? pts.back() : pts.front();
-  for (int i = 1; i < n; ++i) {
-    const Eigen::Vector2d& q = from_front ? pts[i] : pts[n - 1 - i];
-    if ((q - anchor).norm() >= span) {
-      other = q;
-      break;
-    }
-  }
-  const Eigen::Vector2d d =
-      from_front ? Eigen::Vector2d(other - anchor) : Eigen::Vector2d(anchor - other);
-  return d.norm() > 0 ? Eigen::Vector2d(d.normalized()) : Eigen::Vector2d::Zero();
-}
-
-// The skeleton path from point k of segment s, walking toward increasing indices (forward) or
-// decreasing, through junctions where a path continues within max_turn; at most max_px long.
-std::vector<Eigen::Vector2d> FollowSkeleton(const View2D& view, int s, int k, bool forward,
-                                            double max_turn, double max_px) {
-  std::vector<Eigen::Vector2d> path;
-  std::unordered_set<int> visited;
-  double length = 0;
-  while (true) {
-    visited.insert(s);
-    const std::vector<Eigen::Vector2d>& pts = view.segments[s].points;
-    const int n = static_cast<int>(pts.size());
-    for (int i = k; i >= 0 && i < n; i += forward ? 1 : -1) {
-      if (!path.empty()) length += (pts[i] - path.back()).norm();
-      path.push_back(pts[i]);
-      if (length >= max_px) return path;
-    }
-    const int node = forward ? view.segments[s].node_end : view.segments[s].node_begin;
-    if (node < 0 || node >= static_cast<int>(view.nodes.size())) return path;
-    const Eigen::Vector2d in = PathDirection(path, false);
-    int best = -1;
-    bool best_forward = true;
-    double best_turn = max_turn;
-    for (int s2 : view.nodes[node].segments) {
-      if (visited.count(s2)) continue;
-      const Segment2D& seg = view.segments[s2];
-      for (bool f : {true, false}) {
-        if ((f ? seg.node_begin : seg.node_end) != node) continue;
-        std::vector<Eigen::Vector2d> pts2 = seg.points;
-        if (!f) std::reverse(pts2.begin(), pts2.end());
-        const Eigen::Vector2d out = PathDirection(pts2, true);
-        const double turn = std::acos(std::clamp(in.dot(out), -1.0, 1.0));
-        if (turn < best_turn) best_turn = turn, best = s2, best_forward = f;
-      }
-    }
-    if (best < 0) return path;
-    s = best;
-    forward = best_forward;
-    k = forward ? 0 : static_cast<int>(view.segments[s].points.size()) - 1;
-  }
-}
-
-// Points of `path` every `step` px of arc length, starting `step` past its first point.
-std::vector<Eigen::Vector2d> Resample(const std::vector<Eigen::Vector2d>& path, double step) {
-  std::vector<Eigen::Vector2d> out;
-  double next = step, at = 0;
-  for (size_t i = 0; i + 1 < path.size(); ++i) {
-    const double seg = (path[i + 1] - path[i]).norm();
-    while (seg > 0 && next <= at + seg) {
-      out.push_back(path[i] + (path[i + 1] - path[i]) * ((next - at) / seg));
-      next += step;
-    }
-    at += seg;
-  }
-  return out;
-}
-
-bool WoodNear(const View2D& view, const Eigen::Vector2d& uv, int r) {
-  const int cx = static_cast<int>(std::lround(uv.x())), cy = static_cast<int>(std::lround(uv.y()));
-  for (int y = std::max(0, cy - r); y <= std::min(view.height - 1, cy + r); ++y)
-    for (int x = std::max(0, cx - r); x <= std::min(view.width - 1, cx + r); ++x)
-      if (view.classes.at(x, y) != PixelClass::kBackground) return true;
-  return false;
-}
-
-// The largest, over the views, of the mean distance (px) from the projections of the cane's
-// last span_m (every 5 mm; those inside the image) to the nearest skeleton point.
-double WorstSupportPx(const Polyline3& line, const std::vector<View2D>& views,
-                      const RigCalibration& rig, double span_m) {
-  const std::vector<double> arc = line.ArcLengths();
-  const double length = arc.back();
-  std::vector<Eigen::Vector3d> samples;
-  for (double s = std::max(0.0, length - span_m); s <= length + 1e-9; s += 0.005)
-    samples.push_back(line.PointAt(s, arc));
-  double worst = 0;
-  for (size_t v = 0; v < views.size(); ++v) {
-    const CameraCalibration& camera = rig.cameras[v];
-    const View2D& view = views[v];
-    if (view.centreline_distance_px.size() != static_cast<size_t>(view.width) * view.height)
-      continue;
-    double sum = 0;
-    int n = 0;
-    for (const Eigen::Vector3d& p : samples) {
-      const std::optional<Eigen::Vector2d> uv = camera.Project(p);
-      if (!uv || !camera.InImage(*uv)) continue;
-      const int x = std::clamp(static_cast<int>(std::lround(uv->x())), 0, view.width - 1);
-      const int y = std::clamp(static_cast<int>(std::lround(uv->y())), 0, view.height - 1);
-      sum += view.centreline_distance_px[static_cast<size_t>(y) * view.width + x];
-      ++n;
-    }
-    if (n > 0) worst = std::max(worst, sum / n);
-  }
-  return worst;
-}
+using extend_internal::CaneLabels;
+using extend_internal::SkeletonIndex;
 
 struct Extension {
   std::vector<Eigen::Vector3d> points;
@@ -276,6 +75,101 @@ void SolveDepths(const CameraCalibration& camera, const std::vector<Eigen::Vecto
   }
 }
 
+// A tip about to be extended: what every view's attempt continues.
+struct Tip {
+  int cane = -1;                         // index into the model's canes
+  std::vector<Eigen::Vector3d> anchors;  // oldest first, the tip last (TipAnchors)
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();    // anchors.back()
+  Eigen::Vector3d tangent = Eigen::Vector3d::Zero();  // unit, from the last two anchors
+  double radius_m = 0.0;                 // the cane's last radius
+};
+
+// Whether another view than `v` that sees p (inside its image by image_margin_px) shows only
+// background within background_px plus the projected tip radius of it.
+bool Contradicted(const std::vector<View2D>& views, const RigCalibration& rig, int v,
+                  const Eigen::Vector3d& p, double radius_m, const ExtendOptions& options) {
+  for (size_t w = 0; w < views.size(); ++w) {
+    if (static_cast<int>(w) == v) continue;
+    const CameraCalibration& other = rig.cameras[w];
+    const std::optional<Eigen::Vector2d> uv = ProjectInside(other, p, options.image_margin_px);
+    if (!uv) continue;
+    const double r_px = ProjectedRadiusPx(other, p, radius_m);
+    if (!WoodNear(views[w], *uv, static_cast<int>(std::ceil(options.background_px + r_px))))
+      return true;
+  }
+  return false;
+}
+
+// The extension of `tip` along view v's skeleton (empty points if there is none), cut where a
+// rule of extend.h stops it.
+Extension ExtendInView(const std::vector<View2D>& views, const RigCalibration& rig, int v,
+                       const SkeletonIndex& skeleton, const CaneLabels& labels, const Tip& tip,
+                       double plane_y, const WorkingVolume& volume, const ExtendOptions& options) {
+  Extension ext;
+  const CameraCalibration& camera = rig.cameras[v];
+  const std::optional<Eigen::Vector2d> uv_tip = camera.Project(tip.point);
+  const std::optional<Eigen::Vector2d> uv_ahead =
+      camera.Project(tip.point + options.step_m * tip.tangent);
+  if (!uv_tip || !uv_ahead || !camera.InImage(*uv_tip)) return ext;
+  const Eigen::Vector2d ahead = *uv_ahead - *uv_tip;
+  const double step_px = ahead.norm();
+  if (step_px < 0.5) return ext;  // the cane runs along the ray: depth is unobservable
+  const auto snapped = skeleton.Nearest(*uv_tip, options.snap_px);
+  if (!snapped) return ext;
+  const auto [s, k] = *snapped;
+  const std::vector<Eigen::Vector2d>& seg = views[v].segments[s].points;
+  // Walk the way the cane points.
+  const int n = static_cast<int>(seg.size());
+  const Eigen::Vector2d local = seg[std::min(n - 1, k + 2)] - seg[std::max(0, k - 2)];
+  const bool forward = local.dot(ahead) >= 0;
+  const double max_px = step_px * (options.max_length_m / options.step_m + 2);
+  const std::vector<Eigen::Vector2d> path =
+      extend_internal::FollowSkeleton(views[v], s, k, forward, options.max_turn_rad, max_px);
+  const Eigen::Vector2d start_dir = extend_internal::PathDirection(path, true);
+  if (start_dir.dot(ahead.normalized()) < std::cos(options.max_turn_rad)) return ext;
+  std::vector<Eigen::Vector2d> pixels = extend_internal::Resample(path, step_px);
+  ext.view = v;
+  if (pixels.size() >= static_cast<size_t>(options.max_length_m / options.step_m))
+    ext.stop = ExtendStop::kMaxLength;
+  // Up to where the path runs onto another model cane.
+  size_t keep = 0;
+  while (keep < pixels.size()) {
+    const int label = labels.At(pixels[keep]);
+    if (label >= 0 && label != tip.cane) {
+      ext.stop = ExtendStop::kOtherCane;
+      break;
+    }
+    ++keep;
+  }
+  pixels.resize(keep);
+  if (pixels.empty()) return ext;
+  std::vector<Eigen::Vector3d> points;
+  std::vector<double> sd;
+  SolveDepths(camera, tip.anchors, pixels, plane_y, options, &points, &sd);
+  for (size_t i = 0; i < points.size(); ++i) {
+    if (sd[i] > options.max_depth_sd_m) {
+      ext.uncertain = true;
+      ext.stop = ExtendStop::kUncertain;
+      break;
+    }
+    if (!volume.Contains(points[i])) {
+      ext.stop = ExtendStop::kVolume;
+      break;
+    }
+    if (Contradicted(views, rig, v, points[i], tip.radius_m, options)) {
+      ext.contradicted = true;
+      ext.stop = ExtendStop::kContradicted;
+      break;
+    }
+    ext.points.push_back(points[i]);
+  }
+  double ext_length = 0;
+  for (size_t i = 0; i < ext.points.size(); ++i)
+    ext_length += ((i == 0 ? tip.point : ext.points[i - 1]) - ext.points[i]).norm();
+  if (ext_length < options.min_length_m) ext.points.clear();
+  return ext;
+}
+
 }  // namespace
 
 absl::Status ExtendOptions::Validate() const {
@@ -287,7 +181,7 @@ absl::Status ExtendOptions::Validate() const {
                                      {max_depth_sd_m, "max_depth_sd_m"},
                                      {max_length_m, "max_length_m"},
                                      {max_turn_rad, "max_turn_rad"}}) {
-    if (absl::Status s = Positive(value, field); !s.ok()) return s;
+    if (absl::Status s = CheckPositive(value, "extend", field); !s.ok()) return s;
   }
   for (const auto& [value, field] : {std::pair{min_length_m, "min_length_m"},
                                      {anchor_span_m, "anchor_span_m"},
@@ -297,10 +191,7 @@ absl::Status ExtendOptions::Validate() const {
                                      {max_support_px, "max_support_px"},
                                      {max_tip_row_distance_m, "max_tip_row_distance_m"},
                                      {max_tip_out_of_plane, "max_tip_out_of_plane"}}) {
-    if (!std::isfinite(value) || value < 0) {
-      return absl::InvalidArgumentError(
-          absl::StrCat("extend.", field, " must be finite and >= 0, is ", value));
-    }
+    if (absl::Status s = CheckNonNegative(value, "extend", field); !s.ok()) return s;
   }
   if (anchor_points < 3) {
     return absl::InvalidArgumentError(
@@ -353,139 +244,29 @@ absl::Status ExtendCanes(const std::vector<View2D>& views, const RigCalibration&
   for (size_t c = 0; c < model->canes.size(); ++c) {
     Cane& cane = model->canes[c];
     if (cane.kind != CaneKind::kCane) continue;
-    const double length = cane.polyline.Length();
-    if (length < options.min_cane_length_m) continue;
+    if (cane.polyline.Length() < options.min_cane_length_m) continue;
     ++sum.tips_tried;
     if (options.max_support_px > 0 &&
-        WorstSupportPx(cane.polyline, views, rig, options.support_span_m) >
+        TipSupportOf(cane.polyline, views, rig, options.support_span_m).worst_mean_px >
             options.max_support_px) {
       ++sum.tips_skipped;
       continue;
     }
-    const std::vector<double> arc = cane.polyline.ArcLengths();
-    std::vector<Eigen::Vector3d> anchors;
-    for (int k = options.anchor_points - 1; k >= 0; --k)
-      anchors.push_back(cane.polyline.PointAt(std::max(0.0, length - k * options.step_m), arc));
-    if (options.anchor_span_m > 0) {
-      // A line through the last anchor_span_m of the cane: one noisy point near the tip would
-      // otherwise set the direction the depths continue in.
-      const double span = std::min(options.anchor_span_m, length);
-      const int m = std::max(3, static_cast<int>(span / 0.005) + 1);
-      Eigen::Vector3d mean_p = Eigen::Vector3d::Zero();
-      double mean_s = 0;
-      std::vector<std::pair<double, Eigen::Vector3d>> samples;
-      for (int i = 0; i < m; ++i) {
-        const double s_i = length - span * i / (m - 1);
-        samples.emplace_back(s_i, cane.polyline.PointAt(s_i, arc));
-        mean_p += samples.back().second;
-        mean_s += s_i;
-      }
-      mean_p /= m;
-      mean_s /= m;
-      Eigen::Vector3d slope = Eigen::Vector3d::Zero();
-      double var_s = 0;
-      for (const auto& [s_i, p_i] : samples) {
-        slope += (s_i - mean_s) * (p_i - mean_p);
-        var_s += (s_i - mean_s) * (s_i - mean_s);
-      }
-      slope /= var_s;
-      // Anchor the line at the tip as reconstructed (its projection continues into the 2D path).
-      const Eigen::Vector3d tip_point = cane.polyline.points.back();
-      for (int k = 0; k < options.anchor_points; ++k)
-        anchors[k] = tip_point - (options.anchor_points - 1 - k) * options.step_m * slope;
-    }
-    const Eigen::Vector3d tip = anchors.back();
-    const Eigen::Vector3d tangent = (tip - anchors[anchors.size() - 2]).normalized();
-    const double tip_radius = cane.polyline.radii.back();
-    // Tips of which a wrong one is likelier than a right one is useful (docs/reconstruction.md,
-    // step 4c, "Which tips"): far along the row, where neighbours' canes run along the same
-    // wires, and tips pointing toward or away from the cameras, mostly mis-depthed ends.
-    if ((options.max_tip_row_distance_m > 0 && trunk_x &&
-         std::abs(tip.x() - *trunk_x) > options.max_tip_row_distance_m) ||
-        (options.max_tip_out_of_plane > 0 &&
-         std::abs(tangent.y()) > options.max_tip_out_of_plane)) {
+    Tip tip;
+    tip.cane = static_cast<int>(c);
+    tip.anchors = extend_internal::TipAnchors(cane.polyline, options);
+    tip.point = tip.anchors.back();
+    tip.tangent = (tip.point - tip.anchors[tip.anchors.size() - 2]).normalized();
+    tip.radius_m = cane.polyline.radii.back();
+    if (extend_internal::FarOrAcross(tip.point, tip.tangent, trunk_x, options)) {
       ++sum.tips_skipped;
       continue;
     }
 
     Extension best;
     for (int v = 0; v < nv; ++v) {
-      const CameraCalibration& camera = rig.cameras[v];
-      const std::optional<Eigen::Vector2d> uv_tip = camera.Project(tip);
-      const std::optional<Eigen::Vector2d> uv_ahead =
-          camera.Project(tip + options.step_m * tangent);
-      if (!uv_tip || !uv_ahead || !camera.InImage(*uv_tip)) continue;
-      const Eigen::Vector2d ahead = *uv_ahead - *uv_tip;
-      const double step_px = ahead.norm();
-      if (step_px < 0.5) continue;  // the cane runs along the ray: depth is unobservable
-      const auto snapped = skeletons[v].Nearest(*uv_tip, options.snap_px);
-      if (!snapped) continue;
-      const auto [s, k] = *snapped;
-      const std::vector<Eigen::Vector2d>& seg = views[v].segments[s].points;
-      // Walk the way the cane points.
-      const int n = static_cast<int>(seg.size());
-      const Eigen::Vector2d local = seg[std::min(n - 1, k + 2)] - seg[std::max(0, k - 2)];
-      const bool forward = local.dot(ahead) >= 0;
-      const double max_px = step_px * (options.max_length_m / options.step_m + 2);
-      const std::vector<Eigen::Vector2d> path =
-          FollowSkeleton(views[v], s, k, forward, options.max_turn_rad, max_px);
-      const Eigen::Vector2d start_dir = PathDirection(path, true);
-      if (start_dir.dot(ahead.normalized()) < std::cos(options.max_turn_rad)) continue;
-      std::vector<Eigen::Vector2d> pixels = Resample(path, step_px);
-      Extension ext;
-      ext.view = v;
-      if (pixels.size() >= static_cast<size_t>(options.max_length_m / options.step_m))
-        ext.stop = ExtendStop::kMaxLength;
-      // Up to where the path runs onto another model cane.
-      size_t keep = 0;
-      while (keep < pixels.size()) {
-        const int label = labels[v].At(pixels[keep]);
-        if (label >= 0 && label != static_cast<int>(c)) {
-          ext.stop = ExtendStop::kOtherCane;
-          break;
-        }
-        ++keep;
-      }
-      pixels.resize(keep);
-      if (pixels.empty()) continue;
-      std::vector<Eigen::Vector3d> points;
-      std::vector<double> sd;
-      SolveDepths(camera, anchors, pixels, plane_y, options, &points, &sd);
-      for (size_t i = 0; i < points.size(); ++i) {
-        if (sd[i] > options.max_depth_sd_m) {
-          ext.uncertain = true;
-          ext.stop = ExtendStop::kUncertain;
-          break;
-        }
-        if (!volume.Contains(points[i])) {
-          ext.stop = ExtendStop::kVolume;
-          break;
-        }
-        bool contradicted = false;
-        for (int w = 0; w < nv && !contradicted; ++w) {
-          if (w == v) continue;
-          const CameraCalibration& other = rig.cameras[w];
-          const std::optional<Eigen::Vector2d> uv = other.Project(points[i]);
-          const int m = options.image_margin_px;
-          if (!uv || uv->x() < m || uv->y() < m || uv->x() > other.image_width - 1 - m ||
-              uv->y() > other.image_height - 1 - m)
-            continue;
-          const double depth = (other.camera_from_platform() * points[i]).z();
-          const double r_px = tip_radius * other.camera_matrix(0, 0) / std::max(depth, 0.05);
-          contradicted =
-              !WoodNear(views[w], *uv, static_cast<int>(std::ceil(options.background_px + r_px)));
-        }
-        if (contradicted) {
-          ext.contradicted = true;
-          ext.stop = ExtendStop::kContradicted;
-          break;
-        }
-        ext.points.push_back(points[i]);
-      }
-      double ext_length = 0;
-      for (size_t i = 0; i < ext.points.size(); ++i)
-        ext_length += ((i == 0 ? tip : ext.points[i - 1]) - ext.points[i]).norm();
-      if (ext_length < options.min_length_m) ext.points.clear();
+      Extension ext = ExtendInView(views, rig, v, skeletons[v], labels[v], tip, plane_y, volume,
+                                   options);
       if (ext.points.size() > best.points.size() ||
           (best.points.empty() && (ext.contradicted || ext.uncertain)))
         best = std::move(ext);
@@ -503,14 +284,14 @@ absl::Status ExtendCanes(const std::vector<View2D>& views, const RigCalibration&
     for (const Eigen::Vector3d& p : best.points) {
       record.length_m += (p - cane.polyline.points.back()).norm();
       cane.polyline.points.push_back(p);
-      cane.polyline.radii.push_back(tip_radius);
+      cane.polyline.radii.push_back(tip.radius_m);
     }
     sum.added_length_m += record.length_m;
     sum.extended.push_back(record);
-    std::vector<Eigen::Vector3d> drawn = {tip};
+    std::vector<Eigen::Vector3d> drawn = {tip.point};
     drawn.insert(drawn.end(), best.points.begin(), best.points.end());
     for (int v = 0; v < nv; ++v)
-      labels[v].Draw(rig.cameras[v], drawn, tip_radius, options.other_cane_px, int(c));
+      labels[v].Draw(rig.cameras[v], drawn, tip.radius_m, options.other_cane_px, int(c));
   }
   return absl::OkStatus();
 }

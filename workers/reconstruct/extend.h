@@ -102,4 +102,17 @@ absl::Status ExtendCanes(const std::vector<View2D>& views, const RigCalibration&
                          const WorkingVolume& volume, const ExtendOptions& options,
                          VineModel* model, ExtendSummary* summary = nullptr);
 
+// How closely the skeletons follow a cane's last stretch (the support rule of "Which tips"):
+// samples every 5 mm from arc length (length - span_m) (0 if shorter) to the end of `line`,
+// projected into each view (rig.cameras[i] saw views[i]) that has its skeleton distance map
+// (View2D::centreline_distance_px); in each, the mean skeleton distance (px, at the nearest
+// pixel) of the samples that fall inside the image.
+struct TipSupport {
+  double worst_mean_px = 0.0;  // the largest such mean over the views (0 if no view sees any)
+  int views = 0;               // views in whose image at least one sample falls
+};
+// `line` must have at least one point; views.size() must not exceed rig.cameras.size().
+TipSupport TipSupportOf(const Polyline3& line, const std::vector<View2D>& views,
+                        const RigCalibration& rig, double span_m);
+
 }  // namespace vb::reconstruct

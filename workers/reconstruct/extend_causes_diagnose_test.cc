@@ -34,28 +34,12 @@
 #include "core/model_metrics.h"
 #include "gtest/gtest.h"
 #include "workers/reconstruct/correspondence_test_util.h"
+#include "workers/reconstruct/diagnose_util.h"
 #include "workers/reconstruct/extend.h"
 #include "workers/reconstruct/reconstruct.h"
 
 namespace vb::reconstruct {
 namespace {
-
-// Nearest distance from p to any cane of `canes`, and that cane's index.
-double NearestCane(const Eigen::Vector3d& p, const std::vector<Cane>& canes, int* index) {
-  double best = 1e9;
-  for (size_t c = 0; c < canes.size(); ++c) {
-    const std::vector<Eigen::Vector3d>& q = canes[c].polyline.points;
-    for (size_t i = 0; i + 1 < q.size(); ++i) {
-      double t = 0;
-      const double d = PointSegmentDistance(p, q[i], q[i + 1], &t);
-      if (d < best) {
-        best = d;
-        if (index != nullptr) *index = static_cast<int>(c);
-      }
-    }
-  }
-  return best;
-}
 
 double Trellis(const Eigen::Vector3d& p, const VineModel& truth) {
   double best = 1e9;
@@ -114,34 +98,6 @@ bool InTree(const VineModel& model, size_t c) {
     at = it->second;
   }
   return false;
-}
-
-// Mean over views that see them of the centreline distance (px) of the cane's last `span_m`,
-// the largest such mean, and the number of views that see the tip.
-void TipSupport(const Polyline3& line, size_t old_points, const std::vector<View2D>& views,
-                const RigCalibration& rig, double span_m, double* worst_mean_px, int* seeing) {
-  Polyline3 head;
-  head.points.assign(line.points.begin(), line.points.begin() + old_points);
-  head.radii.assign(line.radii.begin(), line.radii.begin() + old_points);
-  const double length = head.Length();
-  const std::vector<double> arc = head.ArcLengths();
-  *worst_mean_px = 0;
-  *seeing = 0;
-  for (size_t v = 0; v < views.size(); ++v) {
-    const CameraCalibration& camera = rig.cameras[v];
-    double sum = 0;
-    int n = 0;
-    for (double s = std::max(0.0, length - span_m); s <= length + 1e-9; s += 0.005) {
-      const auto uv = camera.Project(head.PointAt(s, arc));
-      if (!uv || !camera.InImage(*uv)) continue;
-      const int x = static_cast<int>(std::lround(uv->x())), y = static_cast<int>(std::lround(uv->y()));
-      sum += views[v].centreline_distance_px[static_cast<size_t>(y) * views[v].width + x];
-      ++n;
-    }
-    if (n == 0) continue;
-    ++*seeing;
-    *worst_mean_px = std::max(*worst_mean_px, sum / n);
-  }
 }
 
 const char* StopName(ExtendStop stop) {
@@ -238,8 +194,8 @@ TEST(Extend, DISABLED_Causes) {
           arm_right[a] += (m.canes[tip.cane].polyline.points[i] -
                            m.canes[tip.cane].polyline.points[i - 1])
                               .norm() *
-                          (NearestCane(m.canes[tip.cane].polyline.points[i], truth.canes,
-                                       nullptr) <= 0.010);
+                          (DistanceToCanes(m.canes[tip.cane].polyline.points[i], truth.canes) <=
+                           0.010);
     }
     VineModel model = result->model;
     ExtendSummary summary;
@@ -260,13 +216,13 @@ TEST(Extend, DISABLED_Causes) {
                                                       0.03)))
               .normalized();
       int tip_cane = -1;
-      const bool tip_right = NearestCane(tip_point, truth.canes, &tip_cane) <= 0.010;
+      const bool tip_right = DistanceToCanes(tip_point, truth.canes, nullptr, &tip_cane) <= 0.010;
       std::string tip_cause;
       if (!tip_right) {
         bool on_ray = false;
         for (const CameraCalibration& camera : stop.true_rig.cameras)
           on_ray |= RayHits(camera.CentreInPlatform(), tip_point, true_samples, -1, -1, 0.010);
-        tip_cause = NearestCane(tip_point, neighbour_canes, nullptr) <= 0.010 ? "tip:neighbour"
+        tip_cause = DistanceToCanes(tip_point, neighbour_canes) <= 0.010 ? "tip:neighbour"
                     : Trellis(tip_point, truth) <= 0.015                  ? "tip:trellis"
                     : on_ray                                              ? "tip:depth"
                                                                           : "tip:ghost";
@@ -278,7 +234,7 @@ TEST(Extend, DISABLED_Causes) {
         const Eigen::Vector3d& p = line.points[i];
         const double step = (p - line.points[i - 1]).norm();
         len += step;
-        if (NearestCane(p, truth.canes, nullptr) <= 0.010) {
+        if (DistanceToCanes(p, truth.canes) <= 0.010) {
           len_right += step;
           continue;
         }
@@ -307,9 +263,9 @@ TEST(Extend, DISABLED_Causes) {
       arm_right[0] += len_right;
       if (first_wrong >= 0) depth_first_wrong.push_back(first_wrong);
       if (!verbose) continue;
-      double support_px = 0;
-      int seeing = 0;
-      TipSupport(line, tip.first_point, stop.views, result->rig, 0.03, &support_px, &seeing);
+      // The support of the tip as it was (the cane before the extension appended to it).
+      const TipSupport support =
+          TipSupportOf(result->model.canes[tip.cane].polyline, stop.views, result->rig, 0.03);
       // In the other views: the tip's distance to the image border and to the nearest skeleton
       // end or junction; the share of added points inside another image.
       double border_px = 1e9, node_px = 1e9;
@@ -345,7 +301,7 @@ TEST(Extend, DISABLED_Causes) {
           len_right, tip_right, tip_right ? "-" : tip_cause.c_str(),
           InTree(model, tip.cane), tip_point.x(), tip_point.y(), tip_point.z(), tangent.x(),
           tangent.y(), tangent.z(), result->model.canes[tip.cane].polyline.Length(),
-          line.radii[tip.first_point - 1], seeing, support_px, children,
+          line.radii[tip.first_point - 1], support.views, support.worst_mean_px, children,
           1000 * Trellis(tip_point, truth), first_wrong, border_px, node_px,
           double(in_other) / std::max(1, tip.points));
       for (const std::string& c : causes) std::printf(" %s %.3f", c.c_str(), mine[c]);

@@ -48,6 +48,14 @@ int ImagesSeeing(const RigCalibration& rig, const Eigen::Vector3d& p) {
   return n;
 }
 
+// The index of the cane's last point that two or more cameras see (0 if none).
+size_t LastSeenByTwo(const RigCalibration& rig, const Cane& cane) {
+  size_t last = 0;
+  for (size_t i = 0; i < cane.polyline.points.size(); ++i)
+    if (ImagesSeeing(rig, cane.polyline.points[i]) >= 2) last = i;
+  return last;
+}
+
 double DistanceToLine(const Eigen::Vector3d& p, const Polyline3& line) {
   double d = 0.0;
   line.Project(p, &d);
@@ -72,9 +80,7 @@ TEST(ExtendCanes, ExtendsATipSeenByOneCameraWithinTolerance) {
   const RigCalibration rig = sim::MakeRig().value();
   const Cane cane = CurvedCane(0.4, 1.5);
   // The cane leaves the two-view strip along the row: cut the model where it does.
-  size_t last_two = 0;
-  for (size_t i = 0; i < cane.polyline.points.size(); ++i)
-    if (ImagesSeeing(rig, cane.polyline.points[i]) >= 2) last_two = i;
+  const size_t last_two = LastSeenByTwo(rig, cane);
   ASSERT_GT(last_two, 20u);
   ASSERT_LT(last_two + 10, cane.polyline.points.size());
   for (size_t i = last_two + 1; i < last_two + 8; ++i)
@@ -158,9 +164,7 @@ VineModel WithTrunkAt(VineModel model, double dx) {
 TEST(ExtendCanes, SkipsATipFarAlongTheRowFromTheTrunk) {
   const RigCalibration rig = sim::MakeRig().value();
   const Cane cane = CurvedCane(0.4, 1.5);
-  size_t last_two = 0;
-  for (size_t i = 0; i < cane.polyline.points.size(); ++i)
-    if (ImagesSeeing(rig, cane.polyline.points[i]) >= 2) last_two = i;
+  const size_t last_two = LastSeenByTwo(rig, cane);
   const Cane cut = Truncated(cane, last_two + 1);
   const double tip_x = cut.polyline.points.back().x();
   ASSERT_GT(tip_x, 0.95);  // beyond the default 0.9 m from the trunk at x = 0
@@ -246,6 +250,28 @@ TEST(ExtendCanes, SkipsATipOffTheSkeleton) {
   ExtendSummary summary;
   ASSERT_TRUE(ExtendCanes(views, rig, WorkingVolume{}, any, &model, &summary).ok());
   EXPECT_EQ(summary.tips_extended, 1);
+}
+
+TEST(TipSupportOf, MeanSkeletonDistanceOfTheLastStretchInTheWorstView) {
+  const RigCalibration rig = sim::MakeRig().value();
+  const Cane cane = CurvedCane(0.05, 0.6);
+  std::vector<View2D> views = SyntheticViews(VineWith(cane), rig);
+  const Polyline3 tip = Truncated(cane, 21).polyline;
+  const TipSupport on = TipSupportOf(tip, views, rig, 0.03);
+  EXPECT_EQ(on.views, 3);
+  EXPECT_LT(on.worst_mean_px, 0.8);
+  // 2 mm above the true cane: ~2-3 px off the skeleton in some view.
+  Polyline3 lifted = tip;
+  for (Eigen::Vector3d& p : lifted.points) p.z() += 0.002;
+  const TipSupport off = TipSupportOf(lifted, views, rig, 0.03);
+  EXPECT_EQ(off.views, 3);
+  EXPECT_GT(off.worst_mean_px, 0.8);
+  // A view without its distance map does not count; one that sees none of the stretch neither.
+  views[1].centreline_distance_px.clear();
+  EXPECT_EQ(TipSupportOf(lifted, views, rig, 0.03).views, 2);
+  RigCalibration away = rig;
+  away.cameras[2].translation_camera_from_platform.z() -= 10.0;  // the stretch is behind it
+  EXPECT_EQ(TipSupportOf(lifted, views, away, 0.03).views, 1);
 }
 
 TEST(ExtendCanes, LeavesTheModelWhenDisabled) {

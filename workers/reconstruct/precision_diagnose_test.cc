@@ -9,35 +9,19 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <limits>
 #include <string>
 #include <vector>
 
 #include "core/model_metrics.h"
 #include "gtest/gtest.h"
 #include "workers/reconstruct/correspondence_test_util.h"
+#include "workers/reconstruct/diagnose_util.h"
 #include "workers/reconstruct/gap_support.h"
+#include "workers/reconstruct/image_probes.h"
 #include "workers/reconstruct/reconstruct.h"
 
 namespace vb::reconstruct {
 namespace {
-
-double Nearest(const Eigen::Vector3d& p, const std::vector<Polyline3>& lines,
-               Eigen::Vector3d* at = nullptr) {
-  double best = std::numeric_limits<double>::infinity();
-  for (const Polyline3& line : lines) {
-    const std::vector<Eigen::Vector3d>& q = line.points;
-    for (size_t i = 0; i + 1 < q.size(); ++i) {
-      double t = 0;
-      const double d = PointSegmentDistance(p, q[i], q[i + 1], &t);
-      if (d < best) {
-        best = d;
-        if (at) *at = q[i] + t * (q[i + 1] - q[i]);
-      }
-    }
-  }
-  return best;
-}
 
 // Over the views in whose image p projects: the largest distance (pixels) of the projection to
 // the nearest skeleton point, and how many views that is.
@@ -48,10 +32,7 @@ std::pair<double, int> WorstResidual(const Eigen::Vector3d& p, const std::vector
   for (size_t v = 0; v < views.size(); ++v) {
     const std::optional<Eigen::Vector2d> uv = rig.cameras[v].Project(p);
     if (!uv || !rig.cameras[v].InImage(*uv)) continue;
-    const int x = std::clamp(static_cast<int>(std::lround(uv->x())), 0, views[v].width - 1);
-    const int y = std::clamp(static_cast<int>(std::lround(uv->y())), 0, views[v].height - 1);
-    const size_t pixel = static_cast<size_t>(y) * views[v].width + x;
-    worst = std::max<double>(worst, views[v].centreline_distance_px[pixel]);
+    worst = std::max(worst, CentrelineDistanceAt(views[v], *uv));
     ++seen;
   }
   return {worst, seen};
@@ -65,21 +46,14 @@ int ViewsOnBackground(const Eigen::Vector3d& p, const std::vector<View2D>& views
   for (size_t v = 0; v < views.size(); ++v) {
     const std::optional<Eigen::Vector2d> uv = rig.cameras[v].Project(p);
     if (!uv || !rig.cameras[v].InImage(*uv)) continue;
-    const int x0 = static_cast<int>(std::lround(uv->x()));
-    const int y0 = static_cast<int>(std::lround(uv->y()));
-    bool any = false;
-    for (int dy = -1; dy <= 1 && !any; ++dy)
-      for (int dx = -1; dx <= 1 && !any; ++dx) {
-        const int x = x0 + dx, y = y0 + dy;
-        if (x < 0 || y < 0 || x >= views[v].width || y >= views[v].height) continue;
-        any = views[v].classes.at(x, y) != PixelClass::kBackground;
-      }
-    n += !any;
+    n += !WoodNear(views[v], *uv, 1);
   }
   return n;
 }
 
-// Arc length along `trunk` (base first) of its first 5 mm sample inside two or more images.
+// Arc length along `trunk` (base first) of its first 5 mm sample inside two or more images. Not
+// cane_fit's FirstSeenArc (cane_fit_trunk.cc), which refines the boundary between two samples:
+// this report counts whole 5 mm samples below the first one seen.
 double FirstSeenArc(const Polyline3& trunk, const RigCalibration& rig) {
   const double length = trunk.Length();
   for (double s = 0; s < length; s += 0.005) {
@@ -192,7 +166,9 @@ TEST(PrecisionLoss, DISABLED_Report) {
       for (const Cane& c : n.canes) neighbour_lines.push_back(c.polyline);
     std::vector<Polyline3> assembled = *canes;
     if (head->trunk) assembled.push_back(*head->trunk);
-    auto right = [&](const Eigen::Vector3d& p) { return Nearest(p, true_lines) <= 0.010; };
+    auto right = [&](const Eigen::Vector3d& p) {
+      return DistanceToLines(p, true_lines) <= 0.010;
+    };
 
     for (const Cane& c : truth.canes)
       if (c.kind == CaneKind::kTrunk)
@@ -241,34 +217,34 @@ TEST(PrecisionLoss, DISABLED_Report) {
         Eigen::Vector3d q = p, a = p;
         if (cane.kind == CaneKind::kTrunk) {
           stage = kTrunk;
-          Nearest(p, before, &q);
+          DistanceToLines(p, before, &q);
           const int z = std::clamp(static_cast<int>(p.z() / 0.1), 0, kZBins - 1);
           trunk_false[z] += 0.005;
           trunk_false_before[z] += right(q) ? 0 : 0.005;
           trunk_unseen[z] += WorstResidual(p, stop.views, rig).second < 2 ? 0.005 : 0;
-          trunk_distance[z] += Nearest(p, true_lines);
+          trunk_distance[z] += DistanceToLines(p, true_lines);
         } else {
-          Nearest(p, before, &q);
+          DistanceToLines(p, before, &q);
           if (right(q)) {
             stage = kRefinement;
-          } else if (Nearest(q, assembled, &a) > 0.010) {
+          } else if (DistanceToLines(q, assembled, &a) > 0.010) {
             stage = kConnection;
           } else {
             Eigen::Vector3d b = a;
-            if (Nearest(a, pieces, &b) > 0.010) stage = kBridge;
+            if (DistanceToLines(a, pieces, &b) > 0.010) stage = kBridge;
             else if (right(b)) stage = kFusion;
           }
         }
         // Place.
         Eigen::Vector3d t = p;
-        const double d = Nearest(p, true_lines, &t);
+        const double d = DistanceToLines(p, true_lines, &t);
         Where where = kGhost;
         bool near_head = false;
         for (const Sphere& sp : truth.head.spheres)
           near_head |= (p - sp.center).norm() <= sp.radius + 0.030;
-        if (Nearest(p, neighbour_lines) <= 0.010) {
+        if (DistanceToLines(p, neighbour_lines) <= 0.010) {
           where = kNeighbour;
-        } else if (near_head || Nearest(p, trunk_lines) <= 0.030) {
+        } else if (near_head || DistanceToLines(p, trunk_lines) <= 0.030) {
           where = kNearTrunk;
         } else if (d <= 0.030) {
           where = kMisDepth;
