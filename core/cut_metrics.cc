@@ -108,12 +108,29 @@ absl::StatusOr<CutMatching> MatchCuts(const VineModel& truth, const CutPlan& tru
     out.model_truth_distance_m.push_back(landing[j].distance_m);
   }
 
+  // Cuts that would take wood the truth keeps, if left unpaired (step 3).
+  const std::unordered_set<size_t> kept = KeptCanes(truth, truth_plan);
+  std::vector<bool> cuts_kept_wood(model_cuts.size(), false);
+  for (size_t j = 0; j < model_cuts.size(); ++j) {
+    const Landing& l = landing[j];
+    if (!kept.contains(l.cane)) continue;
+    const double reach =
+        std::max(options.kept_distance_m, truth.canes[l.cane].polyline.RadiusAt(l.arc_m));
+    if (l.distance_m > reach) continue;
+    const auto first = first_cut_arc.find(l.cane);
+    // Beyond the truth's first cut on the cane: wood the truth removes anyway.
+    if (first != first_cut_arc.end() && l.arc_m >= first->second) continue;
+    cuts_kept_wood[j] = true;
+  }
+
   // Candidate pairs on the same truth cane within the match distance, taken nearest first.
   std::vector<std::tuple<double, size_t, size_t>> pairs;
   for (size_t i = 0; i < truth_plan.cuts.size(); ++i) {
     const Polyline3& cane = truth.canes[truth_cane[i]].polyline;
     for (size_t j = 0; j < model_cuts.size(); ++j) {
       if (landing[j].cane != truth_cane[i]) {
+        // Never on another cane when it would cut wood the truth keeps on its nearest one.
+        if (cuts_kept_wood[j]) continue;
         double off_axis = 0.0;
         cane.Project(model_cuts[j].point, &off_axis);
         if (off_axis > options.on_cane_distance_m) continue;
@@ -129,19 +146,9 @@ absl::StatusOr<CutMatching> MatchCuts(const VineModel& truth, const CutPlan& tru
     out.model_partner[j] = static_cast<int>(i);
   }
 
-  const std::unordered_set<size_t> kept = KeptCanes(truth, truth_plan);
   out.model_on_kept_cane.assign(model_cuts.size(), false);
-  for (size_t j = 0; j < model_cuts.size(); ++j) {
-    const Landing& l = landing[j];
-    if (out.model_partner[j] >= 0 || !kept.contains(l.cane)) continue;
-    const double reach =
-        std::max(options.kept_distance_m, truth.canes[l.cane].polyline.RadiusAt(l.arc_m));
-    if (l.distance_m > reach) continue;
-    const auto first = first_cut_arc.find(l.cane);
-    // Beyond the truth's first cut on the cane: wood the truth removes anyway.
-    if (first != first_cut_arc.end() && l.arc_m >= first->second) continue;
-    out.model_on_kept_cane[j] = true;
-  }
+  for (size_t j = 0; j < model_cuts.size(); ++j)
+    out.model_on_kept_cane[j] = cuts_kept_wood[j] && out.model_partner[j] < 0;
   return out;
 }
 

@@ -8,7 +8,8 @@
 //     axis passes nearest its point. It lies on that cane, and on every other ground-truth cane
 //     whose axis passes within on_cane_distance_m (10 mm, the cane recall tolerance) of its point:
 //     where canes leave the head side by side a cut can be within a few millimetres of two axes,
-//     and which is the nearer is then a matter of reconstruction noise.
+//     and which is the nearer is then a matter of reconstruction noise. Not when the cut would
+//     take wood the truth keeps on its nearest cane (step 3): then it lies on that cane only.
 //  2. Ground-truth cuts and reconstructed cuts lying on the cane of the ground-truth cut pair up
 //     one-to-one, greedily by increasing distance between their points, while that distance is at
 //     most match_distance_m (30 mm). Each ground-truth cut has a single partner at most; with one

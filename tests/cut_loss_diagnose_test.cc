@@ -3,11 +3,26 @@
 // the ground truth (docs/decide.md "Why reconstructed cuts miss"). A diagnosis tool, not a test:
 // each stop is rendered and reconstructed as `vinebot bench reconstruct` does it (vine 1 of each
 // seed, Bayer images, fiducials, 1 px calibration error), decided on the truth and on the model
-// under the default policy and weights, and every truth cut and every model cut is classed by the
-// first reason that applies (core/cut_metrics.h MatchCuts is the pairing). Then three oracles:
-// decide on the model with the truth's scheme carried over (the canes the model would keep if
-// decide chose as on the truth), on the truth with the model's head spheres, and on the model
-// without the head slide.
+// under the default policy and weights, and paired as core/cut_metrics.h MatchCuts pairs them.
+// Prints:
+//  - every unpaired truth cut by the first cause that applies: A no model cane within 10 mm of
+//    the cut (split by the distance from the true head); B the model's trunk covers it; C the
+//    model cane's cut paired with another truth cut; D a model cut within 30 mm not on the cane;
+//    E the model cane's cut lies on another true cane; F on the same cane but > 30 mm away (truth
+//    reason vs model reason, which way along the cane); G the model keeps the cane; H the model
+//    leaves it an uncut spur; I it falls with its model parent's cut (parent right or wrong);
+//  - every unpaired model cut: a not within 10 mm of true wood; b on the true trunk or an old
+//    spur; c its true cane's cut paired with another model cut; d on the same true cane > 30 mm
+//    from its cut; e the truth keeps the cane; f truth spur left uncut; g the true cane falls with
+//    its parent's cut ("[on kept]": counted in cuts_on_kept_canes);
+//  - for A, how far along the true cane its first recalled sample lies, and whether it is inside
+//    the model's head; for d toward the tip, the model cut's slide out of the head and where the
+//    model cane's base lies;
+//  - the kept canes of either plan against the other's;
+//  - oracles (missed and spurious): the truth's scheme carried over to the model (each truth
+//    kept cane / spur to the model candidate covering most of its first 0.3 m); the truth
+//    decided with the model's head spheres, with the truth's scheme, and also without the slide;
+//    the model without the head slide; the model with the true head spheres.
 //
 // Knobs: VB_SEED (1300), VB_STOPS (10), VB_INPUT (images | labels | truth: perfect 2D views),
 // VB_CACHE (a directory: reconstructed models and truths are stored there by seed and input and
@@ -263,6 +278,7 @@ TEST(CutLoss, DISABLED_Report) {
   int head_matched = 0, head_cuts = 0;
   int head_scheme_matched = 0, head_scheme_cuts = 0, head_noslide_matched = 0, head_noslide_cuts = 0;
   int noslide_matched = 0, noslide_cuts = 0;
+  int truehead_matched = 0, truehead_cuts = 0;
   std::vector<double> errors;
   for (int k = 0; k < stops; ++k) {
     const uint64_t seed = static_cast<uint64_t>(seed0 + k);
@@ -510,6 +526,19 @@ TEST(CutLoss, DISABLED_Report) {
         (slide > 0 ? head_scheme_cuts : head_noslide_cuts) += m->model_cuts;
       }
     }
+    // Oracle 4: the model with the true head spheres (the head's whole share on this model).
+    {
+      VineModel m4 = model;
+      m4.head = truth.head;
+      auto d4 = decide::Decide(m4, policy, options);
+      if (d4.ok()) {
+        auto m = EvaluateCuts(truth, tp, m4, &d4->plan);
+        if (m.ok()) {
+          truehead_matched += m->matched_cuts;
+          truehead_cuts += m->model_cuts;
+        }
+      }
+    }
     // Oracle 3: the model without the head slide.
     {
       decide::DecideOptions o3 = options;
@@ -546,6 +575,7 @@ TEST(CutLoss, DISABLED_Report) {
   oracle("truth, model's head, truth's scheme", head_scheme_matched, head_scheme_cuts);
   oracle("truth, model's head, truth's scheme, no slide", head_noslide_matched, head_noslide_cuts);
   oracle("model decided without the head slide", noslide_matched, noslide_cuts);
+  oracle("model decided with the true head spheres", truehead_matched, truehead_cuts);
 }
 
 }  // namespace
