@@ -22,10 +22,12 @@
 //  - oracles (missed and spurious): the truth's scheme carried over to the model (each truth
 //    kept cane / spur to the model candidate covering most of its first 0.3 m); the truth
 //    decided with the model's head spheres, with the truth's scheme, and also without the slide;
-//    the model without the head slide; the model with the true head spheres.
+//    the model without the head slide; the model with the true head spheres;
+//  - where the model's scheme and the carried-over one differ, the weighted feature difference.
 //
 // Knobs: VB_SEED (1300), VB_STOPS (10), VB_INPUT (images | labels | truth: perfect 2D views),
-// VB_CACHE (a directory: reconstructed models and truths are stored there by seed and input and
+// VB_MODEL_DIAMETER_WEIGHT (the keep diameter weight of the model's decision only; spurs get a
+// third), VB_CACHE (a directory: reconstructed models and truths are stored there by seed and input and
 // read back on the next run), VB_VERBOSE (one line per missed truth cut).
 #include <algorithm>
 #include <cstdio>
@@ -279,6 +281,8 @@ TEST(CutLoss, DISABLED_Report) {
   int head_scheme_matched = 0, head_scheme_cuts = 0, head_noslide_matched = 0, head_noslide_cuts = 0;
   int noslide_matched = 0, noslide_cuts = 0;
   int truehead_matched = 0, truehead_cuts = 0;
+  int choice_vines = 0, choice_near_ties = 0, carried_infeasible = 0;
+  decide::FeatureVector choice_diff = decide::FeatureVector::Zero();
   std::vector<double> errors;
   for (int k = 0; k < stops; ++k) {
     const uint64_t seed = static_cast<uint64_t>(seed0 + k);
@@ -288,7 +292,14 @@ TEST(CutLoss, DISABLED_Report) {
     const VineModel& model = stop->model;
     auto td = decide::Decide(truth, policy, options);
     ASSERT_TRUE(td.ok()) << td.status();
-    auto md = decide::Decide(model, policy, options);
+    // VB_MODEL_DIAMETER_WEIGHT: the diameter weights (kept canes and spurs) of the decision on the
+    // model only, to see what the reconstructed diameters cost the choice.
+    decide::DecideOptions model_options = options;
+    if (const char* w = std::getenv("VB_MODEL_DIAMETER_WEIGHT")) {
+      model_options.weights.w[decide::kKeepDiameterOutsideMm] = std::atof(w);
+      model_options.weights.w[decide::kSpurDiameterOutsideMm] = std::atof(w) / 3.0;
+    }
+    auto md = decide::Decide(model, policy, model_options);
     if (!md.ok()) {
       std::printf("seed %d: no model plan: %s\n", int(seed), std::string(md.status().message()).c_str());
       truth_cuts += td->plan.cuts.size();
@@ -481,6 +492,16 @@ TEST(CutLoss, DISABLED_Report) {
     auto candidates = decide::FindCandidates(model, policy);
     if (candidates.ok()) {
       auto scheme = CarryOver(truth, tp, model, *candidates);
+      // What makes the model's own scheme cheaper than the carried-over one, feature by feature
+      // (only where the carried-over scheme is feasible, so that both are of one size).
+      if (*scheme != md->scheme && decide::IsFeasible(*candidates, policy, *scheme)) {
+        const decide::FeatureVector diff =
+            options.weights.w.cwiseProduct(decide::SchemeFeatures(*candidates, policy, md->scheme) -
+                                           decide::SchemeFeatures(*candidates, policy, *scheme));
+        ++choice_vines;
+        choice_diff += diff;
+        if (diff.sum() > -0.1) ++choice_near_ties;
+      }
       auto placed = decide::PlaceCuts(model, *candidates, policy, *scheme, options.max_head_slide_m);
       if (placed.ok()) {
         CutPlan plan = mp;
@@ -571,6 +592,12 @@ TEST(CutLoss, DISABLED_Report) {
   };
   oracle("truth's scheme carried over to the model", carry_matched, carry_cuts);
   std::printf("  (carried over on %d of %d stops)\n", carry_vines, stops);
+  std::printf("model's scheme against the carried-over one, where that is feasible and differs: "
+              "%d stops, %d within 0.1 of cost; weighted feature difference (model - carried, "
+              "summed; negative: why the model's is cheaper):\n", choice_vines, choice_near_ties);
+  for (int f = 0; f < decide::kSchemeFeatureCount; ++f)
+    std::printf("  %-28s %+8.3f\n", std::string(decide::SchemeFeatureName(f)).c_str(),
+                choice_diff[f]);
   oracle("truth decided with the model's head spheres", head_matched, head_cuts);
   oracle("truth, model's head, truth's scheme", head_scheme_matched, head_scheme_cuts);
   oracle("truth, model's head, truth's scheme, no slide", head_noslide_matched, head_noslide_cuts);
