@@ -66,12 +66,15 @@ absl::Status CutMetricsOptions::Validate() const {
   if (!std::isfinite(kept_distance_m) || kept_distance_m <= 0)
     return absl::InvalidArgumentError(
         absl::StrCat("cut metrics options.kept_distance_m must be positive, is ", kept_distance_m));
+  if (!std::isfinite(on_cane_distance_m) || on_cane_distance_m <= 0)
+    return absl::InvalidArgumentError(absl::StrCat(
+        "cut metrics options.on_cane_distance_m must be positive, is ", on_cane_distance_m));
   return absl::OkStatus();
 }
 
-absl::StatusOr<CutMetrics> EvaluateCuts(const VineModel& truth, const CutPlan& truth_plan,
-                                        const VineModel& model, const CutPlan* model_plan,
-                                        const CutMetricsOptions& options) {
+absl::StatusOr<CutMatching> MatchCuts(const VineModel& truth, const CutPlan& truth_plan,
+                                      const VineModel& model, const CutPlan* model_plan,
+                                      const CutMetricsOptions& options) {
   if (absl::Status s = options.Validate(); !s.ok()) return s;
   if (absl::Status s = Prefixed("truth", truth.Validate()); !s.ok()) return s;
   if (absl::Status s = Prefixed("truth_plan", truth_plan.ValidateAgainst(truth)); !s.ok()) return s;
@@ -81,12 +84,11 @@ absl::StatusOr<CutMetrics> EvaluateCuts(const VineModel& truth, const CutPlan& t
       return s;
   }
 
-  CutMetrics m;
-  m.truth_cuts = static_cast<int>(truth_plan.cuts.size());
-  m.cuts_missed_fraction = m.truth_cuts > 0 ? 1.0 : 0.0;
-  if (model_plan == nullptr) return m;
+  CutMatching out;
+  out.truth_partner.assign(truth_plan.cuts.size(), -1);
+  if (model_plan == nullptr) return out;
   const std::vector<Cut>& model_cuts = model_plan->cuts;
-  m.model_cuts = static_cast<int>(model_cuts.size());
+  out.model_partner.assign(model_cuts.size(), -1);
 
   // Truth cuts by the index of their cane, and the first truth cut's arc length on each cane.
   std::vector<size_t> truth_cane(truth_plan.cuts.size());
@@ -100,25 +102,70 @@ absl::StatusOr<CutMetrics> EvaluateCuts(const VineModel& truth, const CutPlan& t
   }
 
   std::vector<Landing> landing(model_cuts.size());
-  for (size_t j = 0; j < model_cuts.size(); ++j) landing[j] = Land(truth, model_cuts[j].point);
+  for (size_t j = 0; j < model_cuts.size(); ++j) {
+    landing[j] = Land(truth, model_cuts[j].point);
+    out.model_truth_cane.push_back(landing[j].cane);
+    out.model_truth_distance_m.push_back(landing[j].distance_m);
+  }
+
+  // Cuts that would take wood the truth keeps, if left unpaired (step 3).
+  const std::unordered_set<size_t> kept = KeptCanes(truth, truth_plan);
+  std::vector<bool> cuts_kept_wood(model_cuts.size(), false);
+  for (size_t j = 0; j < model_cuts.size(); ++j) {
+    const Landing& l = landing[j];
+    if (!kept.contains(l.cane)) continue;
+    const double reach =
+        std::max(options.kept_distance_m, truth.canes[l.cane].polyline.RadiusAt(l.arc_m));
+    if (l.distance_m > reach) continue;
+    const auto first = first_cut_arc.find(l.cane);
+    // Beyond the truth's first cut on the cane: wood the truth removes anyway.
+    if (first != first_cut_arc.end() && l.arc_m >= first->second) continue;
+    cuts_kept_wood[j] = true;
+  }
 
   // Candidate pairs on the same truth cane within the match distance, taken nearest first.
   std::vector<std::tuple<double, size_t, size_t>> pairs;
   for (size_t i = 0; i < truth_plan.cuts.size(); ++i) {
+    const Polyline3& cane = truth.canes[truth_cane[i]].polyline;
     for (size_t j = 0; j < model_cuts.size(); ++j) {
-      if (landing[j].cane != truth_cane[i]) continue;
+      if (landing[j].cane != truth_cane[i]) {
+        // Never on another cane when it would cut wood the truth keeps on its nearest one.
+        if (cuts_kept_wood[j]) continue;
+        double off_axis = 0.0;
+        cane.Project(model_cuts[j].point, &off_axis);
+        if (off_axis > options.on_cane_distance_m) continue;
+      }
       const double d = (truth_plan.cuts[i].point - model_cuts[j].point).norm();
       if (d <= options.match_distance_m) pairs.emplace_back(d, i, j);
     }
   }
   std::sort(pairs.begin(), pairs.end());
-  std::vector<bool> truth_matched(truth_plan.cuts.size(), false);
-  std::vector<bool> model_matched(model_cuts.size(), false);
-  std::vector<double> errors;
   for (const auto& [d, i, j] : pairs) {
-    if (truth_matched[i] || model_matched[j]) continue;
-    truth_matched[i] = model_matched[j] = true;
-    errors.push_back(d);
+    if (out.truth_partner[i] >= 0 || out.model_partner[j] >= 0) continue;
+    out.truth_partner[i] = static_cast<int>(j);
+    out.model_partner[j] = static_cast<int>(i);
+  }
+
+  out.model_on_kept_cane.assign(model_cuts.size(), false);
+  for (size_t j = 0; j < model_cuts.size(); ++j)
+    out.model_on_kept_cane[j] = cuts_kept_wood[j] && out.model_partner[j] < 0;
+  return out;
+}
+
+absl::StatusOr<CutMetrics> EvaluateCuts(const VineModel& truth, const CutPlan& truth_plan,
+                                        const VineModel& model, const CutPlan* model_plan,
+                                        const CutMetricsOptions& options) {
+  absl::StatusOr<CutMatching> matching = MatchCuts(truth, truth_plan, model, model_plan, options);
+  if (!matching.ok()) return matching.status();
+  CutMetrics m;
+  m.truth_cuts = static_cast<int>(truth_plan.cuts.size());
+  m.cuts_missed_fraction = m.truth_cuts > 0 ? 1.0 : 0.0;
+  if (model_plan == nullptr) return m;
+  m.model_cuts = static_cast<int>(model_plan->cuts.size());
+  std::vector<double> errors;
+  for (size_t i = 0; i < truth_plan.cuts.size(); ++i) {
+    const int j = matching->truth_partner[i];
+    if (j >= 0) errors.push_back((truth_plan.cuts[i].point - model_plan->cuts[j].point).norm());
   }
   m.matched_cuts = static_cast<int>(errors.size());
   m.cut_error_median_m = Median(errors);
@@ -127,19 +174,8 @@ absl::StatusOr<CutMetrics> EvaluateCuts(const VineModel& truth, const CutPlan& t
     m.cuts_missed_fraction = static_cast<double>(m.truth_cuts - m.matched_cuts) / m.truth_cuts;
   if (m.model_cuts > 0)
     m.cuts_spurious_fraction = static_cast<double>(m.model_cuts - m.matched_cuts) / m.model_cuts;
-
-  const std::unordered_set<size_t> kept = KeptCanes(truth, truth_plan);
-  for (size_t j = 0; j < model_cuts.size(); ++j) {
-    const Landing& l = landing[j];
-    if (model_matched[j] || !kept.contains(l.cane)) continue;
-    const double reach =
-        std::max(options.kept_distance_m, truth.canes[l.cane].polyline.RadiusAt(l.arc_m));
-    if (l.distance_m > reach) continue;
-    const auto first = first_cut_arc.find(l.cane);
-    // Beyond the truth's first cut on the cane: wood the truth removes anyway.
-    if (first != first_cut_arc.end() && l.arc_m >= first->second) continue;
-    ++m.cuts_on_kept_canes;
-  }
+  m.cuts_on_kept_canes = static_cast<int>(std::count(
+      matching->model_on_kept_cane.begin(), matching->model_on_kept_cane.end(), true));
   return m;
 }
 

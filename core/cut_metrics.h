@@ -5,8 +5,12 @@
 //
 // Matching, in order:
 //  1. Each reconstructed cut is assigned to the ground-truth cane (any kind, trunk included) whose
-//     axis passes nearest its point.
-//  2. Ground-truth cuts and reconstructed cuts assigned to the same ground-truth cane pair up
+//     axis passes nearest its point. It lies on that cane, and on every other ground-truth cane
+//     whose axis passes within on_cane_distance_m (10 mm, the cane recall tolerance) of its point:
+//     where canes leave the head side by side a cut can be within a few millimetres of two axes,
+//     and which is the nearer is then a matter of reconstruction noise. Not when the cut would
+//     take wood the truth keeps on its nearest cane (step 3): then it lies on that cane only.
+//  2. Ground-truth cuts and reconstructed cuts lying on the cane of the ground-truth cut pair up
 //     one-to-one, greedily by increasing distance between their points, while that distance is at
 //     most match_distance_m (30 mm). Each ground-truth cut has a single partner at most; with one
 //     cut per cane on either side, this is "the nearest reconstructed cut on the same cane".
@@ -19,6 +23,8 @@
 //     parent of a kept cane drops the kept cane too): the worst error.
 #pragma once
 
+#include <vector>
+
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
 #include "core/cut_plan.h"
@@ -30,8 +36,10 @@ namespace vb {
 struct CutMetricsOptions {
   double match_distance_m = 0.030;  // a truth cut and a reconstructed cut match within this
   double kept_distance_m = 0.010;   // this near a kept cane's axis (or inside it) cuts it
+  // A reconstructed cut lies on every true cane whose axis passes this near (besides the nearest).
+  double on_cane_distance_m = 0.010;
 
-  // INVALID_ARGUMENT naming the field unless both are positive and finite.
+  // INVALID_ARGUMENT naming the field unless each is positive and finite.
   absl::Status Validate() const;
 };
 
@@ -49,6 +57,24 @@ struct CutMetrics {
   // Reconstructed cuts that would remove wood the ground-truth plan keeps (see above).
   int cuts_on_kept_canes = 0;
 };
+
+// The pairing behind CutMetrics, cut by cut (for diagnosis tools and tests).
+struct CutMatching {
+  // Per truth_plan.cuts[i]: the index of its partner in model_plan->cuts, or -1.
+  std::vector<int> truth_partner;
+  // Per model_plan->cuts[j]: the index of its partner in truth_plan.cuts, or -1.
+  std::vector<int> model_partner;
+  // Per model cut: the index into truth.canes of the cane it is assigned to (step 1), the
+  // distance of its point from that cane's axis, and whether it is on a kept cane (step 3).
+  std::vector<size_t> model_truth_cane;
+  std::vector<double> model_truth_distance_m;
+  std::vector<bool> model_on_kept_cane;
+};
+
+// The pairing of EvaluateCuts. Same errors; `model_plan` null gives no model cuts.
+absl::StatusOr<CutMatching> MatchCuts(const VineModel& truth, const CutPlan& truth_plan,
+                                      const VineModel& model, const CutPlan* model_plan,
+                                      const CutMetricsOptions& options = {});
 
 // Compares `model_plan` (decided on the reconstruction `model`) with `truth_plan` (decided on
 // `truth`). `model_plan` null means no plan could be made for the reconstruction: every

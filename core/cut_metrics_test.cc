@@ -1,7 +1,9 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "core/cut_metrics.h"
 
+#include <limits>
 #include <string>
+#include <vector>
 
 #include "gtest/gtest.h"
 
@@ -102,6 +104,55 @@ TEST(EvaluateCuts, CutNearerAnotherCaneDoesNotMatch) {
   EXPECT_DOUBLE_EQ(m->cuts_spurious_fraction, 1.0 / 3.0);
 }
 
+TEST(EvaluateCuts, CutWithinTenMillimetresOfItsCaneMatchesThoughNearerAnother) {
+  // Canes 3 and 4 leave the head 12 mm apart; the truth removes cane 3, and cane 4, growing from
+  // it, falls with it.
+  VineModel truth;
+  truth.canes.push_back(StraightCane(1, std::nullopt, CaneKind::kTrunk, {0, 0, 0}, {0, 0, 1}, 1.0));
+  truth.canes.push_back(StraightCane(3, 1, CaneKind::kCane, {-0.05, 0, 1}, {-1, 0, 0}, 0.6));
+  truth.canes.push_back(StraightCane(4, 3, CaneKind::kCane, {-0.05, 0, 1.012}, {-1, 0, 0}, 0.6));
+  CutPlan truth_plan;
+  truth_plan.cuts = {MakeCut(1, 3, {-0.06, 0, 1}, CutReason::kRemove)};
+  CutPlan model_plan = truth_plan;
+  // 7 mm from cane 3's axis, 5 mm from cane 4's: nearest cane 4, yet on cane 3 and 7 mm from its
+  // cut.
+  model_plan.cuts[0].point = {-0.06, 0, 1.007};
+  auto m = EvaluateCuts(truth, truth_plan, truth, &model_plan);
+  ASSERT_TRUE(m.ok()) << m.status();
+  EXPECT_EQ(m->matched_cuts, 1);
+  EXPECT_NEAR(m->cut_error_median_m, 0.007, 1e-9);
+  auto matching = MatchCuts(truth, truth_plan, truth, &model_plan);
+  ASSERT_TRUE(matching.ok()) << matching.status();
+  EXPECT_EQ(matching->truth_partner, std::vector<int>{0});
+  EXPECT_EQ(matching->model_partner, std::vector<int>{0});
+  EXPECT_EQ(matching->model_truth_cane, std::vector<size_t>{2});  // assigned to cane 4, nearest
+
+  // A tighter tolerance takes it off cane 3.
+  CutMetricsOptions tight;
+  tight.on_cane_distance_m = 0.005;
+  m = EvaluateCuts(truth, truth_plan, truth, &model_plan, tight);
+  ASSERT_TRUE(m.ok()) << m.status();
+  EXPECT_EQ(m->matched_cuts, 0);
+
+  // 12 mm from cane 3's axis (on cane 4's): beyond the tolerance, not on cane 3.
+  model_plan.cuts[0].point = {-0.06, 0, 1.012};
+  m = EvaluateCuts(truth, truth_plan, truth, &model_plan);
+  ASSERT_TRUE(m.ok()) << m.status();
+  EXPECT_EQ(m->matched_cuts, 0);
+  EXPECT_EQ(m->cuts_on_kept_canes, 0);
+
+  // When the truth keeps cane 4 (growing from the trunk), the cut 5 mm from it would take kept
+  // wood: it lies on cane 4 only, and counts as a cut on a kept cane.
+  truth.canes[2].parent_id = CaneId(1);
+  truth_plan.keep = {CaneId(4)};
+  model_plan = truth_plan;
+  model_plan.cuts[0].point = {-0.06, 0, 1.007};
+  m = EvaluateCuts(truth, truth_plan, truth, &model_plan);
+  ASSERT_TRUE(m.ok()) << m.status();
+  EXPECT_EQ(m->matched_cuts, 0);
+  EXPECT_EQ(m->cuts_on_kept_canes, 1);
+}
+
 TEST(EvaluateCuts, OneReconstructedCutMatchesOneTruthCut) {
   const VineModel truth = Truth();
   const CutPlan truth_plan = TruthPlan();
@@ -175,6 +226,11 @@ TEST(EvaluateCuts, RejectsInvalidInputNamingIt) {
   m = EvaluateCuts(truth, plan, truth, &plan, options);
   ASSERT_FALSE(m.ok());
   EXPECT_NE(m.status().message().find("match_distance_m"), std::string_view::npos) << m.status();
+  options = {};
+  options.on_cane_distance_m = std::numeric_limits<double>::quiet_NaN();
+  m = EvaluateCuts(truth, plan, truth, &plan, options);
+  ASSERT_FALSE(m.ok());
+  EXPECT_NE(m.status().message().find("on_cane_distance_m"), std::string_view::npos) << m.status();
 }
 
 TEST(CutMetricsToJson, HasTheDocumentedKeys) {
