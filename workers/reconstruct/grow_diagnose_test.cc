@@ -32,6 +32,99 @@ double MeanSe(const std::vector<double>& v, double* se) {
   return mean;
 }
 
+// The ends whose growth stopped alongside another cane, against the truth: whether the end and
+// the other cane lie on the vine's canes, on the same true cane (the other cane continues this
+// one) or another, how far apart those two true canes are, and the end's own true cane's length
+// beyond the stop (up to 15 cm) that no grown cane recalls: what growth alongside could win.
+struct AlongsideTally {
+  int ends = 0, end_off = 0, other_off = 0, same = 0, different = 0;
+  double lost_same = 0, lost_different = 0;   // m beyond the stop, not recalled
+  int gap[4] = {};                            // different: true canes < 10, 10-20, 20-40, 40+ mm
+  double lost_by_gap[4] = {};
+
+  void Print(int count) const {
+    std::printf("stopped alongside: %d ends; end > 10 mm off its vine's canes %d; other cane off "
+                "%d; other on the end's own true cane %d (lost beyond %.3f m per stop), on "
+                "another %d (lost beyond %.3f m per stop)\n",
+                ends, end_off, other_off, same, lost_same / count, different,
+                lost_different / count);
+    std::printf("  another true cane, 3D gap < 10 / 10-20 / 20-40 / 40+ mm: %d (%.3f) %d (%.3f) "
+                "%d (%.3f) %d (%.3f) ends (lost m per stop)\n",
+                gap[0], lost_by_gap[0] / count, gap[1], lost_by_gap[1] / count, gap[2],
+                lost_by_gap[2] / count, gap[3], lost_by_gap[3] / count);
+  }
+};
+
+int NearestCane(const Eigen::Vector3d& p, const std::vector<Cane>& canes, double* distance) {
+  int best = -1;
+  *distance = 1e9;
+  for (size_t i = 0; i < canes.size(); ++i) {
+    double d = 0;
+    canes[i].polyline.Project(p, &d);
+    if (d < *distance) {
+      *distance = d;
+      best = static_cast<int>(i);
+    }
+  }
+  return best;
+}
+
+void AlongsideEnds(const VineModel& truth, const std::vector<Polyline3>& grown,
+                   const GrowSummary& summary, AlongsideTally* tally) {
+  std::vector<Cane> model;
+  for (const Polyline3& line : grown) {
+    Cane cane;
+    cane.polyline = line;
+    model.push_back(cane);
+  }
+  for (const GrowEnd& end : summary.ends) {
+    if (end.stop != GrowStop::kAlongside || end.other_cane < 0) continue;
+    ++tally->ends;
+    double d_end = 0, d_other = 0;
+    const int own = NearestCane(end.stop_point, truth.canes, &d_end);
+    if (own < 0 || d_end > 0.010) {
+      ++tally->end_off;
+      continue;
+    }
+    const Polyline3& other = grown[end.other_cane];
+    double d = 0;
+    const Eigen::Vector3d on_other = other.PointAt(other.Project(end.stop_point, &d));
+    const int other_true = NearestCane(on_other, truth.canes, &d_other);
+    if (other_true < 0 || d_other > 0.010) {
+      ++tally->other_off;
+      continue;
+    }
+    // The end's direction: from the cane's point 3 cm back to its end.
+    const Polyline3& line = grown[end.cane];
+    const double length = line.Length();
+    const Eigen::Vector3d tip = end.side == 0 ? line.points.back() : line.points.front();
+    const Eigen::Vector3d back = line.PointAt(end.side == 0 ? std::max(0.0, length - 0.03)
+                                                            : std::min(length, 0.03));
+    const Eigen::Vector3d dir = (tip - back).normalized();
+    const Polyline3& true_line = truth.canes[own].polyline;
+    const double s0 = true_line.Project(end.stop_point);
+    const double sign = true_line.TangentAt(s0).dot(dir) >= 0 ? 1.0 : -1.0;
+    double lost = 0;
+    for (double u = 0.0025; u <= 0.15; u += 0.005) {
+      const double s = s0 + sign * u;
+      if (s < 0 || s > true_line.Length()) break;
+      if (DistanceToCanes(true_line.PointAt(s), model) > 0.010) lost += 0.005;
+    }
+    if (other_true == own) {
+      ++tally->same;
+      tally->lost_same += lost;
+    } else {
+      ++tally->different;
+      tally->lost_different += lost;
+      double gap = 0;
+      truth.canes[other_true].polyline.Project(true_line.PointAt(s0), &gap);
+      const int b = gap < 0.01 ? 0 : gap < 0.02 ? 1 : gap < 0.04 ? 2 : 3;
+      ++tally->gap[b];
+      tally->lost_by_gap[b] += lost;
+    }
+  }
+}
+
 GrowOptions OptionsFromEnv() {
   GrowOptions o;
   OverrideFromEnv("VB_GROW_SUPPORT_PX", &o.support_px);
@@ -47,6 +140,11 @@ GrowOptions OptionsFromEnv() {
   OverrideFromEnv("VB_GROW_TRIM", &o.trim_m);
   OverrideFromEnv("VB_GROW_VIEWS", &o.min_support_views);
   OverrideFromEnv("VB_GROW_END", &o.require_end_support);
+  OverrideFromEnv("VB_GROW_ALONG_MAX", &o.alongside_max_m);
+  OverrideFromEnv("VB_GROW_ALONG_GAP", &o.alongside_min_gap_m);
+  OverrideFromEnv("VB_GROW_ALONG_CONT", &o.continuation_m);
+  OverrideFromEnv("VB_GROW_ALONG_PRIOR", &o.alongside_prior_px_per_mm);
+  OverrideFromEnv("VB_GROW_ALONG_PART", &o.alongside_require_parting);
   return o;
 }
 
@@ -59,8 +157,11 @@ TEST(Grow, DISABLED_Report) {
   const auto [first, count, images, fiducials] = ReportStopsFromEnv(1300, 10, true);
   const GrowOptions grow = OptionsFromEnv();
   ASSERT_TRUE(grow.Validate().ok());
+  // VB_GROW_BASE=1: compare against the default growth instead of none.
+  bool base = false;
+  OverrideFromEnv("VB_GROW_BASE", &base);
   ReconstructOptions off;
-  off.grow.enabled = false;
+  off.grow.enabled = base;
   ReconstructOptions on;
   on.grow = grow;
   on.grow.enabled = true;
@@ -70,6 +171,7 @@ TEST(Grow, DISABLED_Report) {
   double added = 0, right = 0, added_from_wrong_end = 0, right_from_wrong_end = 0, time = 0;
   int ends = 0, grown_ends = 0;
   GrowSummary totals;
+  AlongsideTally along;
   std::vector<double> d_recall, d_precision, d_connectivity;
   double recall0 = 0, precision0 = 0, connectivity0 = 0;
   for (int k = 0; k < count; ++k) {
@@ -98,6 +200,9 @@ TEST(Grow, DISABLED_Report) {
     totals.turned += summary.turned;
     totals.outside += summary.outside;
     totals.capped += summary.capped;
+    totals.ends_alongside += summary.ends_alongside;
+    totals.alongside_length_m += summary.alongside_length_m;
+    AlongsideEnds(stop.scene.vine, grown, summary, &along);
     const double added_before = added, right_before = right;
     for (size_t c = 0; c < grown.size(); ++c) {
       const Polyline3& before = (*canes)[c];
@@ -209,6 +314,9 @@ TEST(Grow, DISABLED_Report) {
               static_cast<unsigned long long>(first + count - 1), images ? "images" : "views",
               ends, grown_ends, totals.end_unsupported, totals.unsupported, totals.contradicted, totals.alongside,
               totals.thick, totals.turned, totals.outside, totals.capped);
+  std::printf("grown on alongside another cane: %d ends, %.3f m per stop\n", totals.ends_alongside,
+              totals.alongside_length_m / count);
+  along.Print(count);
   std::printf("added %.3f m per stop, right %.3f; from ends already > 10 mm off: %.3f m per stop, "
               "right %.3f; stage %.4f s per stop\n",
               added / count, right / std::max(added, 1e-9), added_from_wrong_end / count,
