@@ -116,6 +116,8 @@ struct Growth {
   GrowStop stop = GrowStop::kCapped;
   Eigen::Vector3d stop_point = Eigen::Vector3d::Zero();
   int other = -1;
+  int removed = 0;        // points backed off the end before growing (end_backoff_m)
+  double removed_m = 0.0; // their length
 };
 
 // Mean radius over the last span_m of the line (its end's thickness, less noisy than one point).
@@ -144,8 +146,33 @@ class Grower {
   }
 
   // Grows the end at line.points.back(). `others` excludes `line` itself.
-  Growth GrowBack(const Polyline3& line, const std::vector<OtherCane>& others) const {
+  Growth GrowBack(const Polyline3& input, const std::vector<OtherCane>& others) const {
     Growth out;
+    // An end the views disagree on is backed off to the last point they agree on (within
+    // end_backoff_m), if any: the growth then starts there.
+    Polyline3 line = input;
+    if (options_.require_end_support && !EndSupported(line.points.back())) {
+      bool found = false;
+      double cut = 0;
+      while (options_.end_backoff_m > 0 && line.points.size() > 2) {
+        cut += (line.points.back() - line.points[line.points.size() - 2]).norm();
+        if (cut > options_.end_backoff_m + 1e-12) break;
+        line.points.pop_back();
+        line.radii.pop_back();
+        ++out.removed;
+        if (EndSupported(line.points.back())) {
+          found = true;
+          out.removed_m = cut;
+          break;
+        }
+      }
+      if (!found) {
+        out.removed = 0;
+        out.stop_point = input.points.back();
+        out.stop = Stop::kEndUnsupported;
+        return out;
+      }
+    }
     std::vector<Eigen::Vector3d> curve = line.points;
     const double length = line.Length();
     const std::vector<double> arc = line.ArcLengths();
@@ -154,10 +181,6 @@ class Grower {
         (end - line.PointAt(std::max(0.0, length - options_.tangent_span_m), arc)).normalized();
     const double radius = EndRadius(line, options_.tangent_span_m);
     out.stop_point = end;
-    if (options_.require_end_support && !EndSupported(end)) {
-      out.stop = Stop::kEndUnsupported;
-      return out;
-    }
     const double cos_turn = std::cos(options_.max_turn_deg * kDegToRad);
     const int max_steps = static_cast<int>(std::floor(options_.max_length_m / options_.step_m));
     const bool may_run_along = options_.alongside_max_m > 0;
@@ -340,8 +363,8 @@ class Grower {
             // The other cane's end near p, and the other cane runs on ahead from it.
             const double s = arc + t * segment, rest = other.line->Length() - s;
             best = AlongHit{other.index, d,
-                            (s <= options_.continuation_m && cos > 0) ||
-                                (rest <= options_.continuation_m && cos < 0)};
+                            (s < options_.continuation_m && cos > 0) ||
+                                (rest < options_.continuation_m && cos < 0)};
           }
         }
         arc += segment;
@@ -384,7 +407,8 @@ absl::Status GrowOptions::Validate() const {
                                      {alongside_max_m, "alongside_max_m"},
                                      {alongside_min_gap_m, "alongside_min_gap_m"},
                                      {continuation_m, "continuation_m"},
-                                     {alongside_prior_px_per_mm, "alongside_prior_px_per_mm"}}) {
+                                     {alongside_prior_px_per_mm, "alongside_prior_px_per_mm"},
+                                     {end_backoff_m, "end_backoff_m"}}) {
     if (!std::isfinite(value) || value < 0) {
       return absl::InvalidArgumentError(
           absl::StrCat("grow.", field, " must be finite and >= 0, is ", value));
@@ -492,6 +516,8 @@ absl::Status GrowCaneEnds(const std::vector<View2D>& views, const RigCalibration
         case Stop::kCapped: ++summary->capped; break;
       }
       std::vector<Eigen::Vector3d> kept = growth.points;
+      line.points.resize(line.points.size() - growth.removed);
+      line.radii.resize(line.radii.size() - growth.removed);
       if (stop == Stop::kUnsupported || stop == Stop::kContradicted || stop == Stop::kTurned) {
         double cut = 0;
         while (!kept.empty() && cut < options.trim_m - 1e-12) {
@@ -501,13 +527,14 @@ absl::Status GrowCaneEnds(const std::vector<View2D>& views, const RigCalibration
           kept.pop_back();
         }
       }
-      if (kept.empty()) continue;
+      if (kept.empty()) continue;  // (`line` is not written back)
       Polyline3 tail;
       tail.points.push_back(line.points.back());
       for (const Eigen::Vector3d& p : kept) tail.points.push_back(p);
       tail.radii.assign(tail.points.size(), EndRadius(line, options.tangent_span_m));
       const double added = tail.Length();
-      if (added < options.min_length_m) continue;
+      // A backed-off end is replaced only by a growth that goes on beyond it.
+      if (added < options.min_length_m + growth.removed_m) continue;
       double alongside = 0;
       for (size_t i = 0; i < kept.size(); ++i)
         if (growth.alongside[i]) alongside += (tail.points[i + 1] - tail.points[i]).norm();

@@ -59,6 +59,10 @@ struct GrowOptions {
   // of at least min_support_views): an end the views disagree on is misplaced, and growing it
   // continues its error.
   bool require_end_support = true;
+  // An unsupported end is backed off, point by point, up to this far to the first point every
+  // view agrees on, and grown from there; the backed-off stretch is replaced only if the growth
+  // goes beyond it by min_length_m (s17). 0: such ends are not grown.
+  double end_backoff_m = 0.0;
   // A view supports a point only if the skeleton also runs along the step there: the points
   // half a step before and after project within support_along_px of it too (a skeleton that
   // crosses the step's projection, or passes by chance, does not support it). 0: off.

@@ -127,6 +127,30 @@ TEST(GrowCaneEnds, GrowsThroughACrossingWithinTwoMillimetres) {
     EXPECT_LT(DistanceToLine(p, scene.crossing), 0.004);
 }
 
+TEST(GrowCaneEnds, BacksOffAMisplacedEndWhenAsked) {
+  const RigCalibration rig = sim::MakeRig().value();
+  const Crossing scene;
+  const std::vector<View2D> views = ViewsOf({scene.cane, scene.crossing}, rig);
+  // The piece's last point is 6 mm off the cane: the views disagree on the end.
+  Polyline3 piece = Head(scene.cane, 20);
+  piece.points.back() += Eigen::Vector3d(0.0, 0.0, 0.006);
+  {
+    std::vector<Polyline3> canes = {piece, scene.crossing};
+    GrowSummary summary;
+    ASSERT_TRUE(GrowCaneEnds(views, rig, WorkingVolume{}, On(), &canes, &summary).ok());
+    EXPECT_GE(summary.end_unsupported, 1);
+    EXPECT_EQ(canes[0].points.size(), 20u);  // by default such an end is not grown
+  }
+  GrowOptions options = On();
+  options.end_backoff_m = 0.02;
+  std::vector<Polyline3> canes = {piece, scene.crossing};
+  ASSERT_TRUE(GrowCaneEnds(views, rig, WorkingVolume{}, options, &canes).ok());
+  // Backed off to the point before, then grown through the crossing; the misplaced point is gone.
+  EXPECT_GT(canes[0].points.back().x(), scene.cane.points[20].x() + 0.08);
+  for (size_t i = 18; i < canes[0].points.size(); ++i)
+    EXPECT_LT(DistanceToLine(canes[0].points[i], scene.cane), 0.002) << i;
+}
+
 TEST(GrowCaneEnds, StopsWhereAViewContradicts) {
   const RigCalibration rig = sim::MakeRig().value();
   const Crossing scene;
@@ -313,7 +337,8 @@ TEST(GrowCaneEnds, RejectsBadInputNamingTheField) {
            {"alongside_min_gap_m", [](GrowOptions* o) { o->alongside_min_gap_m = 0.02; }},
            {"continuation_m", [](GrowOptions* o) { o->continuation_m = NAN; }},
            {"alongside_prior_px_per_mm",
-            [](GrowOptions* o) { o->alongside_prior_px_per_mm = -1; }}}) {
+            [](GrowOptions* o) { o->alongside_prior_px_per_mm = -1; }},
+           {"end_backoff_m", [](GrowOptions* o) { o->end_backoff_m = INFINITY; }}}) {
     options = Alongside();
     change(&options);
     status = GrowCaneEnds(views, rig, WorkingVolume{}, options, &canes);
