@@ -17,7 +17,7 @@
 // tangent, runs alongside another cane (within `other_cane_m`, directions within
 // `along_angle_deg`: that wood is reconstructed already, or the path has switched canes), or
 // after `max_length_m`. Grown points take the end's radius.
-// Growth alongside another cane (`alongside_max_m` > 0; off by default): where two canes lie
+// Growth alongside another cane (`alongside_max_m` > 0; on by default since s17): where two canes lie
 // along each other in the views they share one skeleton path, and the cane that did not get it
 // stops where it joins it. Growth then goes on alongside the other cane unless that cane is the
 // end's own continuation (the other cane's end lies within `continuation_m` of the point and the
@@ -80,11 +80,13 @@ struct GrowOptions {
   double trim_m = 0.01;
   double min_length_m = 0.01;        // shorter growths are dropped
   int image_margin_px = 3;           // a view must see a point this far inside its image
-  // Growth alongside another cane (s17; see above). 0: growth stops alongside another cane.
-  double alongside_max_m = 0.0;          // longest stretch grown alongside other canes, per end
+  // Growth alongside another cane (s17; see above; on by default: recall +0.0018 and +0.0009 on
+  // the two tuning ranges at precision -0.0006 and -0.0011, docs/reconstruction.md step 4d).
+  // 0: growth stops alongside another cane, as before.
+  double alongside_max_m = 0.1;          // longest stretch grown alongside other canes, per end
   double alongside_min_gap_m = 0.004;    // closer to the other cane than this: stop
   double continuation_m = 0.02;          // the other cane's end this near: its continuation
-  double alongside_prior_px_per_mm = 0.0;  // pull toward the prediction while alongside
+  double alongside_prior_px_per_mm = 2.0;  // pull toward the prediction while alongside
   bool alongside_require_parting = false;  // keep an alongside stretch only if growth parts
 
   // INVALID_ARGUMENT naming the field for non-finite or out-of-range values.

@@ -187,14 +187,15 @@ TEST(GrowCaneEnds, DoesNotRunAlongAnotherCane) {
   EXPECT_GT(canes[1].points.front().x(), cane.points[15].x() - 0.012);
 }
 
+// Growth alongside other canes, as by default (session 17).
 GrowOptions Alongside() {
   GrowOptions options = On();
-  options.alongside_max_m = 0.12;
-  options.alongside_prior_px_per_mm = 2.0;
+  EXPECT_GT(options.alongside_max_m, 0.08);
+  EXPECT_GT(options.alongside_prior_px_per_mm, 0.0);
   return options;
 }
 
-// Two canes that lie along each other in every view for 8 cm (x in [-0.12, -0.04]) and part
+// Two canes that lie along each other in every view for 6 cm (x in [-0.12, -0.06]) and part
 // again on either side: `other` 1 cm behind `own` in depth there, and dropping away from it
 // steeply outside. The views draw the shared stretch as one skeleton path, `other`'s (as a
 // skeleton merges two canes lying along each other), and the model has `other` whole but `own`
@@ -205,7 +206,7 @@ struct SharedStretch {
   SharedStretch() {
     other = own;
     for (Eigen::Vector3d& p : other.points) {
-      const double outside = std::max({0.0, -0.12 - p.x(), p.x() + 0.04});
+      const double outside = std::max({0.0, -0.12 - p.x(), p.x() + 0.06});
       p += Eigen::Vector3d(0.0, 0.01, -2.0 * outside);
     }
   }
@@ -228,22 +229,25 @@ TEST(GrowCaneEnds, GrowsAlongAnotherCaneOnItsOwnCourseAndPartsFromIt) {
   const RigCalibration rig = sim::MakeRig().value();
   const SharedStretch scene;
   const std::vector<View2D> views = scene.Views(rig);
-  // The control: by default growth stops alongside the other cane, before the stretch's end.
+  // The control: without growth alongside other canes (alongside_max_m 0, as before session 17)
+  // growth stops alongside the other cane, before the stretch's end.
   {
     std::vector<Polyline3> canes = {scene.OwnPiece(), scene.other};
     GrowSummary summary;
-    ASSERT_TRUE(GrowCaneEnds(views, rig, WorkingVolume{}, On(), &canes, &summary).ok());
+    GrowOptions stop_alongside = On();
+    stop_alongside.alongside_max_m = 0.0;
+    ASSERT_TRUE(GrowCaneEnds(views, rig, WorkingVolume{}, stop_alongside, &canes, &summary).ok());
     EXPECT_GE(summary.alongside, 1);
-    EXPECT_LT(canes[0].points.back().x(), -0.04);
+    EXPECT_LT(canes[0].points.back().x(), -0.06);
   }
   std::vector<Polyline3> canes = {scene.OwnPiece(), scene.other};
   const size_t old_size = canes[0].points.size();
   GrowSummary summary;
   ASSERT_TRUE(GrowCaneEnds(views, rig, WorkingVolume{}, Alongside(), &canes, &summary).ok());
   // The end grew through the shared stretch and on along its own cane beyond it ...
-  EXPECT_GT(canes[0].points.back().x(), -0.02);
+  EXPECT_GT(canes[0].points.back().x(), -0.04);
   EXPECT_EQ(summary.ends_alongside, 1);
-  EXPECT_GT(summary.alongside_length_m, 0.05);
+  EXPECT_GT(summary.alongside_length_m, 0.04);
   // ... following its own cane, not the other: every grown point is nearer its own.
   for (size_t i = old_size; i < canes[0].points.size(); ++i) {
     EXPECT_LT(DistanceToLine(canes[0].points[i], scene.own), 0.003) << i;
