@@ -97,6 +97,27 @@ class ViewProbe {
 struct OtherCane {
   const Polyline3* line;
   Eigen::AlignedBox3d box;
+  int index;  // in the input
+};
+
+// A grown point alongside another cane: the nearest such cane, how far, and whether it is the
+// end's own continuation (its end near the point, running on ahead).
+struct AlongHit {
+  int other = -1;
+  double distance = 0.0;
+  bool continuation = false;
+};
+
+// What the growth of one end gives: the points (not including the end), which of them lie
+// alongside another cane, why and where it stopped.
+struct Growth {
+  std::vector<Eigen::Vector3d> points;
+  std::vector<bool> alongside;
+  GrowStop stop = GrowStop::kCapped;
+  Eigen::Vector3d stop_point = Eigen::Vector3d::Zero();
+  int other = -1;
+  int removed = 0;        // points backed off the end before growing (end_backoff_m)
+  double removed_m = 0.0; // their length
 };
 
 // Mean radius over the last span_m of the line (its end's thickness, less noisy than one point).
@@ -113,7 +134,7 @@ double EndRadius(const Polyline3& line, double span_m) {
   return count > 0 ? sum / count : line.radii.back();
 }
 
-enum class Stop { kEndUnsupported, kUnsupported, kContradicted, kAlongside, kThick, kTurned, kOutside, kCapped };
+using Stop = GrowStop;
 
 class Grower {
  public:
@@ -124,10 +145,34 @@ class Grower {
       probes_.emplace_back(views[i], rig.cameras[i], options.image_margin_px);
   }
 
-  // Grows the end at line.points.back(); returns the grown points (not including the end) and
-  // why growth stopped. `others` excludes `line` itself.
-  std::vector<Eigen::Vector3d> GrowBack(const Polyline3& line, const std::vector<OtherCane>& others,
-                                        Stop* stop) const {
+  // Grows the end at line.points.back(). `others` excludes `line` itself.
+  Growth GrowBack(const Polyline3& input, const std::vector<OtherCane>& others) const {
+    Growth out;
+    // An end the views disagree on is backed off to the last point they agree on (within
+    // end_backoff_m), if any: the growth then starts there.
+    Polyline3 line = input;
+    if (options_.require_end_support && !EndSupported(line.points.back())) {
+      bool found = false;
+      double cut = 0;
+      while (options_.end_backoff_m > 0 && line.points.size() > 2) {
+        cut += (line.points.back() - line.points[line.points.size() - 2]).norm();
+        if (cut > options_.end_backoff_m + 1e-12) break;
+        line.points.pop_back();
+        line.radii.pop_back();
+        ++out.removed;
+        if (EndSupported(line.points.back())) {
+          found = true;
+          out.removed_m = cut;
+          break;
+        }
+      }
+      if (!found) {
+        out.removed = 0;
+        out.stop_point = input.points.back();
+        out.stop = Stop::kEndUnsupported;
+        return out;
+      }
+    }
     std::vector<Eigen::Vector3d> curve = line.points;
     const double length = line.Length();
     const std::vector<double> arc = line.ArcLengths();
@@ -135,44 +180,64 @@ class Grower {
     const Eigen::Vector3d start_tangent =
         (end - line.PointAt(std::max(0.0, length - options_.tangent_span_m), arc)).normalized();
     const double radius = EndRadius(line, options_.tangent_span_m);
-
-    std::vector<Eigen::Vector3d> grown;
-    if (options_.require_end_support && !EndSupported(end)) {
-      *stop = Stop::kEndUnsupported;
-      return grown;
-    }
+    out.stop_point = end;
     const double cos_turn = std::cos(options_.max_turn_deg * kDegToRad);
     const int max_steps = static_cast<int>(std::floor(options_.max_length_m / options_.step_m));
-    *stop = Stop::kCapped;
+    const bool may_run_along = options_.alongside_max_m > 0;
+    double alongside = 0;                // length grown alongside other canes so far
+    size_t run_start = 0;                // where the current alongside run began, if in one
+    bool in_run = false;
+    out.stop = Stop::kCapped;
     for (int k = 0; k < max_steps; ++k) {
       const Eigen::Vector3d tangent = Tangent(curve);
       const Eigen::Vector3d predicted = curve.back() + options_.step_m * tangent;
+      out.stop_point = predicted;
       if (!volume_.Contains(predicted)) {
-        *stop = Stop::kOutside;
+        out.stop = Stop::kOutside;
         break;
       }
-      const Eigen::Vector3d p = Correct(predicted, tangent);
+      const Eigen::Vector3d p = Correct(
+          predicted, tangent, in_run ? options_.alongside_prior_px_per_mm : options_.prior_px_per_mm);
+      out.stop_point = p;
       if (!volume_.Contains(p)) {
-        *stop = Stop::kOutside;
+        out.stop = Stop::kOutside;
         break;
       }
       const Eigen::Vector3d step = (p - curve.back()).normalized();
       if (step.dot(start_tangent) < cos_turn) {
-        *stop = Stop::kTurned;
+        out.stop = Stop::kTurned;
         break;
       }
       if (const std::optional<Stop> s = Check(p, step, radius); s) {
-        *stop = *s;
+        out.stop = *s;
         break;
       }
-      if (Alongside(p, step, others)) {
-        *stop = Stop::kAlongside;
-        break;
+      const std::optional<AlongHit> hit = Alongside(p, step, others);
+      if (hit) {
+        const double step_length = (p - curve.back()).norm();
+        if (!may_run_along || hit->continuation || hit->distance < options_.alongside_min_gap_m ||
+            alongside + step_length > options_.alongside_max_m + 1e-12) {
+          out.stop = Stop::kAlongside;
+          out.other = hit->other;
+          break;
+        }
+        if (!in_run) run_start = out.points.size();
+        in_run = true;
+        alongside += step_length;
+      } else {
+        in_run = false;
       }
       curve.push_back(p);
-      grown.push_back(p);
+      out.points.push_back(p);
+      out.alongside.push_back(hit.has_value());
     }
-    return grown;
+    if (in_run && options_.alongside_require_parting) {
+      // The growth never left the other cane again: what it grew alongside it is not kept.
+      out.points.resize(run_start);
+      out.alongside.resize(run_start);
+      out.stop = Stop::kAlongside;
+    }
+    return out;
   }
 
  private:
@@ -200,10 +265,11 @@ class Grower {
 
   // The point near `predicted`, on the plane normal to the tangent, that best fits the skeletons
   // of all views: a coarse grid of offsets, then a 4x finer one around the best.
-  Eigen::Vector3d Correct(const Eigen::Vector3d& predicted, const Eigen::Vector3d& tangent) const {
+  Eigen::Vector3d Correct(const Eigen::Vector3d& predicted, const Eigen::Vector3d& tangent,
+                          double prior_px_per_mm) const {
     const Eigen::Vector3d u = tangent.unitOrthogonal();
     const Eigen::Vector3d w = tangent.cross(u).normalized();
-    const double prior = options_.prior_px_per_mm * 1000.0;  // px per metre of offset
+    const double prior = prior_px_per_mm * 1000.0;  // px per metre of offset
     double best_a = 0, best_b = 0, best = Cost(predicted);
     const auto search = [&](double centre_a, double centre_b, double grid, int half) {
       double ba = centre_a, bb = centre_b;
@@ -277,20 +343,34 @@ class Grower {
     return std::nullopt;
   }
 
-  bool Alongside(const Eigen::Vector3d& p, const Eigen::Vector3d& step,
-                 const std::vector<OtherCane>& others) const {
+  // The nearest other cane within other_cane_m of p that runs within along_angle_deg of the step.
+  std::optional<AlongHit> Alongside(const Eigen::Vector3d& p, const Eigen::Vector3d& step,
+                                    const std::vector<OtherCane>& others) const {
     const double cos_along = std::cos(options_.along_angle_deg * kDegToRad);
+    std::optional<AlongHit> best;
     for (const OtherCane& other : others) {
       if (!other.box.contains(p)) continue;
       const std::vector<Eigen::Vector3d>& q = other.line->points;
+      double arc = 0;
       for (size_t i = 0; i + 1 < q.size(); ++i) {
+        const double segment = (q[i + 1] - q[i]).norm();
         double t = 0;
-        if (PointSegmentDistance(p, q[i], q[i + 1], &t) > options_.other_cane_m) continue;
-        const Eigen::Vector3d dir = (q[i + 1] - q[i]).normalized();
-        if (std::abs(dir.dot(step)) >= cos_along) return true;
+        const double d = PointSegmentDistance(p, q[i], q[i + 1], &t);
+        if (d <= options_.other_cane_m && (!best || d < best->distance)) {
+          const Eigen::Vector3d dir = (q[i + 1] - q[i]).normalized();
+          const double cos = dir.dot(step);
+          if (std::abs(cos) >= cos_along) {
+            // The other cane's end near p, and the other cane runs on ahead from it.
+            const double s = arc + t * segment, rest = other.line->Length() - s;
+            best = AlongHit{other.index, d,
+                            (s < options_.continuation_m && cos > 0) ||
+                                (rest < options_.continuation_m && cos < 0)};
+          }
+        }
+        arc += segment;
       }
     }
-    return false;
+    return best;
   }
 
   const WorkingVolume& volume_;
@@ -323,7 +403,12 @@ absl::Status GrowOptions::Validate() const {
                                      {support_along_px, "support_along_px"},
                                      {prior_px_per_mm, "prior_px_per_mm"},
                                      {min_length_m, "min_length_m"},
-                                     {min_epipolar_angle_deg, "min_epipolar_angle_deg"}}) {
+                                     {min_epipolar_angle_deg, "min_epipolar_angle_deg"},
+                                     {alongside_max_m, "alongside_max_m"},
+                                     {alongside_min_gap_m, "alongside_min_gap_m"},
+                                     {continuation_m, "continuation_m"},
+                                     {alongside_prior_px_per_mm, "alongside_prior_px_per_mm"},
+                                     {end_backoff_m, "end_backoff_m"}}) {
     if (!std::isfinite(value) || value < 0) {
       return absl::InvalidArgumentError(
           absl::StrCat("grow.", field, " must be finite and >= 0, is ", value));
@@ -354,6 +439,17 @@ absl::Status GrowOptions::Validate() const {
   if (max_length_m > 1000.0 * step_m) {
     return absl::InvalidArgumentError(
         absl::StrCat("grow.max_length_m (", max_length_m, ") must be at most 1000 step_m"));
+  }
+  if (alongside_max_m > max_length_m) {
+    return absl::InvalidArgumentError(absl::StrCat("grow.alongside_max_m (", alongside_max_m,
+                                                   ") must not exceed max_length_m (",
+                                                   max_length_m, ")"));
+  }
+  if (alongside_min_gap_m >= other_cane_m) {
+    return absl::InvalidArgumentError(absl::StrCat("grow.alongside_min_gap_m (",
+                                                   alongside_min_gap_m,
+                                                   ") must be below other_cane_m (", other_cane_m,
+                                                   ")"));
   }
   if (min_support_views < 2) {
     return absl::InvalidArgumentError(
@@ -396,12 +492,19 @@ absl::Status GrowCaneEnds(const std::vector<View2D>& views, const RigCalibration
       continue;
     std::vector<OtherCane> others;
     for (size_t o = 0; o < canes->size(); ++o)
-      if (o != c) others.push_back({&(*canes)[o], boxes[o]});
+      if (o != c) others.push_back({&(*canes)[o], boxes[o], static_cast<int>(o)});
     for (int side = 0; side < (tips_only ? 1 : 2); ++side) {
       Polyline3 line = side == 0 ? (*canes)[c] : Reversed((*canes)[c]);
       ++summary->ends_tried;
-      Stop stop = Stop::kCapped;
-      const std::vector<Eigen::Vector3d> grown = grower.GrowBack(line, others, &stop);
+      const Growth growth = grower.GrowBack(line, others);
+      const Stop stop = growth.stop;
+      GrowEnd record;
+      record.cane = static_cast<int>(c);
+      record.side = side;
+      record.stop = stop;
+      record.stop_point = growth.stop_point;
+      record.other_cane = growth.other;
+      summary->ends.push_back(record);
       switch (stop) {
         case Stop::kEndUnsupported: ++summary->end_unsupported; break;
         case Stop::kUnsupported: ++summary->unsupported; break;
@@ -412,7 +515,9 @@ absl::Status GrowCaneEnds(const std::vector<View2D>& views, const RigCalibration
         case Stop::kOutside: ++summary->outside; break;
         case Stop::kCapped: ++summary->capped; break;
       }
-      std::vector<Eigen::Vector3d> kept = grown;
+      std::vector<Eigen::Vector3d> kept = growth.points;
+      line.points.resize(line.points.size() - growth.removed);
+      line.radii.resize(line.radii.size() - growth.removed);
       if (stop == Stop::kUnsupported || stop == Stop::kContradicted || stop == Stop::kTurned) {
         double cut = 0;
         while (!kept.empty() && cut < options.trim_m - 1e-12) {
@@ -422,13 +527,17 @@ absl::Status GrowCaneEnds(const std::vector<View2D>& views, const RigCalibration
           kept.pop_back();
         }
       }
-      if (kept.empty()) continue;
+      if (kept.empty()) continue;  // (`line` is not written back)
       Polyline3 tail;
       tail.points.push_back(line.points.back());
       for (const Eigen::Vector3d& p : kept) tail.points.push_back(p);
       tail.radii.assign(tail.points.size(), EndRadius(line, options.tangent_span_m));
       const double added = tail.Length();
-      if (added < options.min_length_m) continue;
+      // A backed-off end is replaced only by a growth that goes on beyond it.
+      if (added < options.min_length_m + growth.removed_m) continue;
+      double alongside = 0;
+      for (size_t i = 0; i < kept.size(); ++i)
+        if (growth.alongside[i]) alongside += (tail.points[i + 1] - tail.points[i]).norm();
       // Appended at the cane's own spacing, so later stages see the points they expect.
       const double spacing =
           std::max(options.step_m, line.Length() / static_cast<double>(line.points.size() - 1));
@@ -439,6 +548,10 @@ absl::Status GrowCaneEnds(const std::vector<View2D>& views, const RigCalibration
       }
       ++summary->ends_grown;
       summary->added_length_m += added;
+      summary->ends_alongside += alongside > 0;
+      summary->alongside_length_m += alongside;
+      summary->ends.back().grown_m = added;
+      summary->ends.back().alongside_m = alongside;
       (*canes)[c] = side == 0 ? line : Reversed(line);
     }
   }

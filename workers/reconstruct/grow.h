@@ -17,6 +17,16 @@
 // tangent, runs alongside another cane (within `other_cane_m`, directions within
 // `along_angle_deg`: that wood is reconstructed already, or the path has switched canes), or
 // after `max_length_m`. Grown points take the end's radius.
+// Growth alongside another cane (`alongside_max_m` > 0; on by default since s17): where two canes lie
+// along each other in the views they share one skeleton path, and the cane that did not get it
+// stops where it joins it. Growth then goes on alongside the other cane unless that cane is the
+// end's own continuation (the other cane's end lies within `continuation_m` of the point and the
+// other cane runs on ahead from it: a tip-to-tip join, which connection makes), the grown point
+// comes within `alongside_min_gap_m` of the other cane (it has merged onto it and would double
+// it), or the alongside stretch exceeds `alongside_max_m`; while alongside, the correction is
+// pulled toward the prediction by `alongside_prior_px_per_mm` (the end keeps its own course). With
+// `alongside_require_parting`, an alongside stretch is kept only if growth leaves the other
+// cane again (is accepted on evidence beyond it), else cut off where it began.
 // Thread-safe (pure function of its inputs).
 #pragma once
 
@@ -49,6 +59,10 @@ struct GrowOptions {
   // of at least min_support_views): an end the views disagree on is misplaced, and growing it
   // continues its error.
   bool require_end_support = true;
+  // An unsupported end is backed off, point by point, up to this far to the first point every
+  // view agrees on, and grown from there; the backed-off stretch is replaced only if the growth
+  // goes beyond it by min_length_m (s17). 0: such ends are not grown.
+  double end_backoff_m = 0.0;
   // A view supports a point only if the skeleton also runs along the step there: the points
   // half a step before and after project within support_along_px of it too (a skeleton that
   // crosses the step's projection, or passes by chance, does not support it). 0: off.
@@ -66,9 +80,34 @@ struct GrowOptions {
   double trim_m = 0.01;
   double min_length_m = 0.01;        // shorter growths are dropped
   int image_margin_px = 3;           // a view must see a point this far inside its image
+  // Growth alongside another cane (s17; see above; on by default: recall +0.0018 and +0.0009 on
+  // the two tuning ranges at precision -0.0006 and -0.0011, docs/reconstruction.md step 4d).
+  // 0: growth stops alongside another cane, as before.
+  double alongside_max_m = 0.1;          // longest stretch grown alongside other canes, per end
+  double alongside_min_gap_m = 0.004;    // closer to the other cane than this: stop
+  double continuation_m = 0.02;          // the other cane's end this near: its continuation
+  double alongside_prior_px_per_mm = 2.0;  // pull toward the prediction while alongside
+  bool alongside_require_parting = false;  // keep an alongside stretch only if growth parts
 
   // INVALID_ARGUMENT naming the field for non-finite or out-of-range values.
   absl::Status Validate() const;
+};
+
+// Why the growth of an end stopped (GrowSummary's counts, in order).
+enum class GrowStop { kEndUnsupported, kUnsupported, kContradicted, kAlongside, kThick, kTurned,
+                      kOutside, kCapped };
+
+// One end looked at (for diagnosis): cane index in the input, which end (0: the last point, 1:
+// the first), why growth stopped, the point it stopped at (the rejected step; the end itself when
+// it was not grown), the cane it ran alongside (kAlongside; else -1), and the length kept.
+struct GrowEnd {
+  int cane = -1;
+  int side = 0;
+  GrowStop stop = GrowStop::kCapped;
+  Eigen::Vector3d stop_point = Eigen::Vector3d::Zero();
+  int other_cane = -1;
+  double grown_m = 0.0;      // length added to this end (0 if nothing was kept)
+  double alongside_m = 0.0;  // of which grown alongside another cane
 };
 
 struct GrowSummary {
@@ -83,6 +122,9 @@ struct GrowSummary {
   int outside = 0;         // ... by leaving the working volume
   int capped = 0;          // ... by max_length_m
   double added_length_m = 0.0;
+  int ends_alongside = 0;           // ends grown on alongside another cane (alongside_max_m > 0)
+  double alongside_length_m = 0.0;  // length kept that was grown alongside another cane
+  std::vector<GrowEnd> ends;        // every end tried, in order
 };
 
 // Grows both ends (the last point only when `tips_only`) of every cane in `canes` (unoriented polylines, as AssembleCanes returns them)

@@ -4,6 +4,7 @@
 // --gtest_also_run_disabled_tests --gtest_filter='Grow.DISABLED_Report'. Tuning seeds only
 // (1100-1999).
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -32,6 +33,118 @@ double MeanSe(const std::vector<double>& v, double* se) {
   return mean;
 }
 
+// The ends whose growth stopped alongside another cane, against the truth: whether the end and
+// the other cane lie on the vine's canes, on the same true cane (the other cane continues this
+// one) or another, how far apart those two true canes are, and the end's own true cane's length
+// beyond the stop (up to 15 cm) that no grown cane recalls: what growth alongside could win.
+// The same length for every end on its vine's canes, by why its growth stopped.
+struct AlongsideTally {
+  int ends = 0, end_off = 0, other_off = 0, same = 0, different = 0;
+  double lost_same = 0, lost_different = 0;   // m beyond the stop, not recalled
+  int gap[4] = {};                            // different: true canes < 10, 10-20, 20-40, 40+ mm
+  double lost_by_gap[4] = {};
+  // Every end on its vine's canes, by why growth stopped (GrowStop order): ends, and the own
+  // true cane's length beyond the stop that no grown cane recalls.
+  int by_stop[8] = {};
+  double lost_by_stop[8] = {};
+
+  void Print(int count) const {
+    std::printf("stopped alongside: %d ends; end > 10 mm off its vine's canes %d; other cane off "
+                "%d; other on the end's own true cane %d (lost beyond %.3f m per stop), on "
+                "another %d (lost beyond %.3f m per stop)\n",
+                ends, end_off, other_off, same, lost_same / count, different,
+                lost_different / count);
+    std::printf("  another true cane, 3D gap < 10 / 10-20 / 20-40 / 40+ mm: %d (%.3f) %d (%.3f) "
+                "%d (%.3f) %d (%.3f) ends (lost m per stop)\n",
+                gap[0], lost_by_gap[0] / count, gap[1], lost_by_gap[1] / count, gap[2],
+                lost_by_gap[2] / count, gap[3], lost_by_gap[3] / count);
+    const char* names[8] = {"end unsupported", "unsupported", "contradicted", "alongside",
+                            "thick", "turned", "outside", "capped"};
+    std::printf("ends on the vine's canes by why growth stopped: ends (own cane's length beyond, "
+                "unrecalled, m per stop):");
+    for (int i = 0; i < 8; ++i)
+      std::printf(" %s %d (%.3f);", names[i], by_stop[i], lost_by_stop[i] / count);
+    std::printf("\n");
+  }
+};
+
+int NearestCane(const Eigen::Vector3d& p, const std::vector<Cane>& canes, double* distance) {
+  int best = -1;
+  *distance = 1e9;
+  for (size_t i = 0; i < canes.size(); ++i) {
+    double d = 0;
+    canes[i].polyline.Project(p, &d);
+    if (d < *distance) {
+      *distance = d;
+      best = static_cast<int>(i);
+    }
+  }
+  return best;
+}
+
+void AlongsideEnds(const VineModel& truth, const std::vector<Polyline3>& grown,
+                   const GrowSummary& summary, AlongsideTally* tally) {
+  std::vector<Cane> model;
+  for (const Polyline3& line : grown) {
+    Cane cane;
+    cane.polyline = line;
+    model.push_back(cane);
+  }
+  for (const GrowEnd& end : summary.ends) {
+    const Polyline3& line = grown[end.cane];
+    if (line.points.size() < 2) continue;
+    const bool alongside = end.stop == GrowStop::kAlongside && end.other_cane >= 0;
+    tally->ends += alongside;
+    double d_end = 0, d_other = 0;
+    const int own = NearestCane(end.stop_point, truth.canes, &d_end);
+    if (own < 0 || d_end > 0.010) {
+      tally->end_off += alongside;
+      continue;
+    }
+    int other_true = -1;
+    if (alongside) {
+      const Polyline3& other = grown[end.other_cane];
+      double d = 0;
+      const Eigen::Vector3d on_other = other.PointAt(other.Project(end.stop_point, &d));
+      other_true = NearestCane(on_other, truth.canes, &d_other);
+      if (other_true < 0 || d_other > 0.010) {
+        ++tally->other_off;
+        continue;
+      }
+    }
+    // The end's direction: from the cane's point 3 cm back to its end.
+    const double length = line.Length();
+    const Eigen::Vector3d tip = end.side == 0 ? line.points.back() : line.points.front();
+    const Eigen::Vector3d back = line.PointAt(end.side == 0 ? std::max(0.0, length - 0.03)
+                                                            : std::min(length, 0.03));
+    const Eigen::Vector3d dir = (tip - back).normalized();
+    const Polyline3& true_line = truth.canes[own].polyline;
+    const double s0 = true_line.Project(end.stop_point);
+    const double sign = true_line.TangentAt(s0).dot(dir) >= 0 ? 1.0 : -1.0;
+    double lost = 0;
+    for (double u = 0.0025; u <= 0.15; u += 0.005) {
+      const double s = s0 + sign * u;
+      if (s < 0 || s > true_line.Length()) break;
+      if (DistanceToCanes(true_line.PointAt(s), model) > 0.010) lost += 0.005;
+    }
+    ++tally->by_stop[static_cast<int>(end.stop)];
+    tally->lost_by_stop[static_cast<int>(end.stop)] += lost;
+    if (!alongside) continue;
+    if (other_true == own) {
+      ++tally->same;
+      tally->lost_same += lost;
+    } else {
+      ++tally->different;
+      tally->lost_different += lost;
+      double gap = 0;
+      truth.canes[other_true].polyline.Project(true_line.PointAt(s0), &gap);
+      const int b = gap < 0.01 ? 0 : gap < 0.02 ? 1 : gap < 0.04 ? 2 : 3;
+      ++tally->gap[b];
+      tally->lost_by_gap[b] += lost;
+    }
+  }
+}
+
 GrowOptions OptionsFromEnv() {
   GrowOptions o;
   OverrideFromEnv("VB_GROW_SUPPORT_PX", &o.support_px);
@@ -47,6 +160,12 @@ GrowOptions OptionsFromEnv() {
   OverrideFromEnv("VB_GROW_TRIM", &o.trim_m);
   OverrideFromEnv("VB_GROW_VIEWS", &o.min_support_views);
   OverrideFromEnv("VB_GROW_END", &o.require_end_support);
+  OverrideFromEnv("VB_GROW_BACKOFF", &o.end_backoff_m);
+  OverrideFromEnv("VB_GROW_ALONG_MAX", &o.alongside_max_m);
+  OverrideFromEnv("VB_GROW_ALONG_GAP", &o.alongside_min_gap_m);
+  OverrideFromEnv("VB_GROW_ALONG_CONT", &o.continuation_m);
+  OverrideFromEnv("VB_GROW_ALONG_PRIOR", &o.alongside_prior_px_per_mm);
+  OverrideFromEnv("VB_GROW_ALONG_PART", &o.alongside_require_parting);
   return o;
 }
 
@@ -59,8 +178,11 @@ TEST(Grow, DISABLED_Report) {
   const auto [first, count, images, fiducials] = ReportStopsFromEnv(1300, 10, true);
   const GrowOptions grow = OptionsFromEnv();
   ASSERT_TRUE(grow.Validate().ok());
+  // VB_GROW_BASE=1: compare against the default growth instead of none.
+  bool base = false;
+  OverrideFromEnv("VB_GROW_BASE", &base);
   ReconstructOptions off;
-  off.grow.enabled = false;
+  off.grow.enabled = base;
   ReconstructOptions on;
   on.grow = grow;
   on.grow.enabled = true;
@@ -70,7 +192,8 @@ TEST(Grow, DISABLED_Report) {
   double added = 0, right = 0, added_from_wrong_end = 0, right_from_wrong_end = 0, time = 0;
   int ends = 0, grown_ends = 0;
   GrowSummary totals;
-  std::vector<double> d_recall, d_precision, d_connectivity;
+  AlongsideTally along;
+  std::vector<double> d_recall, d_precision, d_connectivity, d_bag_recall, d_bag_precision;
   double recall0 = 0, precision0 = 0, connectivity0 = 0;
   for (int k = 0; k < count; ++k) {
     const SimulatedStop stop = MakeRenderedStop(first + k, images, fiducials);
@@ -98,20 +221,38 @@ TEST(Grow, DISABLED_Report) {
     totals.turned += summary.turned;
     totals.outside += summary.outside;
     totals.capped += summary.capped;
+    totals.ends_alongside += summary.ends_alongside;
+    totals.alongside_length_m += summary.alongside_length_m;
+    AlongsideEnds(stop.scene.vine, grown, summary, &along);
+    if (base) {
+      // The grown canes as a bag, before connection: the default growth against this one.
+      std::vector<Polyline3> grown_base = *canes;
+      ASSERT_TRUE(
+          GrowCaneEnds(stop.views, matched->rig, off.volume, off.grow, &grown_base).ok());
+      const auto bag_base = EvaluateReconstruction(Flat(grown_base), truth);
+      const auto bag = EvaluateReconstruction(Flat(grown), truth);
+      ASSERT_TRUE(bag_base.ok() && bag.ok());
+      d_bag_recall.push_back(bag->cane_recall - bag_base->cane_recall);
+      d_bag_precision.push_back(bag->cane_precision - bag_base->cane_precision);
+    }
     const double added_before = added, right_before = right;
     for (size_t c = 0; c < grown.size(); ++c) {
       const Polyline3& before = (*canes)[c];
       const Polyline3& after = grown[c];
       // The original points are kept as a contiguous run; what lies outside it was added.
-      size_t offset = 0;
-      while (offset < after.points.size() && after.points[offset] != before.points.front())
-        ++offset;
-      ASSERT_LT(offset, after.points.size());
+      // (An end backed off before growing, end_backoff_m, lost some of them.)
+      const auto original = [&](const Eigen::Vector3d& p) {
+        return std::find(before.points.begin(), before.points.end(), p) != before.points.end();
+      };
+      size_t first = 0, last = after.points.size() - 1;
+      while (first < after.points.size() && !original(after.points[first])) ++first;
+      while (last > first && !original(after.points[last])) --last;
+      ASSERT_LT(first, after.points.size());
       for (int side = 0; side < 2; ++side) {
-        const size_t lo = side == 0 ? 0 : offset + before.points.size() - 1;
-        const size_t hi = side == 0 ? offset : after.points.size() - 1;
+        const size_t lo = side == 0 ? 0 : last;
+        const size_t hi = side == 0 ? first : after.points.size() - 1;
         if (hi <= lo) continue;
-        const Eigen::Vector3d& end = side == 0 ? before.points.front() : before.points.back();
+        const Eigen::Vector3d& end = side == 0 ? after.points[first] : after.points[last];
         const bool end_right = DistanceToCanes(end, drawn.canes) <= 0.010;
         int seeing = 0;
         for (const CameraCalibration& camera : matched->rig.cameras) {
@@ -209,6 +350,9 @@ TEST(Grow, DISABLED_Report) {
               static_cast<unsigned long long>(first + count - 1), images ? "images" : "views",
               ends, grown_ends, totals.end_unsupported, totals.unsupported, totals.contradicted, totals.alongside,
               totals.thick, totals.turned, totals.outside, totals.capped);
+  std::printf("grown on alongside another cane: %d ends, %.3f m per stop\n", totals.ends_alongside,
+              totals.alongside_length_m / count);
+  along.Print(count);
   std::printf("added %.3f m per stop, right %.3f; from ends already > 10 mm off: %.3f m per stop, "
               "right %.3f; stage %.4f s per stop\n",
               added / count, right / std::max(added, 1e-9), added_from_wrong_end / count,
@@ -232,6 +376,12 @@ TEST(Grow, DISABLED_Report) {
               end_stretch_right / std::max(end_stretch, 1e-9));
   std::printf("without: recall %.4f precision %.4f connectivity %.4f\n", recall0 / count,
               precision0 / count, connectivity0 / count);
+  if (base) {
+    double se_br = 0, se_bp = 0;
+    const double br = MeanSe(d_bag_recall, &se_br), bp = MeanSe(d_bag_precision, &se_bp);
+    std::printf("grown canes before connection, these options - default: recall %+.4f +- %.4f, "
+                "precision %+.4f +- %.4f\n", br, se_br, bp, se_bp);
+  }
   std::printf("with - without: recall %+.4f +- %.4f, precision %+.4f +- %.4f, connectivity "
               "%+.4f +- %.4f\n",
               dr, se_r, dp, se_p, dc, se_c);

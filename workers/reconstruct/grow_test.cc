@@ -2,6 +2,9 @@
 #include "workers/reconstruct/grow.h"
 
 #include <cmath>
+#include <functional>
+#include <string>
+#include <utility>
 
 #include "core/geometry.h"
 #include "core/vine_model.h"
@@ -124,6 +127,30 @@ TEST(GrowCaneEnds, GrowsThroughACrossingWithinTwoMillimetres) {
     EXPECT_LT(DistanceToLine(p, scene.crossing), 0.004);
 }
 
+TEST(GrowCaneEnds, BacksOffAMisplacedEndWhenAsked) {
+  const RigCalibration rig = sim::MakeRig().value();
+  const Crossing scene;
+  const std::vector<View2D> views = ViewsOf({scene.cane, scene.crossing}, rig);
+  // The piece's last point is 6 mm off the cane: the views disagree on the end.
+  Polyline3 piece = Head(scene.cane, 20);
+  piece.points.back() += Eigen::Vector3d(0.0, 0.0, 0.006);
+  {
+    std::vector<Polyline3> canes = {piece, scene.crossing};
+    GrowSummary summary;
+    ASSERT_TRUE(GrowCaneEnds(views, rig, WorkingVolume{}, On(), &canes, &summary).ok());
+    EXPECT_GE(summary.end_unsupported, 1);
+    EXPECT_EQ(canes[0].points.size(), 20u);  // by default such an end is not grown
+  }
+  GrowOptions options = On();
+  options.end_backoff_m = 0.02;
+  std::vector<Polyline3> canes = {piece, scene.crossing};
+  ASSERT_TRUE(GrowCaneEnds(views, rig, WorkingVolume{}, options, &canes).ok());
+  // Backed off to the point before, then grown through the crossing; the misplaced point is gone.
+  EXPECT_GT(canes[0].points.back().x(), scene.cane.points[20].x() + 0.08);
+  for (size_t i = 18; i < canes[0].points.size(); ++i)
+    EXPECT_LT(DistanceToLine(canes[0].points[i], scene.cane), 0.002) << i;
+}
+
 TEST(GrowCaneEnds, StopsWhereAViewContradicts) {
   const RigCalibration rig = sim::MakeRig().value();
   const Crossing scene;
@@ -158,6 +185,99 @@ TEST(GrowCaneEnds, DoesNotRunAlongAnotherCane) {
   EXPECT_LT(canes[0].points.back().x(), cane.points[18].x() + 0.012);
   // Nor does the rest grow back along the first piece.
   EXPECT_GT(canes[1].points.front().x(), cane.points[15].x() - 0.012);
+}
+
+// Growth alongside other canes, as by default (session 17).
+GrowOptions Alongside() {
+  GrowOptions options = On();
+  EXPECT_GT(options.alongside_max_m, 0.08);
+  EXPECT_GT(options.alongside_prior_px_per_mm, 0.0);
+  return options;
+}
+
+// Two canes that lie along each other in every view for 6 cm (x in [-0.12, -0.06]) and part
+// again on either side: `other` 1 cm behind `own` in depth there, and dropping away from it
+// steeply outside. The views draw the shared stretch as one skeleton path, `other`'s (as a
+// skeleton merges two canes lying along each other), and the model has `other` whole but `own`
+// only up to where the stretch begins.
+struct SharedStretch {
+  Polyline3 own = CurvedCane(-0.3, 0.1, 0.95, 0.3);
+  Polyline3 other;
+  SharedStretch() {
+    other = own;
+    for (Eigen::Vector3d& p : other.points) {
+      const double outside = std::max({0.0, -0.12 - p.x(), p.x() + 0.06});
+      p += Eigen::Vector3d(0.0, 0.01, -2.0 * outside);
+    }
+  }
+  std::vector<View2D> Views(const RigCalibration& rig) const {
+    SyntheticViewOptions options;
+    options.draw_head = false;
+    options.break_at_crossings_px = 2.0;
+    options.merge_overlaps = true;  // `other`, listed first, keeps the shared stretch
+    return SyntheticViews(ModelOf({other, own}), rig, options, 40.0);
+  }
+  // `own` up to 1 cm before the shared stretch.
+  Polyline3 OwnPiece() const {
+    size_t n = 0;
+    while (own.points[n].x() < -0.13) ++n;
+    return Head(own, n);
+  }
+};
+
+TEST(GrowCaneEnds, GrowsAlongAnotherCaneOnItsOwnCourseAndPartsFromIt) {
+  const RigCalibration rig = sim::MakeRig().value();
+  const SharedStretch scene;
+  const std::vector<View2D> views = scene.Views(rig);
+  // The control: without growth alongside other canes (alongside_max_m 0, as before session 17)
+  // growth stops alongside the other cane, before the stretch's end.
+  {
+    std::vector<Polyline3> canes = {scene.OwnPiece(), scene.other};
+    GrowSummary summary;
+    GrowOptions stop_alongside = On();
+    stop_alongside.alongside_max_m = 0.0;
+    ASSERT_TRUE(GrowCaneEnds(views, rig, WorkingVolume{}, stop_alongside, &canes, &summary).ok());
+    EXPECT_GE(summary.alongside, 1);
+    EXPECT_LT(canes[0].points.back().x(), -0.06);
+  }
+  std::vector<Polyline3> canes = {scene.OwnPiece(), scene.other};
+  const size_t old_size = canes[0].points.size();
+  GrowSummary summary;
+  ASSERT_TRUE(GrowCaneEnds(views, rig, WorkingVolume{}, Alongside(), &canes, &summary).ok());
+  // The end grew through the shared stretch and on along its own cane beyond it ...
+  EXPECT_GT(canes[0].points.back().x(), -0.04);
+  EXPECT_EQ(summary.ends_alongside, 1);
+  EXPECT_GT(summary.alongside_length_m, 0.04);
+  // ... following its own cane, not the other: every grown point is nearer its own.
+  for (size_t i = old_size; i < canes[0].points.size(); ++i) {
+    EXPECT_LT(DistanceToLine(canes[0].points[i], scene.own), 0.003) << i;
+    EXPECT_GT(DistanceToLine(canes[0].points[i], scene.other), 0.006) << i;
+  }
+  // The other cane, whole in the views, is left as it was.
+  EXPECT_EQ(canes[1].points.size(), scene.other.points.size());
+}
+
+TEST(GrowCaneEnds, StopsAlongACaneThatContinuesIt) {
+  const RigCalibration rig = sim::MakeRig().value();
+  const Polyline3 cane = CurvedCane(-0.3, 0.1, 0.95, 0.3);
+  const std::vector<View2D> views = ViewsOf({cane}, rig);
+  // The rest of the cane is in the model from 3 cm on: growing alongside other canes does not
+  // run along it, since it is the end's own continuation (its end at the meeting point).
+  std::vector<Polyline3> canes = {Head(cane, 16), Tail(cane, 18)};
+  GrowSummary summary;
+  ASSERT_TRUE(GrowCaneEnds(views, rig, WorkingVolume{}, Alongside(), &canes, &summary).ok());
+  EXPECT_GE(summary.alongside, 1);
+  EXPECT_EQ(summary.ends_alongside, 0);
+  EXPECT_LT(canes[0].points.back().x(), cane.points[18].x() + 0.012);
+  EXPECT_GT(canes[1].points.front().x(), cane.points[15].x() - 0.012);
+  // With the continuation test off (the other cane's end must coincide with the point) and no
+  // least gap, the end runs along it.
+  GrowOptions loose = Alongside();
+  loose.continuation_m = 0.0;
+  loose.alongside_min_gap_m = 0.0;
+  std::vector<Polyline3> doubled = {Head(cane, 16), Tail(cane, 18)};
+  ASSERT_TRUE(GrowCaneEnds(views, rig, WorkingVolume{}, loose, &doubled, &summary).ok());
+  EXPECT_GT(summary.ends_alongside, 0);
 }
 
 TEST(GrowCaneEnds, GrowsOnlyTheTipWhenAsked) {
@@ -214,6 +334,21 @@ TEST(GrowCaneEnds, RejectsBadInputNamingTheField) {
   options.max_length_m = 100.0;
   status = GrowCaneEnds(views, rig, WorkingVolume{}, options, &canes);
   EXPECT_THAT(status.message(), testing::HasSubstr("max_length_m"));
+  for (const auto& [field, change] :
+       std::vector<std::pair<std::string, std::function<void(GrowOptions*)>>>{
+           {"alongside_max_m", [](GrowOptions* o) { o->alongside_max_m = -0.1; }},
+           {"alongside_max_m", [](GrowOptions* o) { o->alongside_max_m = 1.0; }},
+           {"alongside_min_gap_m", [](GrowOptions* o) { o->alongside_min_gap_m = 0.02; }},
+           {"continuation_m", [](GrowOptions* o) { o->continuation_m = NAN; }},
+           {"alongside_prior_px_per_mm",
+            [](GrowOptions* o) { o->alongside_prior_px_per_mm = -1; }},
+           {"end_backoff_m", [](GrowOptions* o) { o->end_backoff_m = INFINITY; }}}) {
+    options = Alongside();
+    change(&options);
+    status = GrowCaneEnds(views, rig, WorkingVolume{}, options, &canes);
+    EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument) << field;
+    EXPECT_THAT(status.message(), testing::HasSubstr(field));
+  }
   status = GrowCaneEnds({views[0]}, rig, WorkingVolume{}, On(), &canes);
   EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument);
   EXPECT_THAT(status.message(), testing::HasSubstr("views"));
