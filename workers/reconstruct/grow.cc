@@ -8,19 +8,12 @@
 
 #include "absl/strings/str_cat.h"
 #include "core/status_macros.h"
+#include "workers/reconstruct/image_probes.h"
 
 namespace vb::reconstruct {
 namespace {
 
 constexpr double kDegToRad = M_PI / 180.0;
-
-absl::Status Positive(double value, const char* field) {
-  if (!std::isfinite(value) || value <= 0) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("grow.", field, " must be finite and > 0, is ", value));
-  }
-  return absl::OkStatus();
-}
 
 // One view as the growth reads it: where a 3D point projects, how far that is from the
 // skeleton, and what the pixels around it are.
@@ -28,32 +21,16 @@ class ViewProbe {
  public:
   ViewProbe(const View2D& view, const CameraCalibration& camera, int margin_px)
       : view_(view), camera_(camera), margin_(margin_px),
-        has_distance_(view.centreline_distance_px.size() ==
-                      static_cast<size_t>(view.width) * view.height),
-        has_thick_(view.thick_mask.size() == static_cast<size_t>(view.width) * view.height),
-        has_classes_(view.classes.data.size() == static_cast<size_t>(view.width) * view.height) {}
+        has_thick_(view.thick_mask.size() == static_cast<size_t>(view.width) * view.height) {}
 
   // The pixel of p when it lies at least the margin inside the image.
   std::optional<Eigen::Vector2d> Inside(const Eigen::Vector3d& p) const {
-    const std::optional<Eigen::Vector2d> uv = camera_.Project(p);
-    if (!uv || uv->x() < margin_ || uv->y() < margin_ || uv->x() > view_.width - 1 - margin_ ||
-        uv->y() > view_.height - 1 - margin_) {
-      return std::nullopt;
-    }
-    return uv;
+    return ProjectInside(camera_, p, margin_);
   }
 
   // Distance to the skeleton at uv, bilinear between pixel centres (uv inside the image).
   double Distance(const Eigen::Vector2d& uv) const {
-    if (!has_distance_) return kCentrelineDistanceCapPx;
-    const int x0 = std::clamp(static_cast<int>(std::floor(uv.x())), 0, view_.width - 2);
-    const int y0 = std::clamp(static_cast<int>(std::floor(uv.y())), 0, view_.height - 2);
-    const double fx = std::clamp(uv.x() - x0, 0.0, 1.0), fy = std::clamp(uv.y() - y0, 0.0, 1.0);
-    const auto at = [&](int x, int y) {
-      return static_cast<double>(view_.centreline_distance_px[static_cast<size_t>(y) * view_.width + x]);
-    };
-    return (1 - fy) * ((1 - fx) * at(x0, y0) + fx * at(x0 + 1, y0)) +
-           fy * ((1 - fx) * at(x0, y0 + 1) + fx * at(x0 + 1, y0 + 1));
+    return CentrelineDistanceBilinear(view_, uv);
   }
 
   bool Thick(const Eigen::Vector2d& uv) const {
@@ -65,23 +42,8 @@ class ViewProbe {
   // Only background within the point's projected radius (at least one pixel): this view should
   // see wood there and does not. Wires and posts are in front of canes, so they do not contradict.
   bool Background(const Eigen::Vector2d& uv, const Eigen::Vector3d& p, double radius_m) const {
-    if (!has_classes_) return false;
-    const double depth = (camera_.rotation_camera_from_platform * p +
-                          camera_.translation_camera_from_platform).z();
-    const double radius_px =
-        std::max(1.0, camera_.camera_matrix(0, 0) * radius_m / std::max(depth, 1e-6));
-    const int r = static_cast<int>(std::ceil(radius_px));
-    const int cx = static_cast<int>(std::lround(uv.x())), cy = static_cast<int>(std::lround(uv.y()));
-    for (int y = std::max(0, cy - r); y <= std::min(view_.height - 1, cy + r); ++y) {
-      for (int x = std::max(0, cx - r); x <= std::min(view_.width - 1, cx + r); ++x) {
-        if ((x - uv.x()) * (x - uv.x()) + (y - uv.y()) * (y - uv.y()) >
-            (radius_px + 0.5) * (radius_px + 0.5)) {
-          continue;
-        }
-        if (view_.classes.at(x, y) != PixelClass::kBackground) return false;
-      }
-    }
-    return true;
+    return !WoodInDisc(view_, uv,
+                       std::max(1.0, ProjectedRadiusPx(camera_, p, radius_m, 1e-6)));
   }
 
   Eigen::Vector3d Centre() const { return camera_.CentreInPlatform(); }
@@ -90,7 +52,7 @@ class ViewProbe {
   const View2D& view_;
   const CameraCalibration& camera_;
   int margin_;
-  bool has_distance_, has_thick_, has_classes_;
+  bool has_thick_;
 };
 
 // The other canes, for the "alongside" test, each with a box grown by what growth can add.
@@ -396,7 +358,7 @@ absl::Status GrowOptions::Validate() const {
                                      {support_px, "support_px"},
                                      {max_length_m, "max_length_m"},
                                      {other_cane_m, "other_cane_m"}}) {
-    if (absl::Status s = Positive(value, field); !s.ok()) return s;
+    if (absl::Status s = CheckPositive(value, "grow", field); !s.ok()) return s;
   }
   for (const auto& [value, field] : {std::pair{min_cane_length_m, "min_cane_length_m"},
                                      {trim_m, "trim_m"},
@@ -409,10 +371,7 @@ absl::Status GrowOptions::Validate() const {
                                      {continuation_m, "continuation_m"},
                                      {alongside_prior_px_per_mm, "alongside_prior_px_per_mm"},
                                      {end_backoff_m, "end_backoff_m"}}) {
-    if (!std::isfinite(value) || value < 0) {
-      return absl::InvalidArgumentError(
-          absl::StrCat("grow.", field, " must be finite and >= 0, is ", value));
-    }
+    if (absl::Status s = CheckNonNegative(value, "grow", field); !s.ok()) return s;
   }
   for (const auto& [value, field] : {std::pair{max_turn_deg, "max_turn_deg"},
                                      {along_angle_deg, "along_angle_deg"}}) {
