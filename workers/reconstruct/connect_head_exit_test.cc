@@ -90,6 +90,17 @@ TEST(ConnectHeadExit, ACaneWhoseInnerPartIsHiddenInTheHeadHangsOnTheHead) {
   EXPECT_EQ(h->polyline.points.size(), 12u);
 }
 
+TEST(ConnectHeadExit, WithoutImagesItHangsOnTheHeadButItsGapIsNotDrawn) {
+  // No GapSupportFn: head_exit_min_support 0 needs none, but the 20 cm gap is not drawn.
+  const auto model =
+      ConnectCanes(TwoCanesLeavingTogether(), Trunk(), Head(), WithHeadExit(0.3), nullptr);
+  ASSERT_TRUE(model.ok()) << model.status();
+  const Cane* h = EndingAt(*model, kHTip);
+  ASSERT_NE(h, nullptr);
+  EXPECT_EQ(h->parent_id, CaneId(1));
+  EXPECT_EQ(h->polyline.points.size(), 11u);
+}
+
 TEST(ConnectHeadExit, ACaneOfACaneBesideTheHeadStillHangsOnThatCane) {
   // C forks upward off N 27 cm from the head's surface: its inner end lies within reach of the
   // head, on wood, but points down at N, not at the head.

@@ -155,7 +155,7 @@ void HangHeadExits(const std::vector<Polyline3>& canes, const HeadModel& head,
                    const GapSupportFn& gap_support, const ConnectOptions& options,
                    std::vector<JoinCandidate>* joins, std::vector<int>* kept,
                    std::vector<int>* parent, std::vector<int>* join, ConnectSummary* sum) {
-  if (options.head_exit_reach_m <= 0.0 || head.spheres.empty() || !gap_support) return;
+  if (options.head_exit_reach_m <= 0.0 || head.spheres.empty()) return;
   for (size_t i = 0; i < canes.size(); ++i) {
     if ((*kept)[i] == 1 && (*parent)[i] < 0) continue;  // on the trunk or head already
     if ((*kept)[i] != 1 && !options.head_exit_left_out) continue;
@@ -172,7 +172,10 @@ void HangHeadExits(const std::vector<Polyline3>& canes, const HeadModel& head,
     if (d > 0.0) {
       const Eigen::Vector3d to_head = (at - inner).normalized();
       if (EndOutward(cane, last).dot(to_head) < options.head_exit_min_cos) continue;
-      if (gap_support(inner, at) < options.head_exit_min_support) continue;
+      if (options.head_exit_min_support > 0.0 &&
+          (!gap_support || gap_support(inner, at) < options.head_exit_min_support)) {
+        continue;
+      }
     }
     JoinCandidate c;
     c.child = static_cast<int>(i);
@@ -187,7 +190,8 @@ void HangHeadExits(const std::vector<Polyline3>& canes, const HeadModel& head,
     (*parent)[i] = -1;
     (*join)[i] = static_cast<int>(joins->size()) - 1;
     ++sum->head_exits;
-    if (was_out && options.rescue_min_probability > 0.0) sum->rescued += FollowParents(*parent, kept);
+    if (was_out && options.rescue_min_probability > 0.0)
+      sum->rescued += FollowParents(*parent, kept);
   }
 }
 
