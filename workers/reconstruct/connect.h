@@ -55,18 +55,19 @@
 //     reaches beyond `keep_within_m` and is at least `drop_thickening_ratio` times as thick at
 //     its far third as at its third nearer the centre is a neighbour's cane hung by its tip on
 //     this vine's, and is left out (counted in ConnectSummary::dropped_thickening and unattached).
-//  6c. Head exits (beyond the paper; off by default, `head_exit_reach_m` 0: most of what it gains
-//     on the metric is not real, docs/reconstruction.md section 6, "Head exits"). Canes leaving
-//     the head together lose their inner parts in the head's thick foreground, and the outer
-//     piece of such a cane, beyond max_attach_m of the head, hangs on a cane it passes. A cane
-//     hung on another cane, unless it continues that cane from one of its ends (step 4's test),
-//     or left out (with `head_exit_left_out`), whose inner end (the one nearer the head's
-//     surface) lies within `head_exit_reach_m` of that surface and whose outward tangent there
-//     points at its nearest point (cosine >= `head_exit_min_cos`), with at least
-//     `head_exit_min_support` of the straight line to it wood in the images (GapSupportFn; 0: no
-//     test), hangs on the head by that end; its base is drawn there as step 5 draws any base.
-//     The canes hung on it go with it. A fork off a cane beside the head whose base points at
-//     that cane, not at the head, keeps its parent; one pointing at the head does not.
+//  6c. Head exits (beyond the paper; off by default, `head_exit_reach_m` 0: about half of what it
+//     gains on the metric is canes of canes hung on the head, docs/reconstruction.md section 6,
+//     "Head exits"). Canes leaving the head together lose their inner parts in the head's thick
+//     foreground, and the outer piece of such a cane, beyond max_attach_m of the head, hangs on
+//     a cane it passes. A cane hung on another cane, unless it continues that cane from one of
+//     its ends (step 4's test), or left out (with `head_exit_left_out`, off: it costs
+//     precision), whose inner end (the one nearer the head's surface) lies within
+//     `head_exit_reach_m` of that surface and whose outward tangent there points at its nearest
+//     point (cosine >= `head_exit_min_cos`), with at least `head_exit_min_support` of the
+//     straight line to it wood in the images (GapSupportFn; 0: no test, and no function needed),
+//     hangs on the head by that end; its base is drawn there as step 5 draws any base. The canes
+//     hung on it go with it. A fork off a cane beside the head whose base points at that cane,
+//     not at the head, keeps its parent; one pointing at the head does not.
 // Steps 1-2 are in connect.cc, 3-6 in connect_tree.cc (the arborescence in arborescence.h),
 // the geometry they share in connect_geometry.cc. Thread-safe (pure).
 #pragma once
@@ -148,7 +149,8 @@ struct ConnectOptions {
   double head_exit_min_support = 0.0;  // ... at least this fraction of that straight line wood
                                      // (GapSupportFn); 0 (as measured): no test. Its base is
                                      // drawn on the head as step 5 draws any base
-  bool head_exit_left_out = true;    // ... left-out canes too (they come into the tree)
+  bool head_exit_left_out = false;   // ... left-out canes too (they come into the tree); off:
+                                     // on the bench they cost precision (neighbours' canes)
   double drop_thickening_ratio = 1.1;  // a cane in the tree without children that reaches beyond
                                      // keep_within_m and is this much thicker at its end farther
                                      // from the vine's centre is a neighbour's and is dropped

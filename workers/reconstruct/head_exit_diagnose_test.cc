@@ -191,7 +191,8 @@ void PrintAccount(const char* title, const Account& a) {
 }
 
 // Knobs: VB_NEAR_M (verbose lines within this of the head, 0.3); the variant's head exit
-// (ConnectOptions): VB_EXIT_REACH (0.3 while the default is off), VB_EXIT_COS, VB_EXIT_SUPPORT, VB_EXIT_LEFT_OUT.
+// (ConnectOptions): VB_EXIT_REACH (0.3 while the default is off), VB_EXIT_COS,
+// VB_EXIT_SUPPORT, VB_EXIT_LEFT_OUT.
 TEST(HeadExit, DISABLED_Report) {
   const auto [first, count, images, fiducials] = ReportStopsFromEnv(1300, 20, true);
   const bool verbose = std::getenv("VB_VERBOSE") != nullptr;
