@@ -64,6 +64,16 @@ absl::Status ConnectOptions::Validate() const {
     return absl::InvalidArgumentError(
         "connect options: head_margin_m and spur_length_m must be >= 0");
   }
+  if (!std::isfinite(head_exit_reach_m) || head_exit_reach_m < 0) {
+    return absl::InvalidArgumentError("connect options: head_exit_reach_m must be >= 0");
+  }
+  if (!(head_exit_min_cos >= -1.0 && head_exit_min_cos <= 1.0)) {
+    return absl::InvalidArgumentError("connect options: head_exit_min_cos must be in [-1, 1]");
+  }
+  if (!(head_exit_min_support >= 0.0 && head_exit_min_support <= 1.0)) {
+    return absl::InvalidArgumentError(
+        "connect options: head_exit_min_support must be in [0, 1]");
+  }
   if (!std::isfinite(rescue_min_taper) || rescue_min_taper < 0) {
     return absl::InvalidArgumentError("connect options: rescue_min_taper must be finite and >= 0");
   }

@@ -55,6 +55,19 @@
 //     reaches beyond `keep_within_m` and is at least `drop_thickening_ratio` times as thick at
 //     its far third as at its third nearer the centre is a neighbour's cane hung by its tip on
 //     this vine's, and is left out (counted in ConnectSummary::dropped_thickening and unattached).
+//  6c. Head exits (beyond the paper; off by default, `head_exit_reach_m` 0: about half of what it
+//     gains on the metric is canes of canes hung on the head, docs/reconstruction.md section 6,
+//     "Head exits"). Canes leaving the head together lose their inner parts in the head's thick
+//     foreground, and the outer piece of such a cane, beyond max_attach_m of the head, hangs on
+//     a cane it passes. A cane hung on another cane, unless it continues that cane from one of
+//     its ends (step 4's test), or left out (with `head_exit_left_out`, off: it costs
+//     precision), whose inner end (the one nearer the head's surface) lies within
+//     `head_exit_reach_m` of that surface and whose outward tangent there points at its nearest
+//     point (cosine >= `head_exit_min_cos`), with at least `head_exit_min_support` of the
+//     straight line to it wood in the images (GapSupportFn; 0: no test, and no function needed),
+//     hangs on the head by that end; its base is drawn there as step 5 draws any base. The canes
+//     hung on it go with it. A fork off a cane beside the head whose base points at that cane,
+//     not at the head, keeps its parent; one pointing at the head does not.
 // Steps 1-2 are in connect.cc, 3-6 in connect_tree.cc (the arborescence in arborescence.h),
 // the geometry they share in connect_geometry.cc. Thread-safe (pure).
 #pragma once
@@ -127,6 +140,17 @@ struct ConnectOptions {
                                      // at its end nearer the vine's centre (TaperTowardCentre):
                                      // canes taper from base to tip, a neighbour's the other way;
                                      // 0 (or keep_within_m 0) turns this off; otherwise > 1
+  double head_exit_reach_m = 0.0;    // step 6c: a cane hung on another cane (or left out) whose
+                                     // inner end lies within this of the head's surface, points
+                                     // at it and is joined to it by wood in the images hangs on
+                                     // the head instead; 0 (the default) turns this off
+  double head_exit_min_cos = 0.8;    // ... its outward tangent there within acos(this) of the
+                                     // direction to the nearest point of the head's surface
+  double head_exit_min_support = 0.0;  // ... at least this fraction of that straight line wood
+                                     // (GapSupportFn); 0 (as measured): no test. Its base is
+                                     // drawn on the head as step 5 draws any base
+  bool head_exit_left_out = false;   // ... left-out canes too (they come into the tree); off:
+                                     // on the bench they cost precision (neighbours' canes)
   double drop_thickening_ratio = 1.1;  // a cane in the tree without children that reaches beyond
                                      // keep_within_m and is this much thicker at its end farther
                                      // from the vine's centre is a neighbour's and is dropped
@@ -142,6 +166,7 @@ struct ConnectSummary {
   int kept_near = 0;      // of the attached: canes kept by step 6 (near the vine, no likely join)
   int inside_trunk_or_head = 0;  // canes dropped as duplicates of the trunk or head
   int dropped_thickening = 0;  // canes dropped as neighbours' (drop_thickening_ratio)
+  int head_exits = 0;     // of the attached: canes hung on the head by step 6c
   int rescued = 0;        // of the attached: canes hung on the tree by step 3b
                           // (rescue_min_probability), or following a cane kept so or by
                           // step 6

@@ -15,6 +15,7 @@ namespace vb::reconstruct {
 
 using connect_internal::Reverse;
 using connect_internal::EndOutward;
+using connect_internal::DistanceToHead;
 using connect_internal::WhollyWithin;
 
 namespace {
@@ -130,10 +131,74 @@ void KeepNear(const std::vector<Polyline3>& canes, double centre_x, const std::v
   }
 }
 
+// Whether join `c` of a cane to another continues that cane from one of its ends (within
+// continuation_gap_m of it, tangents within continuation_angle_deg): the same cane broken in the
+// images, which step 4 appends to its parent.
+bool IsContinuation(const std::vector<Polyline3>& canes, const JoinCandidate& c,
+                    const ConnectOptions& options) {
+  if (c.parent < 0) return false;
+  const Polyline3& parent = canes[c.parent];
+  const double length = parent.Length();
+  const double s = parent.Project(c.point);
+  if (std::min(s, length - s) > options.continuation_gap_m) return false;
+  const double cos_max = std::cos(options.continuation_angle_deg * 3.14159265358979323846 / 180);
+  return std::abs(EndOutward(canes[c.child], c.base_is_last).dot(parent.TangentAt(s))) >= cos_max;
+}
+
+// Step 6c: a cane hung on another cane (not as its continuation) or left out (with
+// head_exit_left_out) whose inner end (the one nearer the head's surface) lies within
+// head_exit_reach_m of it and points at it (head_exit_min_cos), the straight line to it wood
+// enough in the images (head_exit_min_support), hangs on the head by that end. Canes leaving the
+// head together in one direction lose their inner parts in the thick foreground there, and their
+// outer pieces otherwise hang on a cane they pass. Each such join is appended to `joins`.
+void HangHeadExits(const std::vector<Polyline3>& canes, const HeadModel& head,
+                   const GapSupportFn& gap_support, const ConnectOptions& options,
+                   std::vector<JoinCandidate>* joins, std::vector<int>* kept,
+                   std::vector<int>* parent, std::vector<int>* join, ConnectSummary* sum) {
+  if (options.head_exit_reach_m <= 0.0 || head.spheres.empty()) return;
+  for (size_t i = 0; i < canes.size(); ++i) {
+    if ((*kept)[i] == 1 && (*parent)[i] < 0) continue;  // on the trunk or head already
+    if ((*kept)[i] != 1 && !options.head_exit_left_out) continue;
+    const Polyline3& cane = canes[i];
+    if ((*kept)[i] == 1 && IsContinuation(canes, (*joins)[(*join)[i]], options)) continue;
+    Eigen::Vector3d at_front, at_back;
+    const double d_front = DistanceToHead(cane.points.front(), head, &at_front);
+    const double d_back = DistanceToHead(cane.points.back(), head, &at_back);
+    const bool last = d_back < d_front;
+    const double d = std::min(d_front, d_back);
+    if (d > options.head_exit_reach_m) continue;
+    const Eigen::Vector3d inner = last ? cane.points.back() : cane.points.front();
+    const Eigen::Vector3d at = last ? at_back : at_front;
+    if (d > 0.0) {
+      const Eigen::Vector3d to_head = (at - inner).normalized();
+      if (EndOutward(cane, last).dot(to_head) < options.head_exit_min_cos) continue;
+      if (options.head_exit_min_support > 0.0 &&
+          (!gap_support || gap_support(inner, at) < options.head_exit_min_support)) {
+        continue;
+      }
+    }
+    JoinCandidate c;
+    c.child = static_cast<int>(i);
+    c.base_is_last = last;
+    c.parent = -1;
+    c.target = JoinTarget::kHead;
+    c.point = at;
+    c.probability = options.min_join_probability;
+    joins->push_back(c);
+    const bool was_out = (*kept)[i] != 1;
+    (*kept)[i] = 1;
+    (*parent)[i] = -1;
+    (*join)[i] = static_cast<int>(joins->size()) - 1;
+    ++sum->head_exits;
+    if (was_out && options.rescue_min_probability > 0.0)
+      sum->rescued += FollowParents(*parent, kept);
+  }
+}
+
 }  // namespace
 
 absl::StatusOr<VineModel> BuildTree(const PreparedCanes& prepared_in,
-                                    const std::vector<JoinCandidate>& joins,
+                                    const std::vector<JoinCandidate>& candidate_joins,
                                     const HeadModel& head, const ConnectOptions& options,
                                     ConnectSummary* summary, const GapSupportFn& gap_support) {
   if (absl::Status s = options.Validate(); !s.ok()) return s;
@@ -145,6 +210,8 @@ absl::StatusOr<VineModel> BuildTree(const PreparedCanes& prepared_in,
   model.head = head;
   if (!prepared->trunk) return model;
   sum.inside_trunk_or_head = prepared->inside_trunk_or_head;
+  // Step 6c appends the joins it makes.
+  std::vector<JoinCandidate> joins = candidate_joins;
   const int count = static_cast<int>(prepared->canes.size());
   for (size_t k = 0; k < joins.size(); ++k) {
     const JoinCandidate& c = joins[k];
@@ -226,6 +293,7 @@ absl::StatusOr<VineModel> BuildTree(const PreparedCanes& prepared_in,
       break;
     }
   }
+  HangHeadExits(canes, head, gap_support, options, &joins, &kept, &parent, &join, &sum);
   // A leaf of the tree that reaches beyond keep_within_m and thickens away from the centre is a
   // neighbour's cane hung on this vine's (by its tip, near a cane it crosses): drop it.
   if (options.drop_thickening_ratio > 0.0 && options.keep_within_m > 0.0) {
