@@ -9,7 +9,9 @@
 //     --gtest_also_run_disabled_tests --gtest_filter='OverlapLoss.DISABLED_Report'
 // Tuning seeds only (1100-1999; docs/reconstruction.md "Seeds").
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <map>
 #include <optional>
 #include <set>
 #include <tuple>
@@ -155,7 +157,9 @@ TEST(OverlapLoss, DISABLED_ByStage) {
                                  "  >= 40 mm", "  head surface < 5 cm", "  5-15 cm",
                                  "  >= 15 cm"};
   double table[kRowCount][kStages] = {};
-  double total = 0.0;
+  double total = 0.0, raw_cause[3] = {}, probable_band[3] = {};
+  MatchFeatures feature_sum[2] = {}, weights = options.correspondence.classifier.multi_view;
+  double feature_weight[2] = {};
   for (int k = 0; k < count; ++k) {
     const uint64_t seed = first + k;
     const auto run = RenderAndMatch(seed, images, fiducials, options);
@@ -170,10 +174,28 @@ TEST(OverlapLoss, DISABLED_ByStage) {
         SampleViews(views, rig, options.correspondence.sample_step_px);
     for (const MatchCandidate& c : RawCandidates(samples, rig, co))
       raw_grid.AddLine(HitPoints(c), 1.0);
+    // Every run of every pair (min_hits 1), its hits keyed by the pair's segments, with the run's
+    // length: why a bundle sample has no raw candidate.
+    std::map<std::tuple<int, int, int, int>, std::vector<std::pair<Eigen::Vector3d, int>>> runs;
+    {
+      CandidateOptions all_runs = co;
+      all_runs.min_hits = 1;
+      for (const MatchCandidate& c : RawCandidates(samples, rig, all_runs))
+        for (const EpipolarHit& h : c.hits)
+          runs[{c.view_a, c.segment_a, c.view_b, c.segment_b}].push_back(
+              {h.point, static_cast<int>(c.hits.size())});
+    }
     const auto scored = ScoreCandidates(views, rig, options.correspondence, Deadline::Infinite());
     ASSERT_TRUE(scored.ok());
-    for (const ScoredCandidate& s : *scored)
+    // The best candidate near a sample: probability to 1e-3, then the index (kIndexScale apart).
+    constexpr double kIndexScale = 1e6;
+    PointGrid best_grid;
+    for (size_t i = 0; i < scored->size(); ++i) {
+      const ScoredCandidate& s = (*scored)[i];
       fitted_grid.AddLine(s.fit.control_points, s.probability);
+      best_grid.AddLine(s.fit.control_points,
+                        std::floor(s.probability * 1000.0) * kIndexScale + static_cast<double>(i));
+    }
     for (const Piece3D& p : run->matched.pieces) piece_grid.AddLine(p.polyline.points, 1.0);
     const auto assembled = AssembleStop(views, rig, run->matched.pieces, options);
     ASSERT_TRUE(assembled.ok()) << assembled.status();
@@ -235,9 +257,48 @@ TEST(OverlapLoss, DISABLED_ByStage) {
         else if (assembled_grid.MaxNear(p) < 0) stage = kAssembled;
         else if (connected_grid.MaxNear(p) < 0) stage = kConnected;
         else if (final_grid.MaxNear(p) < 0) stage = kFinal;
+        // Features of the best candidate near: bundle samples lost at the threshold against
+        // samples along nothing that are kept.
+        const int group = (stage == kProbable && beside_own >= 2) ? 0
+                          : (stage == kKept && beside == 0)        ? 1
+                                                                   : -1;
+        if (group >= 0) {
+          const double code = best_grid.MaxNear(p);
+          if (code >= 0) {
+            const ScoredCandidate& s =
+                (*scored)[static_cast<size_t>(std::fmod(code, kIndexScale))];
+            if (s.multi_view) {
+              for (size_t f = 0; f < s.features.size(); ++f)
+                feature_sum[group][f] += w * s.features[f];
+              feature_weight[group] += w;
+            }
+          }
+        }
         if (beside == 0) table[0][stage] += w;
         if (beside_own < 2) continue;
         table[1][stage] += w;
+        if (stage == kRaw) {
+          // 0 no crossing of a conditioned pair's segments within 10 mm; 1 only runs shorter
+          // than min_hits, a segment shorter than that; 2 only short runs, both segments long.
+          int cause = 0;
+          for (int a = 0; a < n; ++a)
+            for (int b = a + 1; b < n; ++b) {
+              if (seg[a] < 0 || seg[b] < 0) continue;
+              const auto it = runs.find({a, seg[a], b, seg[b]});
+              if (it == runs.end()) continue;
+              for (const auto& [q, size] : it->second) {
+                if ((q - p).norm() > 0.01) continue;
+                const int na = static_cast<int>(samples[a].segments()[seg[a]].normalised.size());
+                const int nb = static_cast<int>(samples[b].segments()[seg[b]].normalised.size());
+                cause = std::max(cause, std::min(na, nb) < co.min_hits ? 1 : 2);
+              }
+            }
+          raw_cause[cause] += w;
+        }
+        if (stage == kProbable) {
+          const double best = fitted_grid.MaxNear(p);
+          probable_band[best < 0.05 ? 0 : best < 0.15 ? 1 : 2] += w;
+        }
         double nearest = 1e9;
         for (size_t o = 0; o < vine.canes.size(); ++o) {
           if (o == c) continue;
@@ -267,6 +328,20 @@ TEST(OverlapLoss, DISABLED_ByStage) {
     std::printf("  %-30s %7.3f", rows[r], sum / total);
     for (int s = 0; s < kStages; ++s) std::printf(" %6.3f", table[r][s] / total);
     std::printf("\n");
+  }
+  std::printf("  raw column of the second row: no crossing of the pair's segments within 10 mm "
+              "%.3f; only runs under min_hits, a segment that short %.3f; only short runs, both "
+              "segments long (run broke) %.3f\n", raw_cause[0] / total, raw_cause[1] / total,
+              raw_cause[2] / total);
+  std::printf("  thr column of the second row: best fitted probability near < 0.05 %.3f, "
+              "0.05-0.15 %.3f, above %.3f\n", probable_band[0] / total, probable_band[1] / total,
+              probable_band[2] / total);
+  std::printf("  best multi-view candidate near: feature, mean for bundle samples lost at the "
+              "threshold / kept samples along nothing, weight x difference\n");
+  for (size_t f = 0; f < weights.size(); ++f) {
+    const double lost = feature_sum[0][f] / std::max(1e-9, feature_weight[0]);
+    const double kept = feature_sum[1][f] / std::max(1e-9, feature_weight[1]);
+    std::printf("    f%-2zu %8.3f %8.3f %+8.3f\n", f, lost, kept, weights[f] * (lost - kept));
   }
   EXPECT_GT(total, 0.0);
 }
