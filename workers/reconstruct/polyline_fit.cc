@@ -180,10 +180,10 @@ Eigen::Vector3d CurvePoint(const Eigen::MatrixXd& p, double t) {
   return (1.0 - w) * p.row(k).transpose() + w * p.row(k + 1).transpose();
 }
 
-}  // namespace
-
 // Half-width of the window around log(bundle_width_ratio), in units of that log.
 constexpr double kBundleWindow = 0.35;
+
+}  // namespace
 
 PolylineFit FitPolyline(const MatchCandidate& candidate, const CameraCalibration& camera_a,
                         const CameraCalibration& camera_b, const PolylineFitOptions& options) {

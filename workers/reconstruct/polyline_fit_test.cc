@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // RefineInOtherViews across rounds, and candidates refined in the other views before they are
 // scored (CorrespondenceOptions::refine_before_scoring). The single-round behaviour is tested in
-// correspondence_test.cc (RefineInOtherViews.ThirdViewFixesDepthOfAnIllConditionedPair).
+// correspondence_test.cc (RefineInOtherViews.ThirdViewFixesDepthOfAnIllConditionedPair). The fit's
+// reading of two canes along each other (PolylineFitOptions::bundle_width_ratio).
 #include "workers/reconstruct/polyline_fit.h"
 
 #include <algorithm>
