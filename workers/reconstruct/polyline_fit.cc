@@ -180,6 +180,9 @@ Eigen::Vector3d CurvePoint(const Eigen::MatrixXd& p, double t) {
   return (1.0 - w) * p.row(k).transpose() + w * p.row(k + 1).transpose();
 }
 
+// Half-width of the window around log(bundle_width_ratio), in units of that log.
+constexpr double kBundleWindow = 0.35;
+
 }  // namespace
 
 PolylineFit FitPolyline(const MatchCandidate& candidate, const CameraCalibration& camera_a,
@@ -251,7 +254,17 @@ PolylineFit FitPolyline(const MatchCandidate& candidate, const CameraCalibration
     const double radius_b = 0.5 * hits[j].width_b * yb.z();
     double radius = 0.5 * (radius_a + radius_b);
     if (radius_a > 0.0 && radius_b > 0.0) {
-      log_ratio += std::abs(std::log(radius_a / radius_b));
+      double disagreement = std::abs(std::log(radius_a / radius_b));
+      if (options.bundle_width_ratio > 1.0) {
+        const double bundle = std::log(options.bundle_width_ratio);
+        const double off = std::abs(disagreement - bundle);
+        if (off < kBundleWindow * bundle) {
+          // Read as two canes along each other, overlapping in the narrower view: no
+          // disagreement at the factor itself, back to the plain one at the window's edges.
+          disagreement *= off / (kBundleWindow * bundle);
+        }
+      }
+      log_ratio += disagreement;
       ++ratio_count;
     } else {
       radius = std::max(radius_a, radius_b);

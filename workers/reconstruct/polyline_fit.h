@@ -20,6 +20,13 @@ struct PolylineFitOptions {
   int max_control_points = 12;       // upper bound on control points
   int max_iterations = 12;           // Levenberg-Marquardt iterations
   double smoothness_weight = 0.02;   // weight of second differences of control points (pixels)
+  // Two canes lying along each other: one view sees them overlap (one cane wide), another side by
+  // side (about twice as wide). Where the log of the two views' radius ratio at a hit lies within
+  // 0.35 log(factor) of log(factor), the hit is read as such a bundle and its width disagreement
+  // (width_log_ratio) shrinks linearly to 0 at the factor itself. Values <= 1 turn it off (the
+  // default: with 2 it traded precision for recall, docs/reconstruction.md "The two reports
+  // crossed").
+  double bundle_width_ratio = 1.0;
 };
 
 struct PolylineFit {
@@ -33,7 +40,8 @@ struct PolylineFit {
   double max_residual_px = 0.0;
   double length_m = 0.0;       // length of the control polygon
   double turning_rad = 0.0;    // total turning angle of the control polygon
-  double width_log_ratio = 0.0;  // mean |log(radius seen in a / radius seen in b)|
+  double width_log_ratio = 0.0;  // mean |log(radius seen in a / radius seen in b)| (see
+                                 // PolylineFitOptions::bundle_width_ratio)
 };
 
 // Fits a polyline to a candidate: initialised from the triangulated hits, then refined by

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // RefineInOtherViews across rounds, and candidates refined in the other views before they are
 // scored (CorrespondenceOptions::refine_before_scoring). The single-round behaviour is tested in
-// correspondence_test.cc (RefineInOtherViews.ThirdViewFixesDepthOfAnIllConditionedPair).
+// correspondence_test.cc (RefineInOtherViews.ThirdViewFixesDepthOfAnIllConditionedPair). The fit's
+// reading of two canes along each other (PolylineFitOptions::bundle_width_ratio).
 #include "workers/reconstruct/polyline_fit.h"
 
 #include <algorithm>
@@ -218,6 +219,37 @@ TEST(ScoreCandidates, RefinesInTheOtherViewsBeforeScoringWhenAsked) {
   EXPECT_GT(r->probability, p->probability);
   EXPECT_EQ(r->two_view_features, p->two_view_features);
   EXPECT_EQ(f->fit.control_points, p->fit.control_points);
+}
+
+// Two canes along each other: view 1 sees them side by side, twice as wide as view 0, where they
+// overlap. With PolylineFitOptions::bundle_width_ratio 2 the fit reads such hits as a bundle and
+// reports little width disagreement; off (the default), the disagreement is about log 2. A ratio
+// of four is no bundle either way, and the radii are the same with the option on or off.
+TEST(FitPolyline, ReadsTwiceTheWidthInOneViewAsTwoCanesAlongEachOtherWhenAsked) {
+  IllConditionedScene scene = MakeScene(0.0);
+  const auto fit_with_width_factor = [&](double factor, double bundle_ratio) {
+    IllConditionedScene widened = scene;
+    for (double& w : widened.views[1].segments.at(0).widths_px) w *= factor;
+    std::vector<ViewSamples> samples;
+    for (int v = 0; v < 2; ++v) samples.emplace_back(widened.views[v], scene.rig.cameras[v], 3.0);
+    const MatchCandidate candidate = LongestCandidate(widened, samples);
+    PolylineFitOptions options;
+    options.bundle_width_ratio = bundle_ratio;
+    return FitPolyline(candidate, scene.rig.cameras[0], scene.rig.cameras[1], options);
+  };
+  EXPECT_LE(PolylineFitOptions{}.bundle_width_ratio, 1.0);  // off by default
+  const PolylineFit single = fit_with_width_factor(1.0, 2.0);
+  const PolylineFit bundle = fit_with_width_factor(2.0, 2.0);
+  const PolylineFit plain = fit_with_width_factor(2.0, 1.0);
+  const PolylineFit wide = fit_with_width_factor(4.0, 2.0);
+  const PolylineFit wide_plain = fit_with_width_factor(4.0, 1.0);
+  ASSERT_TRUE(single.ok && bundle.ok && plain.ok && wide.ok && wide_plain.ok);
+  EXPECT_LT(single.width_log_ratio, 0.15);
+  EXPECT_NEAR(plain.width_log_ratio, std::log(2.0), 0.15);
+  EXPECT_LT(bundle.width_log_ratio, 0.5 * plain.width_log_ratio);
+  EXPECT_NEAR(wide.width_log_ratio, std::log(4.0), 0.2);
+  EXPECT_DOUBLE_EQ(wide.width_log_ratio, wide_plain.width_log_ratio);
+  EXPECT_EQ(bundle.hit_radii, plain.hit_radii);
 }
 
 }  // namespace
