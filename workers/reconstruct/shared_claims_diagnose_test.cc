@@ -14,9 +14,14 @@
 //   sep: median 3D distance from one candidate's points over the shared stretch to the other's
 //     polyline (mm); third: the lower of the two candidates' third-view support over the shared
 //     stretch (CheckInView: inside x aligned, a view outside the pair), and own: the same over
-//     the unshared part; p: the lower probability; kept: how many of the two Gibbs kept.
-// Then, for each setting of the shared-claim relaxation (CorrespondenceOptions), how many pairs
-// of each class it would relax. Run with
+//     the unshared part (0 when one of them has none, as nearly always); p: the lower
+//     probability; kept: how many of the two Gibbs kept.
+// Then, for each setting of the shared-claim relaxation (SharedClaimOptions), how many pairs of
+// each class it would relax; and the true length of the vine inside two or more images, split by
+// whether it lies along another cane of the vine in two or more views (LyingAlongAnother, as
+// OverlapLoss.DISABLED_Report), near (10 mm) any fitted candidate, one above the threshold, one
+// kept strictly, one kept with the relaxation (VB_RELAX), and, where none above the threshold is
+// near, whether one below it is right, partial or wrong. Run with
 //   VB_INPUT=labels|images VB_SEED=1300 VB_STOPS=20 [VB_FIDUCIALS=0] vb_reconstruct_test
 //     --gtest_also_run_disabled_tests --gtest_filter='SharedClaims.DISABLED_Report'
 // Tuning seeds only (1100-1999; docs/reconstruction.md "Seeds").
@@ -102,6 +107,9 @@ TEST(SharedClaims, DISABLED_Report) {
   }
   double length_total[2] = {}, length_any[2] = {}, length_above[2] = {}, length_strict[2] = {},
          length_relaxed[2] = {};
+  // Not near a candidate above the threshold, but near one below it that is right / partial /
+  // wrong (the first that applies).
+  double length_below[2][3] = {};
   for (int k = 0; k < count; ++k) {
     const uint64_t seed = first + k;
     const auto run = RenderAndMatch(seed, images, fiducials, options);
@@ -112,9 +120,15 @@ TEST(SharedClaims, DISABLED_Report) {
     auto scored = ScoreCandidates(stop.views, rig, co, Deadline::Infinite(), &samples);
     ASSERT_TRUE(scored.ok()) << scored.status();
     std::vector<Polyline3> any_lines;  // every fitted candidate, whatever its probability
+    // Those at or below the threshold, by label: right, partial, wrong.
+    std::vector<Polyline3> below_lines[3];
     for (const ScoredCandidate& c : *scored) {
       Polyline3 line;
       line.points = c.fit.control_points;
+      if (c.probability <= threshold) {
+        const int l = Label(c, stop.drawn.canes);
+        below_lines[l >= 0 ? 0 : l == -2 ? 1 : 2].push_back(line);
+      }
       any_lines.push_back(std::move(line));
     }
     std::vector<ScoredCandidate> cands;
@@ -194,6 +208,14 @@ TEST(SharedClaims, DISABLED_Report) {
           length_above[row] += step * near(p, above_lines);
           length_strict[row] += step * near(p, strict_lines);
           length_relaxed[row] += step * near(p, relaxed_lines);
+          if (!near(p, above_lines)) {
+            for (int l = 0; l < 3; ++l) {
+              if (near(p, below_lines[l])) {
+                length_below[row][l] += step;
+                break;
+              }
+            }
+          }
         }
       }
     }
@@ -232,6 +254,9 @@ TEST(SharedClaims, DISABLED_Report) {
     std::printf("    %-48s %6.1f m: %.3f / %.3f / %.3f / %.3f\n", rows[r], length_total[r],
                 length_any[r] / t, length_above[r] / t, length_strict[r] / t,
                 length_relaxed[r] / t);
+    std::printf("    %-48s %8s  none above threshold, one below it: right %.3f, partial %.3f, "
+                "wrong only %.3f\n", "", "", length_below[r][0] / t, length_below[r][1] / t,
+                length_below[r][2] / t);
   }
   std::printf("  %-22s %6s | %-17s %-17s %-6s %-17s %-17s %-17s %-17s kept(0/1/2)\n", "class",
               "pairs", "max share q25/50/75", "min share", "sides2", "sep mm", "third",
