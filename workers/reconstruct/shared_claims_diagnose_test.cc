@@ -21,14 +21,19 @@
 // whether it lies along another cane of the vine in two or more views (LyingAlongAnother, as
 // OverlapLoss.DISABLED_Report), near (10 mm) any fitted candidate, one above the threshold, one
 // kept strictly, one kept with the relaxation (VB_RELAX), and, where none above the threshold is
-// near, whether one below it is right, partial or wrong. Run with
+// near, whether one below it is right, partial or wrong; and the match classifier's mean terms
+// (weight x feature, match_classifier.h) of right candidates above / below the threshold whose
+// points lie mostly along another cane of the vine (within a 1 cm cell of such true length) or
+// not, and of wrong candidates above it. Run with
 //   VB_INPUT=labels|images VB_SEED=1300 VB_STOPS=20 [VB_FIDUCIALS=0] vb_reconstruct_test
 //     --gtest_also_run_disabled_tests --gtest_filter='SharedClaims.DISABLED_Report'
 // Tuning seeds only (1100-1999; docs/reconstruction.md "Seeds").
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -79,6 +84,11 @@ int Label(const ScoredCandidate& c, const std::vector<Cane>& canes) {
   return cane;
 }
 
+std::array<int, 3> CellOf(const Eigen::Vector3d& p) {
+  return {static_cast<int>(std::floor(p.x() / 0.01)), static_cast<int>(std::floor(p.y() / 0.01)),
+          static_cast<int>(std::floor(p.z() / 0.01))};
+}
+
 double Quantile(std::vector<double> v, double q) {
   if (v.empty()) return NAN;
   std::sort(v.begin(), v.end());
@@ -110,6 +120,11 @@ TEST(SharedClaims, DISABLED_Report) {
   // Not near a candidate above the threshold, but near one below it that is right / partial /
   // wrong (the first that applies).
   double length_below[2][3] = {};
+  // Classifier terms (weight x feature) summed by group: right above the threshold along another
+  // cane of the vine (in 2+ views) / not, right below it along / not, wrong above it.
+  constexpr int kGroups = 5;
+  double term_sum[kGroups][kMatchFeatureCount] = {}, logit_sum[kGroups] = {};
+  int group_count[kGroups] = {};
   for (int k = 0; k < count; ++k) {
     const uint64_t seed = first + k;
     const auto run = RenderAndMatch(seed, images, fiducials, options);
@@ -119,6 +134,7 @@ TEST(SharedClaims, DISABLED_Report) {
     std::vector<ViewSamples> samples;
     auto scored = ScoreCandidates(stop.views, rig, co, Deadline::Infinite(), &samples);
     ASSERT_TRUE(scored.ok()) << scored.status();
+    std::set<std::array<int, 3>> along_cells;  // 1 cm cells holding true length along another
     std::vector<Polyline3> any_lines;  // every fitted candidate, whatever its probability
     // Those at or below the threshold, by label: right, partial, wrong.
     std::vector<Polyline3> below_lines[3];
@@ -216,8 +232,43 @@ TEST(SharedClaims, DISABLED_Report) {
               }
             }
           }
+          if (row == 1) along_cells.insert(CellOf(p));
         }
       }
+    }
+    // The classifier's terms by group (right candidates above / below the threshold, mostly along
+    // another cane of the vine or not; wrong ones above it).
+    for (size_t i = 0; i < cands.size(); ++i) {
+      const ScoredCandidate& c = cands[i];
+      const bool above = c.probability > threshold;
+      int group;
+      if (label[i] == -1) {
+        if (!above) continue;
+        group = 4;
+      } else if (label[i] >= 0) {
+        int on = 0;
+        for (const Eigen::Vector3d& q : c.fit.points) {
+          const std::array<int, 3> cell = CellOf(q);
+          bool hit = false;
+          for (int dx = -1; dx <= 1 && !hit; ++dx)
+            for (int dy = -1; dy <= 1 && !hit; ++dy)
+              for (int dz = -1; dz <= 1 && !hit; ++dz)
+                hit = along_cells.count({cell[0] + dx, cell[1] + dy, cell[2] + dz}) > 0;
+          on += hit;
+        }
+        const bool along_cane = 2 * on >= static_cast<int>(c.fit.points.size());
+        group = (above ? 0 : 2) + (along_cane ? 0 : 1);
+      } else {
+        continue;
+      }
+      const MatchFeatures& w = c.multi_view ? co.classifier.multi_view : co.classifier.two_view;
+      double logit = 0.0;
+      for (int f = 0; f < kMatchFeatureCount; ++f) {
+        term_sum[group][f] += w[f] * c.features[f];
+        logit += w[f] * c.features[f];
+      }
+      logit_sum[group] += logit;
+      ++group_count[group];
     }
     for (size_t i = 0; i < cands.size(); ++i) {
       for (int j : conflicts[i]) {
@@ -257,6 +308,19 @@ TEST(SharedClaims, DISABLED_Report) {
     std::printf("    %-48s %8s  none above threshold, one below it: right %.3f, partial %.3f, "
                 "wrong only %.3f\n", "", "", length_below[r][0] / t, length_below[r][1] / t,
                 length_below[r][2] / t);
+  }
+  std::printf("  classifier terms (weight x feature, mean) of right candidates above the threshold "
+              "along another cane / not, below it along / not, and of wrong ones above it:\n");
+  std::printf("    %-8s %8d %8d %8d %8d %8d  (candidates)\n", "n", group_count[0],
+              group_count[1], group_count[2], group_count[3], group_count[4]);
+  auto mean = [](double sum, int n) { return n > 0 ? sum / n : 0.0; };
+  std::printf("    %-8s", "logit");
+  for (int g = 0; g < kGroups; ++g) std::printf(" %8.2f", mean(logit_sum[g], group_count[g]));
+  std::printf("\n");
+  for (int f = 0; f < kMatchFeatureCount; ++f) {
+    std::printf("    f%-7d", f);
+    for (int g = 0; g < kGroups; ++g) std::printf(" %8.2f", mean(term_sum[g][f], group_count[g]));
+    std::printf("\n");
   }
   std::printf("  %-22s %6s | %-17s %-17s %-6s %-17s %-17s %-17s %-17s kept(0/1/2)\n", "class",
               "pairs", "max share q25/50/75", "min share", "sides2", "sep mm", "third",
