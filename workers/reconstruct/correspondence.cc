@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <string>
 #include <tuple>
@@ -120,7 +121,51 @@ std::vector<OtherView> OtherViewsOf(int a, int b, const std::vector<View2D>& vie
   return others;
 }
 
+double PointToPolyline(const Eigen::Vector3d& p, const std::vector<Eigen::Vector3d>& line) {
+  if (line.empty()) return std::numeric_limits<double>::infinity();
+  double best = (p - line[0]).norm();
+  for (size_t k = 0; k + 1 < line.size(); ++k) {
+    const Eigen::Vector3d d = line[k + 1] - line[k];
+    const double dd = d.squaredNorm();
+    const double t = dd > 0 ? std::clamp((p - line[k]).dot(d) / dd, 0.0, 1.0) : 0.0;
+    best = std::min(best, (p - line[k] - t * d).norm());
+  }
+  return best;
+}
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+// Best inside x aligned fraction of `points` over the views outside (a, b) that show anything.
+double OtherViewSupport(const std::vector<Eigen::Vector3d>& points, int a, int b,
+                        const std::vector<View2D>& views, const std::vector<ViewSamples>& samples,
+                        const RigCalibration& rig) {
+  if (points.size() < 2) return 0.0;
+  double best = 0.0;
+  for (int c = 0; c < static_cast<int>(views.size()); ++c) {
+    if (c == a || c == b || IsEmptyView(views[c])) continue;
+    const ViewSupport s = CheckInView(points, views[c], samples[c], rig.cameras[c]);
+    best = std::max(best, s.in_image * s.aligned);
+  }
+  return best;
+}
+
 }  // namespace
+
+absl::Status SharedClaimOptions::Validate() const {
+  if (!(min_separation_m >= 0.0) || !std::isfinite(min_separation_m)) {
+    return Invalid("shared_claims.min_separation_m",
+                   absl::StrCat("must be finite and >= 0, got ", min_separation_m));
+  }
+  if (!(min_other_view_support >= 0.0 && min_other_view_support <= 1.0)) {
+    return Invalid("shared_claims.min_other_view_support",
+                   absl::StrCat("must be in [0, 1], got ", min_other_view_support));
+  }
+  return absl::OkStatus();
+}
 
 absl::Status CorrespondenceOptions::Validate() const {
   if (!(volume.box.min().allFinite() && volume.box.max().allFinite()) ||
@@ -177,6 +222,7 @@ absl::Status CorrespondenceOptions::Validate() const {
   if (!(min_conflict_overlap_px >= 0.0) || !std::isfinite(min_conflict_overlap_px)) {
     return Invalid("min_conflict_overlap_px", "must be finite and >= 0");
   }
+  VB_RETURN_IF_ERROR(shared_claims.Validate());
   if (absl::Status s = gibbs.Validate(); !s.ok()) {
     return Invalid("gibbs", std::string(s.message()));
   }
@@ -305,6 +351,96 @@ std::vector<std::vector<int>> CandidateConflicts(const std::vector<ScoredCandida
   return conflicts;
 }
 
+SharedClaimPair DescribeSharedClaim(const std::vector<ScoredCandidate>& candidates, int i, int j,
+                                    const std::vector<View2D>& views,
+                                    const std::vector<ViewSamples>& samples,
+                                    const RigCalibration& rig, double min_overlap_px) {
+  SharedClaimPair pair;
+  const ScoredCandidate& ci = candidates[i];
+  const ScoredCandidate& cj = candidates[j];
+  const MatchCandidate& p = ci.candidate;
+  const MatchCandidate& q = cj.candidate;
+  if (p.view_a != q.view_a || p.view_b != q.view_b) return pair;
+  // Per side: the shared interval [lo, hi] of arc length, when they share that segment.
+  double lo[2] = {0, 0}, hi[2] = {-1, -1};
+  double share_i = 0.0, share_j = 0.0;
+  for (int side = 0; side < 2; ++side) {
+    if ((side == 0 ? p.segment_a != q.segment_a : p.segment_b != q.segment_b)) continue;
+    const double p0 = side ? p.begin_b_px : p.begin_a_px, p1 = side ? p.end_b_px : p.end_a_px;
+    const double q0 = side ? q.begin_b_px : q.begin_a_px, q1 = side ? q.end_b_px : q.end_a_px;
+    const double overlap = std::min(p1, q1) - std::max(p0, q0);
+    if (overlap < min_overlap_px) continue;
+    ++pair.sides;
+    lo[side] = std::max(p0, q0);
+    hi[side] = std::min(p1, q1);
+    share_i = std::max(share_i, overlap / std::max(1.0, p1 - p0));
+    share_j = std::max(share_j, overlap / std::max(1.0, q1 - q0));
+  }
+  if (pair.sides == 0) return pair;
+  pair.max_share = std::max(share_i, share_j);
+  pair.min_share = std::min(share_i, share_j);
+  pair.min_probability = std::min(ci.probability, cj.probability);
+  // Each one's fitted points over the shared stretch and elsewhere.
+  auto split = [&](const ScoredCandidate& c, std::vector<Eigen::Vector3d>* shared,
+                   std::vector<Eigen::Vector3d>* own) {
+    const auto& hits = c.candidate.hits;
+    for (size_t k = 0; k < hits.size() && k < c.fit.points.size(); ++k) {
+      const bool in = (hits[k].arc_a_px >= lo[0] && hits[k].arc_a_px <= hi[0]) ||
+                      (hits[k].arc_b_px >= lo[1] && hits[k].arc_b_px <= hi[1]);
+      (in ? shared : own)->push_back(c.fit.points[k]);
+    }
+  };
+  std::vector<Eigen::Vector3d> shared_i, own_i, shared_j, own_j;
+  split(ci, &shared_i, &own_i);
+  split(cj, &shared_j, &own_j);
+  auto separation = [](const std::vector<Eigen::Vector3d>& from,
+                       const std::vector<Eigen::Vector3d>& to) {
+    std::vector<double> d;
+    for (const Eigen::Vector3d& x : from) d.push_back(PointToPolyline(x, to));
+    return d.empty() ? 0.0 : Median(std::move(d));
+  };
+  pair.separation_m = std::min(separation(shared_i, cj.fit.control_points),
+                               separation(shared_j, ci.fit.control_points));
+  pair.min_shared_support =
+      std::min(OtherViewSupport(shared_i, p.view_a, p.view_b, views, samples, rig),
+               OtherViewSupport(shared_j, p.view_a, p.view_b, views, samples, rig));
+  pair.min_own_support = std::min(OtherViewSupport(own_i, p.view_a, p.view_b, views, samples, rig),
+                                  OtherViewSupport(own_j, p.view_a, p.view_b, views, samples, rig));
+  return pair;
+}
+
+bool RelaxesConflict(const SharedClaimPair& pair, const SharedClaimOptions& options) {
+  return options.enabled && pair.sides == 1 && pair.separation_m >= options.min_separation_m &&
+         pair.min_shared_support >= options.min_other_view_support;
+}
+
+std::vector<std::vector<int>> CandidateConflicts(const std::vector<ScoredCandidate>& candidates,
+                                                 const CorrespondenceOptions& options,
+                                                 const std::vector<View2D>& views,
+                                                 const std::vector<ViewSamples>& samples,
+                                                 const RigCalibration& rig) {
+  std::vector<std::vector<int>> conflicts =
+      CandidateConflicts(candidates, options.min_conflict_overlap_px);
+  if (!options.shared_claims.enabled) return conflicts;
+  std::vector<std::vector<int>> relaxed(conflicts.size());
+  for (int i = 0; i < static_cast<int>(conflicts.size()); ++i) {
+    for (int j : conflicts[i]) {
+      if (j > i && RelaxesConflict(DescribeSharedClaim(candidates, i, j, views, samples, rig,
+                                                       options.min_conflict_overlap_px),
+                                   options.shared_claims)) {
+        relaxed[i].push_back(j);
+        relaxed[j].push_back(i);
+      }
+    }
+  }
+  for (size_t i = 0; i < conflicts.size(); ++i) {
+    std::erase_if(conflicts[i], [&](int j) {
+      return std::find(relaxed[i].begin(), relaxed[i].end(), j) != relaxed[i].end();
+    });
+  }
+  return conflicts;
+}
+
 absl::StatusOr<std::vector<Piece3D>> MatchSegments(const std::vector<View2D>& views,
                                                    const RigCalibration& rig,
                                                    const CorrespondenceOptions& options,
@@ -320,7 +456,7 @@ absl::StatusOr<std::vector<Piece3D>> MatchSegments(const std::vector<View2D>& vi
   probabilities.reserve(candidates.size());
   for (const ScoredCandidate& c : candidates) probabilities.push_back(c.probability);
   const std::vector<std::vector<int>> conflicts =
-      CandidateConflicts(candidates, options.min_conflict_overlap_px);
+      CandidateConflicts(candidates, options, views, samples, rig);
   VB_RETURN_IF_ERROR(deadline.Check("correspondence"));
   const std::vector<double> marginals = GibbsMarginals(probabilities, conflicts, options.gibbs);
   const std::vector<int> kept = SelectMinimumExpectedLoss(marginals, options.alpha);

@@ -18,7 +18,8 @@
 //     match (RefineInOtherViews) and scored on that geometry;
 //  3. a trained logistic model gives each candidate's probability (match_classifier.h);
 //  4. Gibbs sampling under the one-to-one constraint (candidates of the same view pair claiming
-//     overlapping parts of one 2D segment exclude each other) gives marginal probabilities, and
+//     overlapping parts of one 2D segment exclude each other; optionally not where two canes lie
+//     along each other in one view: SharedClaimOptions) gives marginal probabilities, and
 //     the minimum expected loss selection keeps those above 1 / (1 + alpha) (gibbs.h).
 // Duplicate pieces of one cane from different view pairs are expected; cane assembly merges them.
 // Thread-safe (pure functions).
@@ -38,6 +39,30 @@
 #include "workers/reconstruct/view2d.h"
 
 namespace vb::reconstruct {
+
+// Where two canes lie along each other in one view, its skeleton has a single path for both, and
+// the candidates of both canes from a view pair with that view claim the same stretch of it: the
+// one-to-one constraint (CandidateConflicts) keeps only one of them there. The relaxation lets a
+// conflicting pair of one view pair stand together when they look like two canes rather than a
+// right match and a ghost: they share a segment on one side of the pair only (they part in the
+// pair's other view), their curves lie at least `min_separation_m` apart over the shared stretch
+// (closer: one cane twice), and each is supported over it by a view outside the pair (the view
+// where the two part, where a ghost's wrong depth should project off the skeleton). Off by
+// default: on tuning stops ghosts are about as well supported there and far more numerous than
+// pairs of right candidates, so turning it on gained +0.001-0.004 recall for -0.02 to -0.04
+// precision. How much of each claim is shared does not tell them apart either: nearly every
+// conflict, right or wrong, has one candidate whose whole claim on the segment is shared.
+// docs/reconstruction.md, section 3, "Shared claims".
+struct SharedClaimOptions {
+  bool enabled = false;                // off: every overlap of min_conflict_overlap_px conflicts
+  double min_separation_m = 0.01;      // median 3D distance of the curves over it, at least
+  double min_other_view_support = 0.5; // each one's inside x aligned fraction (CheckInView) over
+                                       // the shared stretch in its best view outside the pair
+
+  // INVALID_ARGUMENT naming the field: min_separation_m < 0 or not finite,
+  // min_other_view_support outside [0, 1] or NaN.
+  absl::Status Validate() const;
+};
 
 struct CorrespondenceOptions {
   WorkingVolume volume;                 // pieces must lie in it; bounds the epipolar search
@@ -77,6 +102,7 @@ struct CorrespondenceOptions {
   MatchClassifier classifier = DefaultMatchClassifier();  // candidate probabilities
   double min_probability = 0.02;        // candidates below are dropped before Gibbs sampling
   double min_conflict_overlap_px = 8.0; // overlap on a shared segment that makes a conflict
+  SharedClaimOptions shared_claims;     // conflicts left out for two canes along each other
   GibbsOptions gibbs;                   // marginal probabilities
   // Cost of a missed match relative to a wrong one: keep marginal P > 1 / (1 + alpha). 5 was
   // chosen with the whole pipeline (MatchSegments.DISABLED_PipelineLoss) on rendered stops,
@@ -92,7 +118,8 @@ struct CorrespondenceOptions {
   // INVALID_ARGUMENT naming the field for non-finite or out-of-range values (sample_step_px
   // outside [0.5, 50], min_epipolar_sin or min_epipolar_sin_refined outside [0, 1), min_hits < 2, max_gap_samples < 0,
   // max_ill_conditioned_gap_samples < 0, other_views out of range,
-  // empty volume, alpha <= 0 or NaN, non-finite classifier weights, invalid gibbs options...).
+  // empty volume, alpha <= 0 or NaN, non-finite classifier weights, invalid gibbs or
+  // shared_claims options (the field named as "shared_claims.min_separation_m", ...)...).
   absl::Status Validate() const;
 };
 
@@ -131,6 +158,36 @@ absl::StatusOr<std::vector<ScoredCandidate>> ScoreCandidates(
 // Conflict lists of the one-to-one constraint over `candidates` (symmetric).
 std::vector<std::vector<int>> CandidateConflicts(const std::vector<ScoredCandidate>& candidates,
                                                  double min_overlap_px);
+
+// How two candidates of one view pair share a 2D segment (for the shared-claim relaxation).
+struct SharedClaimPair {
+  int sides = 0;                    // sides (a, b) on which they claim >= min_overlap_px of one
+                                    // segment (0: they do not conflict; 2: the same segments)
+  double max_share = 0.0;           // larger of the two: shared length / own claim on it
+  double min_share = 0.0;           // the smaller of the two
+  double separation_m = 0.0;        // the lower of the two median 3D distances from one's
+                                    // points over the shared stretch to the other's polyline
+  double min_shared_support = 0.0;  // lower of the two: best view outside the pair, inside x
+                                    // aligned fraction (CheckInView) over the shared stretch
+  double min_own_support = 0.0;     // the same over the unshared stretch (0 if < 2 points)
+  double min_probability = 0.0;     // lower of the two probabilities
+};
+// candidates[i] and candidates[j] (valid indices) with the views, their samples (ScoreCandidates)
+// and the rig they were matched with. Candidates of different view pairs share nothing (sides 0).
+SharedClaimPair DescribeSharedClaim(const std::vector<ScoredCandidate>& candidates, int i, int j,
+                                    const std::vector<View2D>& views,
+                                    const std::vector<ViewSamples>& samples,
+                                    const RigCalibration& rig, double min_overlap_px);
+// Whether `options` lets the pair stand together (false when not enabled or sides != 1).
+bool RelaxesConflict(const SharedClaimPair& pair, const SharedClaimOptions& options);
+
+// CandidateConflicts without the conflicts that options.shared_claims relaxes (all of them kept
+// when it is off); views, samples and rig as for DescribeSharedClaim.
+std::vector<std::vector<int>> CandidateConflicts(const std::vector<ScoredCandidate>& candidates,
+                                                 const CorrespondenceOptions& options,
+                                                 const std::vector<View2D>& views,
+                                                 const std::vector<ViewSamples>& samples,
+                                                 const RigCalibration& rig);
 
 // The selected pieces of cane, ordered by (view_a, view_b, segment_a), then as found.
 // rig.cameras[i] took views[i]. Views may have no segments (no pieces come from them); a view
