@@ -5,25 +5,14 @@
 
 #include "gtest/gtest.h"
 #include "workers/reconstruct/connect.h"
+#include "workers/reconstruct/connect_test_util.h"
 
 namespace vb::reconstruct {
 namespace {
 
-Polyline3 Line(Eigen::Vector3d a, Eigen::Vector3d b, double radius = 0.004, int n = 10) {
-  Polyline3 line;
-  for (int i = 0; i <= n; ++i) {
-    line.points.push_back(a + (b - a) * (static_cast<double>(i) / n));
-    line.radii.push_back(radius);
-  }
-  return line;
-}
+using connect_test::Line;
+using connect_test::Head;
 
-// The head: one sphere of 5 cm at (0, 0.8, 1.0) on a trunk from the ground.
-HeadModel Head() {
-  HeadModel head;
-  head.spheres.push_back({{0, 0.8, 1.0}, 0.05});
-  return head;
-}
 Polyline3 Trunk() { return Line({0, 0.8, 0}, {0, 0.8, 0.95}, 0.025); }
 
 // The images show wood (the thick region and the canes in it) within 0.35 m of the head's

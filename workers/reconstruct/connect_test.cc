@@ -6,24 +6,13 @@
 #include <tuple>
 
 #include "gtest/gtest.h"
+#include "workers/reconstruct/connect_test_util.h"
 
 namespace vb::reconstruct {
 namespace {
 
-Polyline3 Line(Eigen::Vector3d a, Eigen::Vector3d b, double radius = 0.004, int n = 10) {
-  Polyline3 line;
-  for (int i = 0; i <= n; ++i) {
-    line.points.push_back(a + (b - a) * (static_cast<double>(i) / n));
-    line.radii.push_back(radius);
-  }
-  return line;
-}
-
-HeadModel Head() {
-  HeadModel head;
-  head.spheres.push_back({{0, 0.8, 1.0}, 0.05});
-  return head;
-}
+using connect_test::Line;
+using connect_test::Head;
 
 TEST(ConnectCanes, GrowsATreeFromTheTrunkAndHead) {
   const Polyline3 trunk = Line({0, 0.8, 0}, {0, 0.8, 0.95}, 0.025);

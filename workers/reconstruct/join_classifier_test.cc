@@ -10,6 +10,7 @@
 
 #include "gtest/gtest.h"
 #include "workers/reconstruct/connect.h"
+#include "workers/reconstruct/connect_test_util.h"
 #include "workers/reconstruct/correspondence_test_util.h"
 #include "workers/reconstruct/join_test_util.h"
 #include "workers/reconstruct/reconstruct.h"
@@ -17,14 +18,7 @@
 namespace vb::reconstruct {
 namespace {
 
-Polyline3 Line(Eigen::Vector3d a, Eigen::Vector3d b, double radius = 0.004, int n = 10) {
-  Polyline3 line;
-  for (int i = 0; i <= n; ++i) {
-    line.points.push_back(a + (b - a) * (static_cast<double>(i) / n));
-    line.radii.push_back(radius);
-  }
-  return line;
-}
+using connect_test::Line;
 
 double Probability(const Polyline3& child, bool base_is_last, const Polyline3& parent,
                    const Eigen::Vector3d& head_centre = {0, 0.8, 1.0}) {
