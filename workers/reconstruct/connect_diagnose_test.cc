@@ -142,7 +142,7 @@ TEST(ConnectLoss, DISABLED_Report) {
     }
 
     const double centre_x = prepared->trunk ? prepared->trunk->points.back().x() : 0.0;
-    // Canes that step 3b (rescue_min_probability) brings into the tree (VB_VERBOSE).
+    // Canes that connect.h's step 3b (rescue_min_probability) brings into the tree (VB_VERBOSE).
     if (verbose && options.connect.rescue_min_probability > 0.0) {
       ConnectOptions no_rescue = options.connect;
       no_rescue.rescue_min_probability = 0.0;
