@@ -123,12 +123,15 @@ absl::StatusOr<CutMatching> MatchCuts(const VineModel& truth, const CutPlan& tru
     cuts_kept_wood[j] = true;
   }
 
-  // Candidate pairs on the same truth cane within the match distance, taken nearest first.
-  std::vector<std::tuple<double, size_t, size_t>> pairs;
+  // Candidate pairs on the same truth cane within the match distance: first those on the model
+  // cut's nearest cane, nearest first, then those on another cane it lies on, so that every pair
+  // the nearest-cane rule alone would make is still made.
+  std::vector<std::tuple<int, double, size_t, size_t>> pairs;
   for (size_t i = 0; i < truth_plan.cuts.size(); ++i) {
     const Polyline3& cane = truth.canes[truth_cane[i]].polyline;
     for (size_t j = 0; j < model_cuts.size(); ++j) {
-      if (landing[j].cane != truth_cane[i]) {
+      const int pass = landing[j].cane == truth_cane[i] ? 0 : 1;
+      if (pass == 1) {
         // Never on another cane when it would cut wood the truth keeps on its nearest one.
         if (cuts_kept_wood[j]) continue;
         double off_axis = 0.0;
@@ -136,11 +139,11 @@ absl::StatusOr<CutMatching> MatchCuts(const VineModel& truth, const CutPlan& tru
         if (off_axis > options.on_cane_distance_m) continue;
       }
       const double d = (truth_plan.cuts[i].point - model_cuts[j].point).norm();
-      if (d <= options.match_distance_m) pairs.emplace_back(d, i, j);
+      if (d <= options.match_distance_m) pairs.emplace_back(pass, d, i, j);
     }
   }
   std::sort(pairs.begin(), pairs.end());
-  for (const auto& [d, i, j] : pairs) {
+  for (const auto& [pass, d, i, j] : pairs) {
     if (out.truth_partner[i] >= 0 || out.model_partner[j] >= 0) continue;
     out.truth_partner[i] = static_cast<int>(j);
     out.model_partner[j] = static_cast<int>(i);

@@ -9,11 +9,15 @@
 //     whose axis passes within on_cane_distance_m (10 mm, the cane recall tolerance) of its point:
 //     where canes leave the head side by side a cut can be within a few millimetres of two axes,
 //     and which is the nearer is then a matter of reconstruction noise. Not when the cut would
-//     take wood the truth keeps on its nearest cane (step 3): then it lies on that cane only.
+//     take wood the truth keeps on its nearest cane (step 3): then it lies on that cane only (and
+//     counts as a cut on a kept cane unless it pairs there).
 //  2. Ground-truth cuts and reconstructed cuts lying on the cane of the ground-truth cut pair up
 //     one-to-one, greedily by increasing distance between their points, while that distance is at
-//     most match_distance_m (30 mm). Each ground-truth cut has a single partner at most; with one
-//     cut per cane on either side, this is "the nearest reconstructed cut on the same cane".
+//     most match_distance_m (30 mm): first the reconstructed cuts whose nearest cane it is, then
+//     those that lie on it only by on_cane_distance_m, so the second rule adds pairs and never
+//     takes one the nearest-cane rule makes. Each ground-truth cut has a single partner at most;
+//     with one cut per cane on either side, this is "the nearest reconstructed cut on the same
+//     cane".
 //  3. A reconstructed cut is on a kept cane when it has no ground-truth partner, lies within
 //     kept_distance_m (10 mm) of the axis of its assigned ground-truth cane or inside that cane's
 //     wood (within its radius there: a thick trunk), and that cane keeps wood there in the

@@ -153,6 +153,31 @@ TEST(EvaluateCuts, CutWithinTenMillimetresOfItsCaneMatchesThoughNearerAnother) {
   EXPECT_EQ(m->cuts_on_kept_canes, 1);
 }
 
+TEST(EvaluateCuts, TheTenMillimetreRuleNeverTakesAPairTheNearestCaneMakes) {
+  // Canes 3 and 4 leave the trunk 12 mm apart; the truth removes both. Model cut 0 lies 5 mm
+  // from cane 3's axis (its nearest cane) and 7 mm from cane 4's, 9.4 mm from the cut on cane 3
+  // and 7.3 mm from the cut on cane 4. Model cut 1 lies on cane 4's axis, 20 mm from its cut.
+  VineModel truth;
+  truth.canes.push_back(StraightCane(1, std::nullopt, CaneKind::kTrunk, {0, 0, 0}, {0, 0, 1}, 1.0));
+  truth.canes.push_back(StraightCane(3, 1, CaneKind::kCane, {-0.05, 0, 1}, {-1, 0, 0}, 0.6));
+  truth.canes.push_back(StraightCane(4, 1, CaneKind::kCane, {-0.05, 0, 1.012}, {-1, 0, 0}, 0.6));
+  CutPlan truth_plan;
+  truth_plan.cuts = {MakeCut(1, 3, {-0.06, 0, 1}, CutReason::kRemove),
+                     MakeCut(2, 4, {-0.07, 0, 1.012}, CutReason::kRemove)};
+  CutPlan model_plan = truth_plan;
+  model_plan.cuts[0].point = {-0.068, 0, 1.005};
+  model_plan.cuts[1].point = {-0.09, 0, 1.012};
+  auto matching = MatchCuts(truth, truth_plan, truth, &model_plan);
+  ASSERT_TRUE(matching.ok()) << matching.status();
+  // Nearest first over both rules at once would pair cut 0 with cane 4's cut and leave cane 3's
+  // unpaired; the nearest-cane pairs come first.
+  EXPECT_EQ(matching->truth_partner, (std::vector<int>{0, 1}));
+  EXPECT_EQ(matching->model_partner, (std::vector<int>{0, 1}));
+  auto m = EvaluateCuts(truth, truth_plan, truth, &model_plan);
+  ASSERT_TRUE(m.ok()) << m.status();
+  EXPECT_EQ(m->matched_cuts, 2);
+}
+
 TEST(EvaluateCuts, OneReconstructedCutMatchesOneTruthCut) {
   const VineModel truth = Truth();
   const CutPlan truth_plan = TruthPlan();
