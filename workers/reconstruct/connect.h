@@ -60,7 +60,8 @@
 //     "Head exits"). Canes leaving the head together lose their inner parts in the head's thick
 //     foreground, and the outer piece of such a cane, beyond max_attach_m of the head, hangs on
 //     a cane it passes. A cane hung on another cane, unless it continues that cane from one of
-//     its ends (step 4's test), or left out (with `head_exit_left_out`, off: it costs
+//     its ends (step 4's gap and angle, but at either end and in either direction: looser than
+//     step 4, so a cane hung at the base of a parallel cane stays), or left out (with `head_exit_left_out`, off: it costs
 //     precision), whose inner end (the one nearer the head's surface) lies within
 //     `head_exit_reach_m` of that surface and whose outward tangent there points at its nearest
 //     point (cosine >= `head_exit_min_cos`), with at least `head_exit_min_support` of the

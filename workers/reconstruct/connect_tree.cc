@@ -132,8 +132,9 @@ void KeepNear(const std::vector<Polyline3>& canes, double centre_x, const std::v
 }
 
 // Whether join `c` of a cane to another continues that cane from one of its ends (within
-// continuation_gap_m of it, tangents within continuation_angle_deg): the same cane broken in the
-// images, which step 4 appends to its parent.
+// continuation_gap_m of it, tangents within continuation_angle_deg either way): the same cane
+// broken in the images. Looser than step 4, which appends a cane only at its parent's tip and in
+// the same direction: this also spares a cane hung at the base of a parallel cane.
 bool IsContinuation(const std::vector<Polyline3>& canes, const JoinCandidate& c,
                     const ConnectOptions& options) {
   if (c.parent < 0) return false;
@@ -161,12 +162,12 @@ void HangHeadExits(const std::vector<Polyline3>& canes, const HeadModel& head,
     if ((*kept)[i] != 1 && !options.head_exit_left_out) continue;
     const Polyline3& cane = canes[i];
     if ((*kept)[i] == 1 && IsContinuation(canes, (*joins)[(*join)[i]], options)) continue;
-    Eigen::Vector3d at_front, at_back;
+    Eigen::Vector3d at_front = Eigen::Vector3d::Zero(), at_back = Eigen::Vector3d::Zero();
     const double d_front = DistanceToHead(cane.points.front(), head, &at_front);
     const double d_back = DistanceToHead(cane.points.back(), head, &at_back);
     const bool last = d_back < d_front;
     const double d = std::min(d_front, d_back);
-    if (d > options.head_exit_reach_m) continue;
+    if (!(d <= options.head_exit_reach_m)) continue;  // NaN ends too
     const Eigen::Vector3d inner = last ? cane.points.back() : cane.points.front();
     const Eigen::Vector3d at = last ? at_back : at_front;
     if (d > 0.0) {

@@ -196,6 +196,10 @@ absl::Status CorrespondenceOptions::Validate() const {
     return Invalid("fit", "control_spacing_m > 0, max_control_points >= 2, max_iterations >= 0, "
                           "smoothness_weight >= 0 (all finite)");
   }
+  if (!(fit.bundle_width_ratio >= 1.0) || !std::isfinite(fit.bundle_width_ratio)) {
+    return Invalid("fit.bundle_width_ratio",
+                   absl::StrCat("must be finite and >= 1 (1: off), got ", fit.bundle_width_ratio));
+  }
   if (!(max_rms_px > 0.0)) return Invalid("max_rms_px", "must be > 0");
   if (!(other_views.gate_px > 0.0) || !std::isfinite(other_views.gate_px)) {
     return Invalid("other_views.gate_px", "must be > 0 and finite");

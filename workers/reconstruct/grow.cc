@@ -404,7 +404,7 @@ absl::Status GrowOptions::Validate() const {
                                                    ") must not exceed max_length_m (",
                                                    max_length_m, ")"));
   }
-  if (alongside_min_gap_m >= other_cane_m) {
+  if (alongside_max_m > 0 && alongside_min_gap_m >= other_cane_m) {
     return absl::InvalidArgumentError(absl::StrCat("grow.alongside_min_gap_m (",
                                                    alongside_min_gap_m,
                                                    ") must be below other_cane_m (", other_cane_m,
@@ -429,6 +429,14 @@ absl::Status GrowCaneEnds(const std::vector<View2D>& views, const RigCalibration
   if (views.size() != rig.cameras.size()) {
     return absl::InvalidArgumentError(absl::StrCat("views: ", views.size(), " views for ",
                                                    rig.cameras.size(), " cameras"));
+  }
+  for (size_t v = 0; v < views.size(); ++v) {
+    const CameraCalibration& camera = rig.cameras[v];
+    if (views[v].width != camera.image_width || views[v].height != camera.image_height) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          "views[", v, "]: size ", views[v].width, "x", views[v].height, " differs from camera '",
+          camera.name, "' (", camera.image_width, "x", camera.image_height, ")"));
+    }
   }
   GrowSummary local;
   if (summary == nullptr) summary = &local;

@@ -99,7 +99,9 @@ enum class GrowStop { kEndUnsupported, kUnsupported, kContradicted, kAlongside, 
 
 // One end looked at (for diagnosis): cane index in the input, which end (0: the last point, 1:
 // the first), why growth stopped, the point it stopped at (the rejected step; the end itself when
-// it was not grown), the cane it ran alongside (kAlongside; else -1), and the length kept.
+// it was not grown), the cane it ran alongside (kAlongside, when growth stopped at that cane;
+// -1 otherwise, and when `alongside_require_parting` dropped a stretch that never parted: then
+// the stop point is the last step), and the length kept.
 struct GrowEnd {
   int cane = -1;
   int side = 0;

@@ -176,6 +176,12 @@ TEST(SharedClaims, BadOptionsRejectNamingTheField) {
   EXPECT_NE(options.Validate().message().find("shared_claims.min_other_view_support"),
             std::string::npos);
   EXPECT_EQ(options.Validate().code(), absl::StatusCode::kInvalidArgument);
+  // The fit's bundle reading (polyline_fit.h) is checked with the other options.
+  CorrespondenceOptions bundle;
+  bundle.fit.bundle_width_ratio = 0.5;
+  EXPECT_NE(bundle.Validate().message().find("fit.bundle_width_ratio"), std::string::npos);
+  bundle.fit.bundle_width_ratio = 2.0;
+  EXPECT_TRUE(bundle.Validate().ok());
   // MatchSegments reports it too.
   const AlongInOneView scene = DrawAlongInOneView();
   const auto pieces = MatchSegments(scene.views, scene.rig, options, Deadline::Infinite());
