@@ -352,6 +352,12 @@ TEST(GrowCaneEnds, RejectsBadInputNamingTheField) {
   status = GrowCaneEnds({views[0]}, rig, WorkingVolume{}, On(), &canes);
   EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument);
   EXPECT_THAT(status.message(), testing::HasSubstr("views"));
+  // A view whose size is not its camera's (the probes index pixels by the camera's size).
+  std::vector<View2D> small = views;
+  small[1].width -= 8;
+  status = GrowCaneEnds(small, rig, WorkingVolume{}, On(), &canes);
+  EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(status.message(), testing::HasSubstr("views[1]"));
 }
 
 }  // namespace
