@@ -24,6 +24,7 @@
 #include "gtest/gtest.h"
 #include "workers/reconstruct/correspondence_test_util.h"
 #include "workers/reconstruct/connect_internal.h"
+#include "workers/reconstruct/diagnose_util.h"
 #include "workers/reconstruct/gap_support.h"
 #include "workers/reconstruct/join_test_util.h"
 #include "workers/reconstruct/reconstruct.h"
@@ -41,17 +42,6 @@ int NearestLine(const Eigen::Vector3d& p, const std::vector<const Polyline3*>& l
     if (d <= best_d) best_d = d, best = static_cast<int>(i);
   }
   return best;
-}
-
-bool SameLine(const Polyline3& a, const Polyline3& b) {
-  // Connection keeps a cane's points (reversed, with a base point added, or appended to its
-  // parent): b contains both ends of a.
-  bool front = false, back = false;
-  for (const Eigen::Vector3d& q : b.points) {
-    front = front || (q - a.points.front()).norm() < 1e-9;
-    back = back || (q - a.points.back()).norm() < 1e-9;
-  }
-  return front && back;
 }
 
 std::vector<int> Ancestry(const VineModel& truth, int g) {
@@ -150,7 +140,7 @@ TEST(ConnectLoss, DISABLED_Report) {
       ASSERT_TRUE(without.ok());
       for (const Cane& m : model->canes) {
         bool before = false;
-        for (const Cane& w : without->canes) before = before || SameLine(w.polyline, m.polyline);
+        for (const Cane& w : without->canes) before = before || HoldsEnds(w.polyline, m.polyline);
         if (before || m.kind == CaneKind::kTrunk) continue;
         const Polyline3& c = m.polyline;
         const int parent_index = static_cast<int>(*model->IndexOf(*m.parent_id));
@@ -175,7 +165,7 @@ TEST(ConnectLoss, DISABLED_Report) {
     for (size_t a = head->trunk ? 1 : 0; a < assembled.size(); ++a) {
       int p = -1;
       for (size_t i = 0; i < prepared->canes.size() && p < 0; ++i)
-        if (SameLine(*assembled[a], prepared->canes[i])) p = static_cast<int>(i);
+        if (HoldsEnds(*assembled[a], prepared->canes[i])) p = static_cast<int>(i);
       if (p < 0) {
         reason[a] = kInside;
         if (verbose) {
@@ -191,7 +181,7 @@ TEST(ConnectLoss, DISABLED_Report) {
         continue;
       }
       bool in_model = false;
-      for (const Cane& m : model->canes) in_model = in_model || SameLine(prepared->canes[p], m.polyline);
+      for (const Cane& m : model->canes) in_model = in_model || HoldsEnds(prepared->canes[p], m.polyline);
       if (in_model) continue;
       const Polyline3& c = prepared->canes[p];
       bool near = true;
@@ -220,7 +210,7 @@ TEST(ConnectLoss, DISABLED_Report) {
           if (jc.child != p) continue;
           bool to_tree = jc.parent < 0;
           for (const Cane& m : model->canes)
-            to_tree = to_tree || (jc.parent >= 0 && SameLine(prepared->canes[jc.parent], m.polyline));
+            to_tree = to_tree || (jc.parent >= 0 && HoldsEnds(prepared->canes[jc.parent], m.polyline));
           if (to_tree && (tree_best < 0 || jc.probability > joins[tree_best].probability))
             tree_best = static_cast<int>(k);
         }
@@ -395,7 +385,7 @@ TEST(ConnectLoss, DISABLED_Report) {
           continue;
         int in_model = -1;
         for (size_t m = 0; m < model->canes.size(); ++m)
-          if (SameLine(c, model->canes[m].polyline)) in_model = static_cast<int>(m);
+          if (HoldsEnds(c, model->canes[m].polyline)) in_model = static_cast<int>(m);
         const int g = MajorityCane(c, truth);
         const bool inner_last =
             std::abs(c.points.back().x() - centre_x) < std::abs(c.points.front().x() - centre_x);
@@ -430,7 +420,7 @@ TEST(ConnectLoss, DISABLED_Report) {
           len += l;
         }
         bool in_model = false;
-        for (const Cane& m : model->canes) in_model = in_model || SameLine(c, m.polyline);
+        for (const Cane& m : model->canes) in_model = in_model || HoldsEnds(c, m.polyline);
         std::printf("  support seed %llu cane %zu: true %d, %.3f m, support %.3f, far %d, in model %d\n",
                     static_cast<unsigned long long>(seed), i, majority_prepared[i], len,
                     len > 0 ? sum / len : 0.0,

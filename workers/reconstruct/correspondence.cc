@@ -9,6 +9,7 @@
 #include <tuple>
 
 #include "absl/strings/str_cat.h"
+#include "core/statistics.h"
 #include "core/status_macros.h"
 
 namespace vb::reconstruct {
@@ -119,24 +120,6 @@ std::vector<OtherView> OtherViewsOf(int a, int b, const std::vector<View2D>& vie
     others.push_back({&samples[c], &rig.cameras[c], &views[c]});
   }
   return others;
-}
-
-double PointToPolyline(const Eigen::Vector3d& p, const std::vector<Eigen::Vector3d>& line) {
-  if (line.empty()) return std::numeric_limits<double>::infinity();
-  double best = (p - line[0]).norm();
-  for (size_t k = 0; k + 1 < line.size(); ++k) {
-    const Eigen::Vector3d d = line[k + 1] - line[k];
-    const double dd = d.squaredNorm();
-    const double t = dd > 0 ? std::clamp((p - line[k]).dot(d) / dd, 0.0, 1.0) : 0.0;
-    best = std::min(best, (p - line[k] - t * d).norm());
-  }
-  return best;
-}
-
-double Median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
 }
 
 // Best inside x aligned fraction of `points` over the views outside (a, b) that show anything.
@@ -397,11 +380,14 @@ SharedClaimPair DescribeSharedClaim(const std::vector<ScoredCandidate>& candidat
   std::vector<Eigen::Vector3d> shared_i, own_i, shared_j, own_j;
   split(ci, &shared_i, &own_i);
   split(cj, &shared_j, &own_j);
+  // The median (core/statistics.h) distance from `from` to the polyline through `to`.
   auto separation = [](const std::vector<Eigen::Vector3d>& from,
                        const std::vector<Eigen::Vector3d>& to) {
+    Polyline3 line;
+    line.points = to;
     std::vector<double> d;
-    for (const Eigen::Vector3d& x : from) d.push_back(PointToPolyline(x, to));
-    return d.empty() ? 0.0 : Median(std::move(d));
+    for (const Eigen::Vector3d& x : from) d.push_back(DistanceToPolyline(x, line));
+    return Median(std::move(d));
   };
   pair.separation_m = std::min(separation(shared_i, cj.fit.control_points),
                                separation(shared_j, ci.fit.control_points));

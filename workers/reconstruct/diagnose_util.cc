@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "workers/reconstruct/diagnose_util.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <optional>
@@ -9,6 +10,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "workers/reconstruct/gap_support.h"
+#include "workers/reconstruct/synthetic_views.h"
 
 namespace vb::reconstruct {
 
@@ -155,6 +157,111 @@ std::optional<double> EpipolarSin(const RigCalibration& rig, int a, int b,
   if (!e || !tt) return std::nullopt;
   const Eigen::Vector2d de = (*e - px_a).normalized(), dt = (*tt - px_a).normalized();
   return std::abs(de.x() * dt.y() - de.y() * dt.x());
+}
+
+std::vector<LengthSample> SampleTrueLength(const SimulatedStop& stop, double step_m,
+                                           bool neighbours) {
+  const std::vector<CameraCalibration>& cameras = stop.true_rig.cameras;
+  // Per view, per cane, per sample; stop.drawn lists the vine's canes first.
+  std::vector<std::vector<std::vector<bool>>> along, along_own;
+  for (const CameraCalibration& camera : cameras) {
+    if (neighbours) along.push_back(LyingAlongAnother(stop.drawn, camera, step_m, 2.0));
+    along_own.push_back(LyingAlongAnother(stop.scene.vine, camera, step_m, 2.0));
+  }
+  std::vector<LengthSample> out;
+  if (cameras.empty()) return out;
+  for (size_t c = 0; c < stop.scene.vine.canes.size(); ++c) {
+    const Polyline3& line = stop.scene.vine.canes[c].polyline;
+    const std::vector<double> arc = line.ArcLengths();
+    const size_t n = along_own[0][c].size();
+    if (n < 2) continue;
+    const double step = arc.back() / static_cast<double>(n - 1);
+    for (size_t i = 0; i < n; ++i) {
+      LengthSample s;
+      s.cane = c;
+      s.index = i;
+      s.p = line.PointAt(arc.back() * i / (n - 1), arc);
+      s.tangent = (line.PointAt(std::min(arc.back(), arc.back() * (i + 0.5) / (n - 1)), arc) -
+                   line.PointAt(std::max(0.0, arc.back() * (i - 0.5) / (n - 1)), arc))
+                      .normalized();
+      s.step_m = step;
+      s.weight_m = (i == 0 || i + 1 == n) ? 0.5 * step : step;
+      for (size_t v = 0; v < cameras.size(); ++v) {
+        const auto uv = cameras[v].Project(s.p);
+        if (!uv || !cameras[v].InImage(*uv)) continue;
+        ++s.in_image;
+        if (neighbours) s.along += along[v][c][i];
+        s.along_own += along_own[v][c][i];
+      }
+      out.push_back(s);
+    }
+  }
+  return out;
+}
+
+SampleEvidence EvidenceOf(const SampleInViews& at, const RigCalibration& rig,
+                          const Eigen::Vector3d& p, const Eigen::Vector3d& t,
+                          double min_epipolar_sin) {
+  const int n = static_cast<int>(at.segment.size());
+  SampleEvidence out;
+  out.in_image = at.in_image;
+  out.foreground = at.foreground;
+  out.segment.assign(n, -1);
+  for (int v = 0; v < n; ++v) {
+    if (at.on_foreground[v]) out.segment[v] = at.segment[v];
+    out.skeleton += out.segment[v] >= 0;
+  }
+  for (int a = 0; a < n; ++a)
+    for (int b = a + 1; b < n; ++b) {
+      if (out.segment[a] < 0 || out.segment[b] < 0) continue;
+      const std::optional<double> sin = EpipolarSin(rig, a, b, p, t, at.px[a]);
+      if (!sin) continue;
+      out.pairs.push_back({a, b});
+      if (*sin >= min_epipolar_sin) out.conditioned = true;
+    }
+  return out;
+}
+
+StageGrids MakeStageGrids(const std::vector<MatchCandidate>& raw,
+                          const std::vector<ScoredCandidate>& scored,
+                          const std::vector<Piece3D>& pieces, const AssembledStop& assembled,
+                          const ConnectedStop& connected) {
+  StageGrids grids;
+  for (const MatchCandidate& c : raw) grids.raw.AddLine(HitPoints(c), 1.0);
+  for (const ScoredCandidate& s : scored)
+    grids.fitted.AddLine(s.fit.control_points, s.probability);
+  for (const Piece3D& p : pieces) grids.piece.AddLine(p.polyline.points, 1.0);
+  for (const Polyline3& c : assembled.canes) grids.assembled.AddLine(c.points, 1.0);
+  if (assembled.head.trunk) grids.assembled.AddLine(assembled.head.trunk->points, 1.0);
+  for (const Cane& c : connected.connected.canes) grids.connected.AddLine(c.polyline.points, 1.0);
+  for (const Cane& c : connected.refined.canes) grids.final.AddLine(c.polyline.points, 1.0);
+  return grids;
+}
+
+LossStage FirstLostStage(const Eigen::Vector3d& p, const SampleEvidence& evidence,
+                         const StageGrids& grids, double threshold) {
+  if (evidence.in_image < 2) return kLossInImage;
+  if (evidence.foreground < 2) return kLossForeground;
+  if (evidence.skeleton < 2) return kLossSkeleton;
+  if (!evidence.conditioned) return kLossConditioned;
+  if (grids.raw.MaxNear(p) < 0) return kLossRaw;
+  const double fitted = grids.fitted.MaxNear(p);
+  if (fitted < 0) return kLossFitted;
+  if (fitted <= threshold) return kLossProbable;
+  if (grids.piece.MaxNear(p) < 0) return kLossPiece;
+  if (grids.assembled.MaxNear(p) < 0) return kLossAssembled;
+  if (grids.connected.MaxNear(p) < 0) return kLossConnected;
+  if (grids.final.MaxNear(p) < 0) return kLossFinal;
+  return kLossKept;
+}
+
+bool HoldsEnds(const Polyline3& a, const Polyline3& b) {
+  bool front = false, back = false;
+  for (const Eigen::Vector3d& q : b.points) {
+    front = front || (q - a.points.front()).norm() < 1e-9;
+    back = back || (q - a.points.back()).norm() < 1e-9;
+  }
+  return front && back;
 }
 
 bool NearAnyCane(const Eigen::Vector3d& p, const std::vector<Cane>& canes, double radius_m) {

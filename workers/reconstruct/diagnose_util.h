@@ -9,6 +9,7 @@
 
 #include <cstdint>
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include "absl/status/statusor.h"
@@ -16,6 +17,7 @@
 #include "core/geometry.h"
 #include "core/vine_model.h"
 #include "sim/rig.h"
+#include "workers/reconstruct/correspondence.h"
 #include "workers/reconstruct/correspondence_test_util.h"
 #include "workers/reconstruct/match_candidates.h"
 #include "workers/reconstruct/reconstruct.h"
@@ -119,6 +121,77 @@ Eigen::Vector3d TangentAt(const std::vector<Eigen::Vector3d>& points, size_t i);
 std::optional<double> EpipolarSin(const RigCalibration& rig, int a, int b,
                                   const Eigen::Vector3d& p, const Eigen::Vector3d& t,
                                   const Eigen::Vector2d& px_a);
+
+// The true length of a stop's vine (trunk and canes, stop.scene.vine) as LyingAlongAnother
+// samples it (every ~step_m along each cane, both ends included), each sample with what the true
+// rig's views show of it. Canes with fewer than 2 samples are left out.
+struct LengthSample {
+  size_t cane = 0;    // index in stop.scene.vine.canes
+  size_t index = 0;   // sample index along it (LyingAlongAnother's)
+  Eigen::Vector3d p = Eigen::Vector3d::Zero();
+  Eigen::Vector3d tangent = Eigen::Vector3d::UnitX();  // unit; p's neighbours half a step away
+  double step_m = 0.0;    // the cane's sample spacing: its length / (samples - 1)
+  double weight_m = 0.0;  // its share of the length: step_m, half that at either end
+  int in_image = 0;       // views whose image holds its projection
+  int along = 0;          // of those, views where it lies along another drawn cane (stop.drawn:
+                          // the vine's and its neighbours'); 0 unless `neighbours`
+  int along_own = 0;      // of those, views where it lies along another cane of the vine
+};
+// LyingAlongAnother with margin 2 px; `neighbours`: also against stop.drawn (fills `along`).
+std::vector<LengthSample> SampleTrueLength(const SimulatedStop& stop, double step_m,
+                                           bool neighbours);
+
+// What the views show of a true sample, for the loss reports' first stages (FirstLostStage):
+// LocateSample's counts, and where skeleton meets foreground, the pairs that could place it.
+struct SampleEvidence {
+  int in_image = 0;             // views whose image holds its projection
+  int foreground = 0;           // of those, views with foreground within 2 px
+  int skeleton = 0;             // views with foreground and a segment near it
+  bool conditioned = false;     // a pair of `pairs` with EpipolarSin >= min_epipolar_sin
+  std::vector<int> segment;     // per view: the segment near it where on foreground, else -1
+  std::vector<std::pair<int, int>> pairs;  // view pairs a < b with a segment in both where
+                                           // EpipolarSin could be measured, in order
+};
+// `at` is LocateSample of p (tangent t) through `rig` (the true rig in the reports).
+SampleEvidence EvidenceOf(const SampleInViews& at, const RigCalibration& rig,
+                          const Eigen::Vector3d& p, const Eigen::Vector3d& t,
+                          double min_epipolar_sin);
+
+// The stages the loss reports follow a true sample through (MatchLoss.DISABLED_Report,
+// OverlapLoss.DISABLED_ByStage), in pipeline order; a sample is lost at the first it fails:
+// in < 2 images, foreground in < 2 views, skeleton in < 2 views, no well-conditioned pair, no raw
+// candidate near it, no fitted candidate near, none above the threshold, no selected piece near,
+// not in the assembled canes and trunk, not in the connected tree, not after refinement.
+// kLossKept: not lost; kLossStageCount: how many (indexes of per-stage arrays).
+enum LossStage {
+  kLossInImage, kLossForeground, kLossSkeleton, kLossConditioned, kLossRaw, kLossFitted,
+  kLossProbable, kLossPiece, kLossAssembled, kLossConnected, kLossFinal, kLossKept,
+  kLossStageCount
+};
+
+// Each stage's output as points (PointGrid: near = within 10 mm), for FirstLostStage.
+struct StageGrids {
+  PointGrid raw;        // raw candidates' hits (value 1)
+  PointGrid fitted;     // fitted candidates' control points, valued by their probability
+  PointGrid piece;      // selected pieces (1)
+  PointGrid assembled;  // assembled canes and the trunk (1)
+  PointGrid connected;  // BuildTree's canes (1)
+  PointGrid final;      // the canes after RefineModel (1)
+};
+StageGrids MakeStageGrids(const std::vector<MatchCandidate>& raw,
+                          const std::vector<ScoredCandidate>& scored,
+                          const std::vector<Piece3D>& pieces, const AssembledStop& assembled,
+                          const ConnectedStop& connected);
+
+// The first stage at which sample p with `evidence` is lost (kLossKept if none); a fitted
+// candidate near p counts only above `threshold` (1 / (1 + alpha)).
+LossStage FirstLostStage(const Eigen::Vector3d& p, const SampleEvidence& evidence,
+                         const StageGrids& grids, double threshold);
+
+// Whether `b` holds both ends of `a` (exactly, to 1e-9 m): connection keeps a cane's points
+// (reversed, with a base point added, or appended to its parent), so a connected polyline that
+// holds an assembled cane's ends carries it. `a` must have points.
+bool HoldsEnds(const Polyline3& a, const Polyline3& b);
 
 // Whether p lies within `radius_m` of a cane of `canes` (DistanceToPolyline).
 bool NearAnyCane(const Eigen::Vector3d& p, const std::vector<Cane>& canes,

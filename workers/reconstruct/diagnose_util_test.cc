@@ -1,7 +1,10 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "workers/reconstruct/diagnose_util.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdlib>
+#include <utility>
 #include <vector>
 
 #include "gtest/gtest.h"
@@ -69,6 +72,180 @@ TEST(EpipolarSin, SmallAlongTheHorizontalPairsEpipolarLinesLargeAcrossThem) {
   ASSERT_TRUE(across.has_value());
   EXPECT_LT(*along, 0.2);
   EXPECT_GT(*across, 0.9);
+}
+
+// A polyline holds a cane when both its ends are among its points, in either order, with more
+// around them; one end alone, or ends 1 mm off, is not enough.
+TEST(HoldsEnds, BothEndsAmongThePointsInAnyOrder) {
+  Polyline3 cane;
+  cane.points = {{0, 0, 1}, {0.1, 0, 1.1}, {0.2, 0, 1.2}};
+  Polyline3 connected;
+  connected.points = {{0, 0, 0.9}, {0.2, 0, 1.2}, {0.1, 0, 1.1}, {0, 0, 1}};
+  EXPECT_TRUE(HoldsEnds(cane, connected));
+  connected.points.pop_back();
+  EXPECT_FALSE(HoldsEnds(cane, connected));
+  connected.points.push_back({0, 0, 1.001});
+  EXPECT_FALSE(HoldsEnds(cane, connected));
+  EXPECT_TRUE(HoldsEnds(cane, cane));
+  EXPECT_FALSE(HoldsEnds(cane, Polyline3{}));
+}
+
+// The ladder of the loss reports: with everything seen, each stage's grid filled in pipeline
+// order moves the first lost stage one on; whatever the grids hold, the views' evidence decides
+// first. A grid counts within 10 mm only, and the fitted one only above the threshold.
+TEST(FirstLostStage, TheFirstStageThatFailsInPipelineOrder) {
+  const Eigen::Vector3d p(0.1, 0.8, 1.0);
+  SampleEvidence seen;
+  seen.in_image = seen.foreground = seen.skeleton = 3;
+  seen.conditioned = true;
+  StageGrids grids;
+  const double threshold = 0.5;
+  EXPECT_EQ(FirstLostStage(p, seen, grids, threshold), kLossRaw);
+  grids.raw.Add(p + Eigen::Vector3d(0.02, 0, 0), 1.0);  // 20 mm away
+  EXPECT_EQ(FirstLostStage(p, seen, grids, threshold), kLossRaw);
+  grids.raw.Add(p + Eigen::Vector3d(0.005, 0, 0), 1.0);
+  EXPECT_EQ(FirstLostStage(p, seen, grids, threshold), kLossFitted);
+  grids.fitted.Add(p, 0.5);  // at the threshold, not above it
+  EXPECT_EQ(FirstLostStage(p, seen, grids, threshold), kLossProbable);
+  grids.fitted.Add(p, 0.6);
+  EXPECT_EQ(FirstLostStage(p, seen, grids, threshold), kLossPiece);
+  grids.piece.Add(p, 1.0);
+  EXPECT_EQ(FirstLostStage(p, seen, grids, threshold), kLossAssembled);
+  grids.assembled.Add(p, 1.0);
+  EXPECT_EQ(FirstLostStage(p, seen, grids, threshold), kLossConnected);
+  grids.connected.Add(p, 1.0);
+  EXPECT_EQ(FirstLostStage(p, seen, grids, threshold), kLossFinal);
+  grids.final.Add(p, 1.0);
+  EXPECT_EQ(FirstLostStage(p, seen, grids, threshold), kLossKept);
+  // The views' evidence, last to first.
+  SampleEvidence e = seen;
+  e.conditioned = false;
+  EXPECT_EQ(FirstLostStage(p, e, grids, threshold), kLossConditioned);
+  e.skeleton = 1;
+  EXPECT_EQ(FirstLostStage(p, e, grids, threshold), kLossSkeleton);
+  e.foreground = 1;
+  EXPECT_EQ(FirstLostStage(p, e, grids, threshold), kLossForeground);
+  e.in_image = 1;
+  EXPECT_EQ(FirstLostStage(p, e, grids, threshold), kLossInImage);
+}
+
+// Each stage's output lands in its own grid, at its own place (1 m apart along x).
+TEST(MakeStageGrids, EachStagesPointsInItsGrid) {
+  auto at = [](double x) { return Eigen::Vector3d(x, 0.8, 1.0); };
+  auto line = [&](double x) {
+    Polyline3 l;
+    l.points = {at(x), at(x) + Eigen::Vector3d(0, 0, 0.05)};
+    l.radii = {0.004, 0.004};
+    return l;
+  };
+  MatchCandidate raw;
+  for (double z : {0.0, 0.004, 0.008}) {
+    EpipolarHit hit;
+    hit.point = at(0) + Eigen::Vector3d(0, 0, z);
+    raw.hits.push_back(hit);
+  }
+  ScoredCandidate scored;
+  scored.fit.control_points = line(1).points;
+  scored.probability = 0.7;
+  Piece3D piece;
+  piece.polyline = line(2);
+  AssembledStop assembled;
+  assembled.canes = {line(3)};
+  assembled.head.trunk = line(4);
+  ConnectedStop connected;
+  connected.connected.canes.push_back(MakeCane(1, at(5), at(5) + Eigen::Vector3d(0, 0, 0.05),
+                                               0.004));
+  connected.refined.canes.push_back(MakeCane(1, at(6), at(6) + Eigen::Vector3d(0, 0, 0.05),
+                                             0.004));
+  const StageGrids grids = MakeStageGrids({raw}, {scored}, {piece}, assembled, connected);
+  const PointGrid* by_place[] = {&grids.raw,       &grids.fitted,    &grids.piece,
+                                 &grids.assembled, &grids.assembled, &grids.connected,
+                                 &grids.final};
+  for (int x = 0; x <= 6; ++x) {
+    const Eigen::Vector3d mid = at(x) + Eigen::Vector3d(0, 0, x == 0 ? 0.004 : 0.025);
+    EXPECT_EQ(by_place[x]->MaxNear(mid), x == 1 ? 0.7 : 1.0) << "place " << x;
+    // Nothing of the other stages there.
+    for (const PointGrid* g : {&grids.raw, &grids.fitted, &grids.piece, &grids.assembled,
+                               &grids.connected, &grids.final}) {
+      if (g != by_place[x]) {
+        EXPECT_LT(g->MaxNear(mid), 0) << "place " << x;
+      }
+    }
+  }
+}
+
+// The horizontal pair of Rig(2) (EpipolarSin above): a sample with skeleton on foreground in both
+// views is placeable by that pair, conditioned when the cane runs across the epipolar lines; a
+// segment where the view shows no foreground does not count.
+TEST(EvidenceOf, SkeletonCountsOnForegroundAndThePairIsConditionedAcrossTheEpipolarLines) {
+  const RigCalibration rig = Rig(2);
+  const Eigen::Vector3d p(0.0, 0.8, 1.0);
+  SampleInViews at;
+  at.in_image = at.foreground = 2;
+  at.inside = {true, true};
+  at.on_foreground = {true, true};
+  at.segment = {4, 7};
+  for (int v = 0; v < 2; ++v) {
+    const auto px = rig.cameras[v].Project(p);
+    ASSERT_TRUE(px.has_value());
+    at.px.push_back(*px);
+  }
+  const SampleEvidence across = EvidenceOf(at, rig, p, Eigen::Vector3d::UnitZ(), 0.5);
+  EXPECT_EQ(across.in_image, 2);
+  EXPECT_EQ(across.foreground, 2);
+  EXPECT_EQ(across.skeleton, 2);
+  EXPECT_EQ(across.segment, std::vector<int>({4, 7}));
+  EXPECT_EQ(across.pairs, (std::vector<std::pair<int, int>>{{0, 1}}));
+  EXPECT_TRUE(across.conditioned);
+  const SampleEvidence along = EvidenceOf(at, rig, p, Eigen::Vector3d::UnitX(), 0.5);
+  EXPECT_EQ(along.pairs.size(), 1u);
+  EXPECT_FALSE(along.conditioned);
+  at.on_foreground[1] = false;
+  at.foreground = 1;
+  const SampleEvidence one = EvidenceOf(at, rig, p, Eigen::Vector3d::UnitZ(), 0.5);
+  EXPECT_EQ(one.skeleton, 1);
+  EXPECT_EQ(one.segment, std::vector<int>({4, -1}));
+  EXPECT_TRUE(one.pairs.empty());
+  EXPECT_FALSE(one.conditioned);
+}
+
+// Two upright canes 3 mm apart (along each other in every view) and one 30 cm to the side; a
+// neighbour's cane along the third. Each cane's samples weigh its length in all (ends half),
+// and say along what each lies.
+TEST(SampleTrueLength, WeightsAddUpToTheLengthAndSayAlongWhatEachSampleLies) {
+  SimulatedStop stop;
+  stop.true_rig = Rig(3);
+  stop.scene.vine.canes = {MakeCane(1, {0.0, 0.8, 0.9}, {0.0, 0.8, 1.1}, 0.004),
+                           MakeCane(2, {0.003, 0.8, 0.9}, {0.003, 0.8, 1.1}, 0.004),
+                           MakeCane(3, {0.3, 0.8, 0.9}, {0.3, 0.8, 1.1}, 0.004)};
+  stop.drawn = stop.scene.vine;
+  stop.drawn.canes.push_back(MakeCane(4, {0.303, 0.8, 0.9}, {0.303, 0.8, 1.1}, 0.004));
+  const std::vector<LengthSample> own = SampleTrueLength(stop, 0.005, false);
+  const std::vector<LengthSample> all = SampleTrueLength(stop, 0.005, true);
+  ASSERT_EQ(own.size(), all.size());
+  double length[3] = {};
+  int middle_own[3] = {}, middle_all[3] = {};
+  for (size_t k = 0; k < all.size(); ++k) {
+    const LengthSample& s = all[k];
+    ASSERT_LT(s.cane, 3u);
+    length[s.cane] += s.weight_m;
+    EXPECT_EQ(own[k].along, 0);
+    EXPECT_EQ(own[k].along_own, s.along_own);
+    EXPECT_EQ(s.in_image, 3);
+    EXPECT_NEAR(std::abs(s.tangent.z()), 1.0, 1e-9);
+    EXPECT_NEAR(s.p.z(), 0.9 + s.step_m * s.index, 1e-9);
+    // Away from the ends, where LyingAlongAnother's runs are whole.
+    if (s.p.z() > 0.95 && s.p.z() < 1.05) {
+      middle_own[s.cane] = std::max(middle_own[s.cane], s.along_own);
+      middle_all[s.cane] = std::max(middle_all[s.cane], s.along);
+    }
+  }
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(length[c], 0.2, 1e-9) << "cane " << c;
+  EXPECT_EQ(middle_own[0], 3);
+  EXPECT_EQ(middle_own[1], 3);
+  EXPECT_EQ(middle_own[2], 0);
+  EXPECT_EQ(middle_all[2], 3);
+  EXPECT_EQ(middle_all[0], 3);
 }
 
 TEST(DistanceToCanes, NearestPointOfTheNearestCane) {

@@ -35,17 +35,6 @@
 namespace vb::reconstruct {
 namespace {
 
-// Whether `b` holds both ends of `a` (connection keeps a cane's points: reversed, with a base
-// point added, or appended to its parent).
-bool HoldsEnds(const Polyline3& a, const Polyline3& b) {
-  bool front = false, back = false;
-  for (const Eigen::Vector3d& q : b.points) {
-    front = front || (q - a.points.front()).norm() < 1e-9;
-    back = back || (q - a.points.back()).norm() < 1e-9;
-  }
-  return front && back;
-}
-
 enum Outcome { kRoot, kRightRoute, kWrongCane, kGhost, kLeftOut, kOutcomeCount };
 const char* kOutcomeNames[kOutcomeCount] = {"on root", "right route", "wrong cane", "on ghost",
                                             "left out"};

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // A diagnosis tool, not a test: why true cane length is not matched across views. Every 5 mm
 // sample of the vine's trunk and canes is projected (true rig) into every view and followed
-// through correspondence; the first stage where it is lost is counted:
+// through correspondence; the first stage where it is lost is counted (FirstLostStage,
+// diagnose_util.h):
 //   in < 2 images; foreground in < 2 views; skeleton near it in < 2 views; no view pair with
 //   skeleton in both that is not near-parallel to the epipolar line; no raw candidate (run of
 //   epipolar crossings) near it; no fitted candidate; no candidate above the minimum expected
@@ -32,14 +33,12 @@ TEST(MatchLoss, DISABLED_Report) {
   const auto [first, count, images, fiducials] = ReportStopsFromEnv(1300, 4);
   const ReconstructOptions options;
   const double threshold = 1.0 / (1.0 + options.correspondence.alpha);
-  enum Stage { kInImage, kForeground, kSkeleton, kConditioned, kRaw, kFitted, kProbable, kPiece,
-               kAssembled, kConnected, kFinal, kKept, kStages };
-  const char* names[kStages] = {"in < 2 images", "foreground < 2 views", "skeleton < 2 views",
-                                "no well-conditioned pair", "no raw candidate",
-                                "no fitted candidate", "no candidate above threshold",
-                                "not selected (Gibbs)", "lost in assembly", "lost in connection",
-                                "lost in refinement", "recalled"};
-  double lost[kStages] = {}, recalled_in[kStages] = {};
+  const char* names[kLossStageCount] = {
+      "in < 2 images", "foreground < 2 views", "skeleton < 2 views", "no well-conditioned pair",
+      "no raw candidate", "no fitted candidate", "no candidate above threshold",
+      "not selected (Gibbs)", "lost in assembly", "lost in connection", "lost in refinement",
+      "recalled"};
+  double lost[kLossStageCount] = {}, recalled_in[kLossStageCount] = {};
   // Of skeleton-in->=2-views samples: how many of the views have skeleton (2 or 3).
   double two_only = 0, three = 0, total = 0;
   // Raw candidate missing although a pair of same segments has a candidate elsewhere.
@@ -53,93 +52,60 @@ TEST(MatchLoss, DISABLED_Report) {
     const RigCalibration& rig = run->matched.rig;
     const int n = static_cast<int>(stop.views.size());
 
-    // Raw candidates (epipolar runs) and fitted, scored ones.
-    PointGrid raw_grid, fitted_grid, piece_grid, final_grid;
     // As the second pass searches each pair (a view outside it shows anything in a 3-camera rig).
     const CandidateOptions co = CandidateOptionsFor(options.correspondence, n > 2);
-    std::set<std::tuple<int, int, int, int>> raw_pairs;
     const std::vector<ViewSamples> samples =
         SampleViews(stop.views, rig, options.correspondence.sample_step_px);
-    for (const MatchCandidate& c : RawCandidates(samples, rig, co)) {
-      raw_grid.AddLine(HitPoints(c), 1.0);
+    const std::vector<MatchCandidate> raw = RawCandidates(samples, rig, co);
+    std::set<std::tuple<int, int, int, int>> raw_pairs;
+    for (const MatchCandidate& c : raw)
       raw_pairs.insert({c.view_a, c.segment_a, c.view_b, c.segment_b});
-    }
     const auto scored =
         ScoreCandidates(stop.views, rig, options.correspondence, Deadline::Infinite());
     ASSERT_TRUE(scored.ok());
-    for (const ScoredCandidate& s : *scored)
-      fitted_grid.AddLine(s.fit.control_points, s.probability);
-    for (const Piece3D& p : run->matched.pieces) piece_grid.AddLine(p.polyline.points, 1.0);
     // The later stages as PipelineStages.DISABLED_Report runs them.
     const auto assembled = AssembleStop(stop.views, rig, run->matched.pieces, options);
     ASSERT_TRUE(assembled.ok()) << assembled.status();
     const auto connected = ConnectAndRefine(stop.views, rig, *assembled, assembled->joins, options);
     ASSERT_TRUE(connected.ok()) << connected.status();
-    PointGrid assembled_grid, connected_grid;
-    for (const Polyline3& c : assembled->canes) assembled_grid.AddLine(c.points, 1.0);
-    if (assembled->head.trunk) assembled_grid.AddLine(assembled->head.trunk->points, 1.0);
-    for (const Cane& c : connected->connected.canes) connected_grid.AddLine(c.polyline.points, 1.0);
-    for (const Cane& c : connected->refined.canes) final_grid.AddLine(c.polyline.points, 1.0);
+    const StageGrids grids =
+        MakeStageGrids(raw, *scored, run->matched.pieces, *assembled, *connected);
 
     const SegmentMaps maps(stop.views);
-    double stop_lost[kStages] = {};
+    double stop_lost[kLossStageCount] = {};
     double stop_total = 0;
     for (const Cane& cane : truth.canes) {
       if (cane.kind == CaneKind::kSpur) continue;
       const std::vector<Eigen::Vector3d> pts = cane.polyline.Sample(0.005);
       for (size_t i = 0; i < pts.size(); ++i) {
         const Eigen::Vector3d& p = pts[i];
-        const Eigen::Vector3d t = TangentAt(pts, i);
         const SampleInViews at = LocateSample(p, stop.true_rig, stop.views, maps);
-        const int in_image = at.in_image, fg = at.foreground;
-        // Skeleton counts where the view also shows foreground.
-        std::vector<int> seg(n, -1);
-        int skel = 0;
-        for (int v = 0; v < n; ++v) {
-          if (at.on_foreground[v]) seg[v] = at.segment[v];
-          skel += seg[v] >= 0;
-        }
-        // A pair with skeleton in both views, the cane not along the epipolar line in view a.
-        bool conditioned = false, same_pair_elsewhere = false;
-        for (int a = 0; a < n; ++a)
-          for (int b = a + 1; b < n; ++b) {
-            if (seg[a] < 0 || seg[b] < 0) continue;
-            const std::optional<double> sin = EpipolarSin(stop.true_rig, a, b, p, t, at.px[a]);
-            if (!sin) continue;
-            if (*sin >= co.min_epipolar_sin) conditioned = true;
-            if (raw_pairs.count({a, seg[a], b, seg[b]})) same_pair_elsewhere = true;
-          }
-        Stage stage = kKept;
-        if (in_image < 2) stage = kInImage;
-        else if (fg < 2) stage = kForeground;
-        else if (skel < 2) stage = kSkeleton;
-        else if (!conditioned) stage = kConditioned;
-        else if (raw_grid.MaxNear(p) < 0) stage = kRaw;
-        else if (fitted_grid.MaxNear(p) < 0) stage = kFitted;
-        else if (fitted_grid.MaxNear(p) <= threshold) stage = kProbable;
-        else if (piece_grid.MaxNear(p) < 0) stage = kPiece;
-        else if (assembled_grid.MaxNear(p) < 0) stage = kAssembled;
-        else if (connected_grid.MaxNear(p) < 0) stage = kConnected;
-        else if (final_grid.MaxNear(p) < 0) stage = kFinal;
+        const SampleEvidence e =
+            EvidenceOf(at, stop.true_rig, p, TangentAt(pts, i), co.min_epipolar_sin);
+        // A placeable pair whose segments are matched by a raw candidate elsewhere.
+        bool same_pair_elsewhere = false;
+        for (const auto& [a, b] : e.pairs)
+          if (raw_pairs.count({a, e.segment[a], b, e.segment[b]})) same_pair_elsewhere = true;
+        const LossStage stage = FirstLostStage(p, e, grids, threshold);
         stop_lost[stage] += 1;
         stop_total += 1;
-        if (final_grid.MaxNear(p) >= 0) recalled_in[stage] += 1;
-        if (skel >= 2) (skel == 2 ? two_only : three) += 1;
-        if (stage == kInImage && cane.kind == CaneKind::kTrunk) trunk_out += 1;
-        if (stage == kInImage && in_image == 1) one_image += 1;
-        if (stage == kRaw && same_pair_elsewhere) raw_same_pair_elsewhere += 1;
+        if (grids.final.MaxNear(p) >= 0) recalled_in[stage] += 1;
+        if (e.skeleton >= 2) (e.skeleton == 2 ? two_only : three) += 1;
+        if (stage == kLossInImage && cane.kind == CaneKind::kTrunk) trunk_out += 1;
+        if (stage == kLossInImage && e.in_image == 1) one_image += 1;
+        if (stage == kLossRaw && same_pair_elsewhere) raw_same_pair_elsewhere += 1;
       }
     }
     total += stop_total;
     std::printf("seed %llu:", static_cast<unsigned long long>(seed));
-    for (int s = 0; s < kStages; ++s) {
+    for (int s = 0; s < kLossStageCount; ++s) {
       lost[s] += stop_lost[s];
       std::printf(" %.2f", stop_lost[s] / stop_total);
     }
     std::printf("\n");
   }
   std::printf("share of true length (%d stops), first stage where lost:\n", count);
-  for (int s = 0; s < kStages; ++s)
+  for (int s = 0; s < kLossStageCount; ++s)
     std::printf("  %-32s %.3f (recalled in the final model anyway: %.3f)\n", names[s],
                 lost[s] / total, recalled_in[s] / total);
   std::printf("skeleton in exactly 2 views %.3f, in 3 %.3f; no raw candidate but the same "

@@ -28,6 +28,26 @@ namespace {
 
 constexpr double kStepM = 0.005;
 
+// The 3D distance from p to the nearest cane of `vine` other than its cane `own` (axis to axis).
+double NearestOtherCane(const VineModel& vine, size_t own, const Eigen::Vector3d& p) {
+  double nearest = 1e9;
+  for (size_t o = 0; o < vine.canes.size(); ++o) {
+    if (o == own) continue;
+    double d = 0.0;
+    vine.canes[o].polyline.Project(p, &d);
+    nearest = std::min(nearest, d);
+  }
+  return nearest;
+}
+
+// The distance from p to the surface of `vine`'s head (its nearest sphere; negative inside).
+double ToHeadSurface(const VineModel& vine, const Eigen::Vector3d& p) {
+  double to_head = 1e9;
+  for (const Sphere& sphere : vine.head.spheres)
+    to_head = std::min(to_head, (p - sphere.center).norm() - sphere.radius);
+  return to_head;
+}
+
 TEST(OverlapLoss, DISABLED_Report) {
   const auto [first, count, images, fiducials] = ReportStopsFromEnv(1300, 10);
   const ReconstructOptions options;
@@ -48,67 +68,39 @@ TEST(OverlapLoss, DISABLED_Report) {
     ASSERT_FALSE(stop.views.empty());
     const auto result = ReconstructFromViews(stop.views, stop.rig, options, Deadline::Infinite());
     ASSERT_TRUE(result.ok()) << result.status();
-    // stop.drawn lists the vine's canes first, then the neighbours'.
-    std::vector<std::vector<std::vector<bool>>> along, along_own;
-    for (const CameraCalibration& camera : stop.true_rig.cameras) {
-      along.push_back(LyingAlongAnother(stop.drawn, camera, kStepM, 2.0));
-      along_own.push_back(LyingAlongAnother(stop.scene.vine, camera, kStepM, 2.0));
-    }
-    for (size_t c = 0; c < stop.scene.vine.canes.size(); ++c) {
-      const Polyline3& line = stop.scene.vine.canes[c].polyline;
-      const std::vector<double> arc = line.ArcLengths();
-      const size_t n = along[0][c].size();
-      const double step = arc.back() / static_cast<double>(n - 1);
-      for (size_t i = 0; i < n; ++i) {
-        const Eigen::Vector3d p = line.PointAt(arc.back() * i / (n - 1), arc);
-        const double w = (i == 0 || i + 1 == n) ? 0.5 * step : step;
-        total += w;
-        int seen = 0, beside = 0, beside_own = 0;
-        for (size_t v = 0; v < stop.true_rig.cameras.size(); ++v) {
-          const auto uv = stop.true_rig.cameras[v].Project(p);
-          if (!uv || !stop.true_rig.cameras[v].InImage(*uv)) continue;
-          ++seen;
-          if (along[v][c][i]) ++beside;
-          if (along_own[v][c][i]) ++beside_own;
-        }
-        if (seen < 2) {
-          outside += w;
-          continue;
-        }
-        bool hit = false;
-        for (const Cane& cane : result->model.canes) {
-          double d = 0.0;
-          cane.polyline.Project(p, &d);
-          if (d <= 0.01) {
-            hit = true;
-            break;
-          }
-        }
-        const int row = std::min(beside, kRows - 1);
-        length[row] += w;
-        if (hit) recalled[row] += w;
-        if (beside_own >= 2) {
-          own[row] += w;
-          if (hit) own_recalled[row] += w;
-          if (!hit) {
-            double nearest = 1e9;
-            for (size_t o = 0; o < stop.scene.vine.canes.size(); ++o) {
-              if (o == c) continue;
-              double d = 0.0;
-              stop.scene.vine.canes[o].polyline.Project(p, &d);
-              nearest = std::min(nearest, d);
-            }
-            int band = 0;
-            while (band < kBands - 1 && nearest >= band_edges_m[band]) ++band;
-            lost_by_gap[band] += w;
-            double to_head = 1e9;
-            for (const Sphere& sphere : stop.scene.vine.head.spheres) {
-              to_head = std::min(to_head, (p - sphere.center).norm() - sphere.radius);
-            }
-            lost_by_head[to_head < 0.05 ? 0 : to_head < 0.15 ? 1 : 2] += w;
-          }
+    const VineModel& vine = stop.scene.vine;
+    for (const LengthSample& s : SampleTrueLength(stop, kStepM, true)) {
+      const Eigen::Vector3d& p = s.p;
+      const double w = s.weight_m;
+      total += w;
+      if (s.in_image < 2) {
+        outside += w;
+        continue;
+      }
+      bool hit = false;
+      for (const Cane& cane : result->model.canes) {
+        double d = 0.0;
+        cane.polyline.Project(p, &d);
+        if (d <= 0.01) {
+          hit = true;
+          break;
         }
       }
+      const int row = std::min(s.along, kRows - 1);
+      length[row] += w;
+      if (hit) recalled[row] += w;
+      if (s.along_own < 2) continue;
+      own[row] += w;
+      if (hit) {
+        own_recalled[row] += w;
+        continue;
+      }
+      const double nearest = NearestOtherCane(vine, s.cane, p);
+      int band = 0;
+      while (band < kBands - 1 && nearest >= band_edges_m[band]) ++band;
+      lost_by_gap[band] += w;
+      const double to_head = ToHeadSurface(vine, p);
+      lost_by_head[to_head < 0.05 ? 0 : to_head < 0.15 ? 1 : 2] += w;
     }
   }
   std::printf("OverlapLoss %s, seeds %llu-%llu: share of true length (trunk and canes)\n",
@@ -132,23 +124,22 @@ TEST(OverlapLoss, DISABLED_Report) {
   EXPECT_GT(total, 0.0);
 }
 
-
 // The two reports crossed: each 5 mm sample inside two or more images, lying along another cane
 // of this vine in two or more views (as above), is followed through the stages of
 // MatchLoss.DISABLED_Report (match_loss_diagnose_test.cc: the pipeline run one stage at a time,
-// without extension), and the first stage where it is lost is counted, split by the 3D distance
-// to the nearest other cane of the vine and by the distance from the true head's surface. The
-// first line is the samples lying along nothing in every view, for comparison. Run with
+// without extension), and the first stage where it is lost (FirstLostStage) is counted, split
+// by the 3D distance to the nearest other cane of the vine and by the distance from the true
+// head's surface. The first line is the samples lying along nothing in every view, for
+// comparison. Run with
 //   VB_INPUT=images VB_SEED=1300 VB_STOPS=20 vb_reconstruct_test
 //     --gtest_also_run_disabled_tests --gtest_filter='OverlapLoss.DISABLED_ByStage'
 TEST(OverlapLoss, DISABLED_ByStage) {
   const auto [first, count, images, fiducials] = ReportStopsFromEnv(1300, 10);
   const ReconstructOptions options;
   const double threshold = 1.0 / (1.0 + options.correspondence.alpha);
-  enum Stage { kForeground, kSkeleton, kConditioned, kRaw, kFitted, kProbable, kPiece,
-               kAssembled, kConnected, kFinal, kKept, kStages };
-  const char* names[kStages] = {"fg", "skel", "pair", "raw", "fit", "thr", "gibbs",
-                                "assem", "conn", "refine", "kept"};
+  // The columns: FirstLostStage's stages from kLossForeground (samples in < 2 images are left out).
+  const char* names[kLossStageCount] = {"in", "fg", "skel", "pair", "raw", "fit", "thr", "gibbs",
+                                        "assem", "conn", "refine", "kept"};
   // Rows: along nothing; along this vine's own in 2+ views, all; by 3D gap <10, 10-20, 20-40,
   // 40+ mm; by head distance <5, 5-15, 15+ cm.
   constexpr int kRowCount = 9;
@@ -156,7 +147,7 @@ TEST(OverlapLoss, DISABLED_ByStage) {
                                  "  nearest other cane < 10 mm", "  10-20 mm", "  20-40 mm",
                                  "  >= 40 mm", "  head surface < 5 cm", "  5-15 cm",
                                  "  >= 15 cm"};
-  double table[kRowCount][kStages] = {};
+  double table[kRowCount][kLossStageCount] = {};
   double total = 0.0, raw_cause[3] = {}, probable_band[3] = {};
   MatchFeatures feature_sum[2] = {}, weights = options.correspondence.classifier.multi_view;
   double feature_weight[2] = {};
@@ -169,11 +160,9 @@ TEST(OverlapLoss, DISABLED_ByStage) {
     const std::vector<View2D>& views = run->views();
     const int n = static_cast<int>(views.size());
     const CandidateOptions co = CandidateOptionsFor(options.correspondence, n > 2);
-    PointGrid raw_grid, fitted_grid, piece_grid, assembled_grid, connected_grid, final_grid;
     const std::vector<ViewSamples> samples =
         SampleViews(views, rig, options.correspondence.sample_step_px);
-    for (const MatchCandidate& c : RawCandidates(samples, rig, co))
-      raw_grid.AddLine(HitPoints(c), 1.0);
+    const std::vector<MatchCandidate> raw = RawCandidates(samples, rig, co);
     // Every run of every pair (min_hits 1), its hits keyed by the pair's segments, with the run's
     // length: why a bundle sample has no raw candidate.
     std::map<std::tuple<int, int, int, int>, std::vector<std::pair<Eigen::Vector3d, int>>> runs;
@@ -192,126 +181,75 @@ TEST(OverlapLoss, DISABLED_ByStage) {
     PointGrid best_grid;
     for (size_t i = 0; i < scored->size(); ++i) {
       const ScoredCandidate& s = (*scored)[i];
-      fitted_grid.AddLine(s.fit.control_points, s.probability);
       best_grid.AddLine(s.fit.control_points,
                         std::floor(s.probability * 1000.0) * kIndexScale + static_cast<double>(i));
     }
-    for (const Piece3D& p : run->matched.pieces) piece_grid.AddLine(p.polyline.points, 1.0);
     const auto assembled = AssembleStop(views, rig, run->matched.pieces, options);
     ASSERT_TRUE(assembled.ok()) << assembled.status();
     const auto connected = ConnectAndRefine(views, rig, *assembled, assembled->joins, options);
     ASSERT_TRUE(connected.ok()) << connected.status();
-    for (const Polyline3& c : assembled->canes) assembled_grid.AddLine(c.points, 1.0);
-    if (assembled->head.trunk) assembled_grid.AddLine(assembled->head.trunk->points, 1.0);
-    for (const Cane& c : connected->connected.canes) connected_grid.AddLine(c.polyline.points, 1.0);
-    for (const Cane& c : connected->refined.canes) final_grid.AddLine(c.polyline.points, 1.0);
+    const StageGrids grids =
+        MakeStageGrids(raw, *scored, run->matched.pieces, *assembled, *connected);
     const SegmentMaps maps(views);
 
-    std::vector<std::vector<std::vector<bool>>> along, along_own;
-    for (const CameraCalibration& camera : stop.true_rig.cameras) {
-      along.push_back(LyingAlongAnother(stop.drawn, camera, kStepM, 2.0));
-      along_own.push_back(LyingAlongAnother(stop.scene.vine, camera, kStepM, 2.0));
-    }
     const VineModel& vine = stop.scene.vine;
-    for (size_t c = 0; c < vine.canes.size(); ++c) {
-      const Polyline3& line = vine.canes[c].polyline;
-      const std::vector<double> arc = line.ArcLengths();
-      const size_t m = along[0][c].size();
-      const double step = arc.back() / static_cast<double>(m - 1);
-      for (size_t i = 0; i < m; ++i) {
-        const Eigen::Vector3d p = line.PointAt(arc.back() * i / (m - 1), arc);
-        const Eigen::Vector3d t =
-            (line.PointAt(std::min(arc.back(), arc.back() * (i + 0.5) / (m - 1)), arc) -
-             line.PointAt(std::max(0.0, arc.back() * (i - 0.5) / (m - 1)), arc)).normalized();
-        const double w = (i == 0 || i + 1 == m) ? 0.5 * step : step;
-        total += w;
-        const SampleInViews at = LocateSample(p, stop.true_rig, views, maps);
-        if (at.in_image < 2) continue;
-        int beside = 0, beside_own = 0;
-        for (int v = 0; v < n; ++v) {
-          if (!at.inside[v]) continue;
-          beside += along[v][c][i];
-          beside_own += along_own[v][c][i];
+    for (const LengthSample& ls : SampleTrueLength(stop, kStepM, true)) {
+      const Eigen::Vector3d& p = ls.p;
+      const double w = ls.weight_m;
+      total += w;
+      const SampleInViews at = LocateSample(p, stop.true_rig, views, maps);
+      if (at.in_image < 2) continue;
+      const int beside = ls.along, beside_own = ls.along_own;
+      const SampleEvidence e =
+          EvidenceOf(at, stop.true_rig, p, ls.tangent, co.min_epipolar_sin);
+      const std::vector<int>& seg = e.segment;
+      const LossStage stage = FirstLostStage(p, e, grids, threshold);
+      // Features of the best candidate near: bundle samples lost at the threshold against
+      // samples along nothing that are kept.
+      const int group = (stage == kLossProbable && beside_own >= 2) ? 0
+                        : (stage == kLossKept && beside == 0)        ? 1
+                                                                     : -1;
+      if (group >= 0) {
+        const double code = best_grid.MaxNear(p);
+        if (code >= 0) {
+          const ScoredCandidate& s =
+              (*scored)[static_cast<size_t>(std::fmod(code, kIndexScale))];
+          if (s.multi_view) {
+            for (size_t f = 0; f < s.features.size(); ++f)
+              feature_sum[group][f] += w * s.features[f];
+            feature_weight[group] += w;
+          }
         }
-        std::vector<int> seg(n, -1);
-        int skel = 0;
-        for (int v = 0; v < n; ++v) {
-          if (at.on_foreground[v]) seg[v] = at.segment[v];
-          skel += seg[v] >= 0;
-        }
-        bool conditioned = false;
+      }
+      if (beside == 0) table[0][stage] += w;
+      if (beside_own < 2) continue;
+      table[1][stage] += w;
+      if (stage == kLossRaw) {
+        // 0 no crossing of a conditioned pair's segments within 10 mm; 1 only runs shorter
+        // than min_hits, a segment shorter than that; 2 only short runs, both segments long.
+        int cause = 0;
         for (int a = 0; a < n; ++a)
           for (int b = a + 1; b < n; ++b) {
             if (seg[a] < 0 || seg[b] < 0) continue;
-            const std::optional<double> sin = EpipolarSin(stop.true_rig, a, b, p, t, at.px[a]);
-            if (sin && *sin >= co.min_epipolar_sin) conditioned = true;
-          }
-        Stage stage = kKept;
-        if (at.foreground < 2) stage = kForeground;
-        else if (skel < 2) stage = kSkeleton;
-        else if (!conditioned) stage = kConditioned;
-        else if (raw_grid.MaxNear(p) < 0) stage = kRaw;
-        else if (fitted_grid.MaxNear(p) < 0) stage = kFitted;
-        else if (fitted_grid.MaxNear(p) <= threshold) stage = kProbable;
-        else if (piece_grid.MaxNear(p) < 0) stage = kPiece;
-        else if (assembled_grid.MaxNear(p) < 0) stage = kAssembled;
-        else if (connected_grid.MaxNear(p) < 0) stage = kConnected;
-        else if (final_grid.MaxNear(p) < 0) stage = kFinal;
-        // Features of the best candidate near: bundle samples lost at the threshold against
-        // samples along nothing that are kept.
-        const int group = (stage == kProbable && beside_own >= 2) ? 0
-                          : (stage == kKept && beside == 0)        ? 1
-                                                                   : -1;
-        if (group >= 0) {
-          const double code = best_grid.MaxNear(p);
-          if (code >= 0) {
-            const ScoredCandidate& s =
-                (*scored)[static_cast<size_t>(std::fmod(code, kIndexScale))];
-            if (s.multi_view) {
-              for (size_t f = 0; f < s.features.size(); ++f)
-                feature_sum[group][f] += w * s.features[f];
-              feature_weight[group] += w;
+            const auto it = runs.find({a, seg[a], b, seg[b]});
+            if (it == runs.end()) continue;
+            for (const auto& [q, size] : it->second) {
+              if ((q - p).norm() > 0.01) continue;
+              const int na = static_cast<int>(samples[a].segments()[seg[a]].normalised.size());
+              const int nb = static_cast<int>(samples[b].segments()[seg[b]].normalised.size());
+              cause = std::max(cause, std::min(na, nb) < co.min_hits ? 1 : 2);
             }
           }
-        }
-        if (beside == 0) table[0][stage] += w;
-        if (beside_own < 2) continue;
-        table[1][stage] += w;
-        if (stage == kRaw) {
-          // 0 no crossing of a conditioned pair's segments within 10 mm; 1 only runs shorter
-          // than min_hits, a segment shorter than that; 2 only short runs, both segments long.
-          int cause = 0;
-          for (int a = 0; a < n; ++a)
-            for (int b = a + 1; b < n; ++b) {
-              if (seg[a] < 0 || seg[b] < 0) continue;
-              const auto it = runs.find({a, seg[a], b, seg[b]});
-              if (it == runs.end()) continue;
-              for (const auto& [q, size] : it->second) {
-                if ((q - p).norm() > 0.01) continue;
-                const int na = static_cast<int>(samples[a].segments()[seg[a]].normalised.size());
-                const int nb = static_cast<int>(samples[b].segments()[seg[b]].normalised.size());
-                cause = std::max(cause, std::min(na, nb) < co.min_hits ? 1 : 2);
-              }
-            }
-          raw_cause[cause] += w;
-        }
-        if (stage == kProbable) {
-          const double best = fitted_grid.MaxNear(p);
-          probable_band[best < 0.05 ? 0 : best < 0.15 ? 1 : 2] += w;
-        }
-        double nearest = 1e9;
-        for (size_t o = 0; o < vine.canes.size(); ++o) {
-          if (o == c) continue;
-          double d = 0.0;
-          vine.canes[o].polyline.Project(p, &d);
-          nearest = std::min(nearest, d);
-        }
-        table[nearest < 0.01 ? 2 : nearest < 0.02 ? 3 : nearest < 0.04 ? 4 : 5][stage] += w;
-        double to_head = 1e9;
-        for (const Sphere& sphere : vine.head.spheres)
-          to_head = std::min(to_head, (p - sphere.center).norm() - sphere.radius);
-        table[to_head < 0.05 ? 6 : to_head < 0.15 ? 7 : 8][stage] += w;
+        raw_cause[cause] += w;
       }
+      if (stage == kLossProbable) {
+        const double best = grids.fitted.MaxNear(p);
+        probable_band[best < 0.05 ? 0 : best < 0.15 ? 1 : 2] += w;
+      }
+      const double nearest = NearestOtherCane(vine, ls.cane, p);
+      table[nearest < 0.01 ? 2 : nearest < 0.02 ? 3 : nearest < 0.04 ? 4 : 5][stage] += w;
+      const double to_head = ToHeadSurface(vine, p);
+      table[to_head < 0.05 ? 6 : to_head < 0.15 ? 7 : 8][stage] += w;
     }
     std::printf("seed %llu done\n", static_cast<unsigned long long>(seed));
   }
@@ -320,13 +258,14 @@ TEST(OverlapLoss, DISABLED_ByStage) {
               images ? "images" : "labels", static_cast<unsigned long long>(first),
               static_cast<unsigned long long>(first + count - 1));
   std::printf("  %-30s %7s", "", "length");
-  for (int s = 0; s < kStages; ++s) std::printf(" %6s", names[s]);
+  for (int s = kLossForeground; s < kLossStageCount; ++s) std::printf(" %6s", names[s]);
   std::printf("\n");
   for (int r = 0; r < kRowCount; ++r) {
     double sum = 0.0;
-    for (int s = 0; s < kStages; ++s) sum += table[r][s];
+    for (int s = kLossForeground; s < kLossStageCount; ++s) sum += table[r][s];
     std::printf("  %-30s %7.3f", rows[r], sum / total);
-    for (int s = 0; s < kStages; ++s) std::printf(" %6.3f", table[r][s] / total);
+    for (int s = kLossForeground; s < kLossStageCount; ++s)
+      std::printf(" %6.3f", table[r][s] / total);
     std::printf("\n");
   }
   std::printf("  raw column of the second row: no crossing of the pair's segments within 10 mm "

@@ -78,6 +78,10 @@ class FeatureExtractor {
 // features; `out` holds kFeatureCount + q (q + 1) / 2 floats. The model must be valid.
 void Stage2Input(const SegmenterModel& model, const float* features, float* out);
 
+// OK if `view` is usable for training or scoring: an rgb8 image whose bytes match its size,
+// labels of the same size; else INVALID_ARGUMENT naming `what` and the field (".rgb", ".labels").
+absl::Status CheckLabelledView(const LabelledView& view, const std::string& what);
+
 // Segment() that also counts the pixels decided by stage 2 (may be null).
 absl::StatusOr<ClassImage> SegmentCounting(const Image& rgb, const SegmenterModel& model,
                                            int64_t* stage2_pixels);

@@ -86,21 +86,6 @@ struct SampleSet {
   }
 };
 
-absl::Status CheckView(const LabelledView& v, const std::string& what) {
-  if (v.rgb.format != PixelFormat::kRgb8) {
-    return absl::InvalidArgumentError(absl::StrCat(what, ".rgb: not rgb8"));
-  }
-  if (v.rgb.width <= 0 || v.rgb.height <= 0 ||
-      v.rgb.data.size() != static_cast<size_t>(v.rgb.width) * v.rgb.height * 3) {
-    return absl::InvalidArgumentError(absl::StrCat(what, ".rgb: size and bytes disagree"));
-  }
-  if (v.labels.width != v.rgb.width || v.labels.height != v.rgb.height ||
-      v.labels.data.size() != static_cast<size_t>(v.rgb.width) * v.rgb.height) {
-    return absl::InvalidArgumentError(absl::StrCat(what, ".labels: size differs from the image"));
-  }
-  return absl::OkStatus();
-}
-
 // 1 where another class lies within Chebyshev distance `r` (separable min/max filters).
 std::vector<uint8_t> BoundaryMask(const std::vector<uint8_t>& classes, int w, int h, int r) {
   std::vector<uint8_t> lo(classes.size()), hi(classes.size());
@@ -339,79 +324,6 @@ absl::Status SegmenterTrainOptions::Validate() const {
   return absl::OkStatus();
 }
 
-absl::StatusOr<SegmenterReport> EvaluateSegmenter(const std::vector<LabelledView>& views,
-                                                  const SegmenterModel& model) {
-  SegmenterReport r;
-  std::array<std::array<int64_t, kC>, kC> m{};
-  int64_t stage2 = 0, wide_hit = 0;
-  double ms = 0;
-  for (size_t v = 0; v < views.size(); ++v) {
-    VB_RETURN_IF_ERROR(CheckView(views[v], absl::StrCat("views[", v, "]")));
-    const auto t0 = std::chrono::steady_clock::now();
-    int64_t hard = 0;
-    VB_ASSIGN_OR_RETURN(const ClassImage pred,
-                        segmenter_internal::SegmentCounting(views[v].rgb, model, &hard));
-    ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-    stage2 += hard;
-    const ClassImage truth = ClassesOfSimLabels(views[v].labels);
-    const int w = truth.width, h = truth.height;
-    for (size_t i = 0; i < truth.data.size(); ++i) ++m[truth.data[i]][pred.data[i]];
-    // Wide foreground: inside an all-foreground 2x2 block.
-    std::vector<uint8_t> wide(truth.data.size(), 0);
-    const auto fg = static_cast<uint8_t>(PixelClass::kForeground);
-    for (int y = 0; y + 1 < h; ++y) {
-      for (int x = 0; x + 1 < w; ++x) {
-        const size_t i = static_cast<size_t>(y) * w + x;
-        if (truth.data[i] == fg && truth.data[i + 1] == fg && truth.data[i + w] == fg &&
-            truth.data[i + w + 1] == fg) {
-          wide[i] = wide[i + 1] = wide[i + w] = wide[i + w + 1] = 1;
-        }
-      }
-    }
-    for (size_t i = 0; i < wide.size(); ++i) {
-      if (!wide[i]) continue;
-      ++r.wide_foreground_px;
-      wide_hit += pred.data[i] == fg;
-    }
-    r.pixels += static_cast<int64_t>(truth.data.size());
-  }
-  r.views = static_cast<int>(views.size());
-  int64_t correct = 0;
-  for (int c = 0; c < kC; ++c) {
-    SegmenterClassScore& s = r.classes[c];
-    for (int k = 0; k < kC; ++k) s.true_px += m[c][k], s.predicted_px += m[k][c];
-    s.correct_px = m[c][c];
-    correct += m[c][c];
-    s.precision = s.predicted_px > 0 ? static_cast<double>(s.correct_px) / s.predicted_px : 1.0;
-    s.recall = s.true_px > 0 ? static_cast<double>(s.correct_px) / s.true_px : 1.0;
-  }
-  r.accuracy = r.pixels > 0 ? static_cast<double>(correct) / r.pixels : 1.0;
-  r.wide_foreground_recall =
-      r.wide_foreground_px > 0 ? static_cast<double>(wide_hit) / r.wide_foreground_px : 1.0;
-  r.stage2_fraction = r.pixels > 0 ? static_cast<double>(stage2) / r.pixels : 0.0;
-  r.mean_segment_ms = views.empty() ? 0.0 : ms / views.size();
-  return r;
-}
-
-nlohmann::json SegmenterReportToJson(const SegmenterReport& r) {
-  static const char* const names[kC] = {"background", "foreground", "wire", "post"};
-  nlohmann::json classes = nlohmann::json::object();
-  for (int c = 0; c < kC; ++c) {
-    const SegmenterClassScore& s = r.classes[c];
-    classes[names[c]] = {{"precision", s.precision},   {"recall", s.recall},
-                         {"true_px", s.true_px},       {"predicted_px", s.predicted_px},
-                         {"correct_px", s.correct_px}};
-  }
-  return {{"views", r.views},
-          {"pixels", r.pixels},
-          {"accuracy", r.accuracy},
-          {"classes", classes},
-          {"wide_foreground_px", r.wide_foreground_px},
-          {"wide_foreground_recall", r.wide_foreground_recall},
-          {"stage2_fraction", r.stage2_fraction},
-          {"mean_segment_ms", r.mean_segment_ms}};
-}
-
 absl::StatusOr<SegmenterTrainResult> TrainSegmenter(const std::vector<LabelledView>& train,
                                                     const std::vector<LabelledView>& held_out,
                                                     const SegmenterTrainOptions& options) {
@@ -419,10 +331,10 @@ absl::StatusOr<SegmenterTrainResult> TrainSegmenter(const std::vector<LabelledVi
   VB_RETURN_IF_ERROR(options.Validate());
   if (train.empty()) return absl::InvalidArgumentError("train: no views");
   for (size_t v = 0; v < train.size(); ++v) {
-    VB_RETURN_IF_ERROR(CheckView(train[v], absl::StrCat("train[", v, "]")));
+    VB_RETURN_IF_ERROR(segmenter_internal::CheckLabelledView(train[v], absl::StrCat("train[", v, "]")));
   }
   for (size_t v = 0; v < held_out.size(); ++v) {
-    VB_RETURN_IF_ERROR(CheckView(held_out[v], absl::StrCat("held_out[", v, "]")));
+    VB_RETURN_IF_ERROR(segmenter_internal::CheckLabelledView(held_out[v], absl::StrCat("held_out[", v, "]")));
   }
   std::mt19937_64 rng(options.seed);
   SegmenterTrainResult result;
@@ -558,5 +470,24 @@ absl::StatusOr<SegmenterTrainResult> TrainSegmenter(const std::vector<LabelledVi
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
 }
+
+namespace segmenter_internal {
+
+absl::Status CheckLabelledView(const LabelledView& v, const std::string& what) {
+  if (v.rgb.format != PixelFormat::kRgb8) {
+    return absl::InvalidArgumentError(absl::StrCat(what, ".rgb: not rgb8"));
+  }
+  if (v.rgb.width <= 0 || v.rgb.height <= 0 ||
+      v.rgb.data.size() != static_cast<size_t>(v.rgb.width) * v.rgb.height * 3) {
+    return absl::InvalidArgumentError(absl::StrCat(what, ".rgb: size and bytes disagree"));
+  }
+  if (v.labels.width != v.rgb.width || v.labels.height != v.rgb.height ||
+      v.labels.data.size() != static_cast<size_t>(v.rgb.width) * v.rgb.height) {
+    return absl::InvalidArgumentError(absl::StrCat(what, ".labels: size differs from the image"));
+  }
+  return absl::OkStatus();
+}
+
+}  // namespace segmenter_internal
 
 }  // namespace vb::reconstruct

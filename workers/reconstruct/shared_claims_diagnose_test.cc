@@ -199,41 +199,25 @@ TEST(SharedClaims, DISABLED_Report) {
       };
       // Row 1: lying along another cane of the vine in 2+ views (LyingAlongAnother, as
       // OverlapLoss.DISABLED_Report); row 0: the rest.
-      std::vector<std::vector<std::vector<bool>>> along;
-      for (const CameraCalibration& camera : stop.true_rig.cameras)
-        along.push_back(LyingAlongAnother(stop.scene.vine, camera, 0.005, 2.0));
-      for (size_t ci = 0; ci < stop.scene.vine.canes.size(); ++ci) {
-        const Polyline3& line = stop.scene.vine.canes[ci].polyline;
-        const std::vector<double> arc = line.ArcLengths();
-        const size_t n = along[0][ci].size();
-        if (n < 2) continue;
-        const double step = arc.back() / static_cast<double>(n - 1);
-        for (size_t i = 0; i < n; ++i) {
-          const Eigen::Vector3d p = line.PointAt(arc.back() * i / (n - 1), arc);
-          int seen = 0, beside = 0;
-          for (size_t v = 0; v < stop.true_rig.cameras.size(); ++v) {
-            const auto uv = stop.true_rig.cameras[v].Project(p);
-            if (!uv || !stop.true_rig.cameras[v].InImage(*uv)) continue;
-            ++seen;
-            beside += along[v][ci][i];
-          }
-          if (seen < 2) continue;
-          const int row = beside >= 2 ? 1 : 0;
-          length_total[row] += step;
-          length_any[row] += step * near(p, any_lines);
-          length_above[row] += step * near(p, above_lines);
-          length_strict[row] += step * near(p, strict_lines);
-          length_relaxed[row] += step * near(p, relaxed_lines);
-          if (!near(p, above_lines)) {
-            for (int l = 0; l < 3; ++l) {
-              if (near(p, below_lines[l])) {
-                length_below[row][l] += step;
-                break;
-              }
+      for (const LengthSample& ls : SampleTrueLength(stop, 0.005, false)) {
+        const Eigen::Vector3d& p = ls.p;
+        const double step = ls.step_m;
+        if (ls.in_image < 2) continue;
+        const int row = ls.along_own >= 2 ? 1 : 0;
+        length_total[row] += step;
+        length_any[row] += step * near(p, any_lines);
+        length_above[row] += step * near(p, above_lines);
+        length_strict[row] += step * near(p, strict_lines);
+        length_relaxed[row] += step * near(p, relaxed_lines);
+        if (!near(p, above_lines)) {
+          for (int l = 0; l < 3; ++l) {
+            if (near(p, below_lines[l])) {
+              length_below[row][l] += step;
+              break;
             }
           }
-          if (row == 1) along_cells.insert(CellOf(p));
         }
+        if (row == 1) along_cells.insert(CellOf(p));
       }
     }
     // The classifier's terms by group (right candidates above / below the threshold, mostly along

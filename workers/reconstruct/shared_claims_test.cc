@@ -165,6 +165,45 @@ TEST(SharedClaims, GhostSharingASegmentStillConflicts) {
   EXPECT_FALSE(RelaxesConflict(same, options.shared_claims));
 }
 
+// Two candidates of view pair (0, 1) sharing segment 0 of view 0 over [0, 100] px (and not
+// their segments of view 1): i's four points there lie 10, 20, 30 and 50 mm from j's curve, j's
+// two lie 0.5 m from i's. The separation is the lower median: (20 + 30) / 2 = 25 mm (the median
+// of an even count is the mean of the middle two, core/statistics.h). No view outside the pair:
+// no support.
+TEST(SharedClaims, SeparationIsTheMedianDistanceOverTheSharedStretch) {
+  auto candidate = [](int segment_b, const std::vector<Eigen::Vector3d>& points,
+                      const std::vector<double>& arcs, double line_y) {
+    ScoredCandidate c;
+    c.candidate.view_a = 0;
+    c.candidate.view_b = 1;
+    c.candidate.segment_a = 0;
+    c.candidate.segment_b = segment_b;
+    c.candidate.begin_a_px = c.candidate.begin_b_px = 0.0;
+    c.candidate.end_a_px = c.candidate.end_b_px = 100.0;
+    for (double arc : arcs) {
+      EpipolarHit hit;
+      hit.arc_a_px = arc;
+      hit.arc_b_px = arc;
+      c.candidate.hits.push_back(hit);
+    }
+    c.fit.points = points;
+    c.fit.control_points = {{0.0, line_y, 0.0}, {1.0, line_y, 0.0}};
+    c.probability = 0.5;
+    return c;
+  };
+  const std::vector<ScoredCandidate> candidates = {
+      candidate(0, {{0.1, 0.01, 0}, {0.2, 0.02, 0}, {0.3, 0.03, 0}, {0.4, 0.05, 0}},
+                {10, 20, 30, 40}, 0.5),
+      candidate(1, {{0.1, 0, 0}, {0.5, 0, 0}}, {10, 50}, 0.0)};
+  const std::vector<View2D> views(2);
+  const SharedClaimPair pair =
+      DescribeSharedClaim(candidates, 0, 1, views, {}, RigCalibration{}, 20.0);
+  EXPECT_EQ(pair.sides, 1);
+  EXPECT_NEAR(pair.separation_m, 0.025, 1e-12);
+  EXPECT_DOUBLE_EQ(pair.max_share, 1.0);
+  EXPECT_EQ(pair.min_shared_support, 0.0);
+}
+
 TEST(SharedClaims, BadOptionsRejectNamingTheField) {
   CorrespondenceOptions options;
   ASSERT_TRUE(options.Validate().ok());
