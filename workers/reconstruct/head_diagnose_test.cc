@@ -85,14 +85,38 @@ void AddStop(uint64_t seed, const VineModel& truth, const HeadModel& head, bool 
   const double trunk_r = trunk && !trunk->radii.empty()
                              ? *std::max_element(trunk->radii.begin(), trunk->radii.end())
                              : 0.0;
+  // Both heads rasterised on one 5 mm grid over the model head's box.
   const double h = 0.005;
+  const Eigen::Vector3i n = ((mhi - mlo) / h).array().ceil().cast<int>().max(1);
+  auto raster = [&](const std::vector<Sphere>& spheres) {
+    std::vector<uint8_t> in(static_cast<size_t>(n.prod()), 0);
+    for (const Sphere& s : spheres) {
+      const Eigen::Vector3i a =
+          ((s.center.array() - s.radius - mlo.array()) / h).floor().cast<int>().max(0);
+      const Eigen::Vector3i b = ((s.center.array() + s.radius - mlo.array()) / h)
+                                    .ceil()
+                                    .cast<int>()
+                                    .min(n.array() - 1);
+      for (int k = a.z(); k <= b.z(); ++k)
+        for (int j = a.y(); j <= b.y(); ++j)
+          for (int i = a.x(); i <= b.x(); ++i) {
+            const Eigen::Vector3d p = mlo + (Eigen::Vector3d(i, j, k).array() + 0.5).matrix() * h;
+            if ((p - s.center).squaredNorm() <= s.radius * s.radius)
+              in[(static_cast<size_t>(k) * n.y() + j) * n.x() + i] = 1;
+          }
+    }
+    return in;
+  };
+  const std::vector<uint8_t> in_model = raster(head.spheres);
+  const std::vector<uint8_t> in_truth = raster(truth.head.spheres);
   double excess[kPlaces] = {};
   double near_volume = 0;
-  for (double z = mlo.z(); z < mhi.z(); z += h)
-    for (double y = mlo.y(); y < mhi.y(); y += h)
-      for (double x = mlo.x(); x < mhi.x(); x += h) {
-        const Eigen::Vector3d p(x + h / 2, y + h / 2, z + h / 2);
-        if (!InSpheres(p, head.spheres) || InSpheres(p, truth.head.spheres)) continue;
+  for (int k = 0; k < n.z(); ++k)
+    for (int j = 0; j < n.y(); ++j)
+      for (int i = 0; i < n.x(); ++i) {
+        const size_t flat = (static_cast<size_t>(k) * n.y() + j) * n.x() + i;
+        if (!in_model[flat] || in_truth[flat]) continue;
+        const Eigen::Vector3d p = mlo + (Eigen::Vector3d(i, j, k).array() + 0.5).matrix() * h;
         Place place = kBox;
         if (p.z() < tlo.z()) {
           place = trunk && DistanceToPolyline(p, *trunk) < trunk_r + 0.02 ? kBelowTrunk : kBelow;
