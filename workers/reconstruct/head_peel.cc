@@ -24,7 +24,8 @@ std::optional<Projected> ProjectCanePoint(const CameraCalibration& camera,
   // Points far outside the image are left out (cv::line clips, but not huge coordinates).
   if (std::abs(uv->x()) > 1e5 || std::abs(uv->y()) > 1e5) return std::nullopt;
   Projected out;
-  out.px = cv::Point(static_cast<int>(std::lround(uv->x())), static_cast<int>(std::lround(uv->y())));
+  out.px = cv::Point(static_cast<int>(std::lround(uv->x())),
+                     static_cast<int>(std::lround(uv->y())));
   out.radius_px = std::max(1, static_cast<int>(std::lround(camera.camera_matrix(0, 0) * radius_m /
                                                            depth)));
   return out;

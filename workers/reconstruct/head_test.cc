@@ -229,7 +229,8 @@ TEST(ReconstructHeadAndTrunk, DepthFactorBoundsTheHeadsDepth) {
   const RigCalibration rig = sim::MakeRig().value();
   VineModel vine;
   vine.canes.push_back(VerticalTrunk(0.0, 0.8, 0.86, 0.02, 0.02));
-  for (double x : {-0.06, -0.03, 0.0, 0.03, 0.06}) vine.head.spheres.push_back({{x, 0.8, 0.89}, 0.03});
+  for (double x : {-0.06, -0.03, 0.0, 0.03, 0.06})
+    vine.head.spheres.push_back({{x, 0.8, 0.89}, 0.03});
   const std::vector<View2D> views = SyntheticViews(vine, rig);
   HeadOptions options;
   const auto deep =
