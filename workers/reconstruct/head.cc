@@ -7,6 +7,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "opencv2/imgproc.hpp"
+#include "workers/reconstruct/head_peel.h"
 
 namespace vb::reconstruct {
 namespace {
@@ -20,11 +21,12 @@ struct SilhouetteMaps {
   cv::Mat to_thick;        // CV_32F: distance to thick foreground alone (posts excluded)
 };
 
-SilhouetteMaps MakeMaps(const View2D& view) {
+// `silhouette`: the view's thick mask, or that mask with the canes peeled off (head_peel.h).
+SilhouetteMaps MakeMaps(const View2D& view, const std::vector<uint8_t>& silhouette) {
   SilhouetteMaps maps;
   maps.width = view.width;
   maps.height = view.height;
-  cv::Mat mask(view.height, view.width, CV_8U, const_cast<uint8_t*>(view.thick_mask.data()));
+  cv::Mat mask(view.height, view.width, CV_8U, const_cast<uint8_t*>(silhouette.data()));
   // A post in front hides whatever is behind it: its pixels may not carve (they count as
   // silhouette for the outside test), but neither do they prove a cube whole.
   cv::Mat classes(view.height, view.width, CV_8U, const_cast<uint8_t*>(view.classes.data.data()));
@@ -49,9 +51,16 @@ struct Cube {
 
 class Carver {
  public:
-  Carver(const std::vector<View2D>& views, const RigCalibration& rig, const HeadOptions& options)
+  // `canes`: 3D cane points to peel off the silhouettes when options.peel_canes.
+  Carver(const std::vector<View2D>& views, const RigCalibration& rig, const HeadOptions& options,
+         const std::vector<Eigen::Vector3d>& canes)
       : rig_(rig), options_(options) {
-    for (const View2D& view : views) maps_.push_back(MakeMaps(view));
+    for (size_t v = 0; v < views.size(); ++v) {
+      maps_.push_back(MakeMaps(views[v], options.peel_canes ? PeelCanesOffSilhouette(
+                                                                  views[v], rig.cameras[v],
+                                                                  canes, options)
+                                                            : views[v].thick_mask));
+    }
   }
 
   CubeVerdict Judge(const Cube& cube, bool* seen_as_wood) const {
@@ -150,7 +159,9 @@ absl::Status HeadOptions::Validate() const {
   };
   for (auto [v, name] : {std::pair{coarse_cell_m, "coarse_cell_m"}, {min_cell_m, "min_cell_m"},
                          {slab_m, "slab_m"}, {head_width_factor, "head_width_factor"},
-                         {head_min_height_m, "head_min_height_m"}}) {
+                         {head_min_height_m, "head_min_height_m"},
+                         {peel_cane_radius_m, "peel_cane_radius_m"}, {peel_link_m, "peel_link_m"},
+                         {head_depth_factor, "head_depth_factor"}}) {
     if (absl::Status s = positive(v, name); !s.ok()) return s;
   }
   if (min_cell_m > coarse_cell_m)
@@ -159,6 +170,8 @@ absl::Status HeadOptions::Validate() const {
     return absl::InvalidArgumentError("head options: silhouette_margin_px must be >= 0");
   if (!std::isfinite(depth_margin_m) || depth_margin_m < 0)
     return absl::InvalidArgumentError("head options: depth_margin_m must be >= 0");
+  if (!std::isfinite(peel_depth_px) || peel_depth_px < 0)
+    return absl::InvalidArgumentError("head options: peel_depth_px must be >= 0");
   if (min_views < 1) return absl::InvalidArgumentError("head options: min_views must be >= 1");
   return absl::OkStatus();
 }
@@ -185,7 +198,7 @@ absl::StatusOr<HeadAndTrunk> ReconstructHeadAndTrunk(const std::vector<View2D>& 
     }
   }
   HeadAndTrunk result;
-  const Carver carver(views, rig, options);
+  const Carver carver(views, rig, options, depth_hints);
   std::vector<Cube> kept;
   const Eigen::Vector3d extent = volume.box.max() - volume.box.min();
   const Eigen::Vector3i roots = (extent / options.coarse_cell_m).array().ceil().cast<int>();
@@ -479,7 +492,8 @@ absl::StatusOr<HeadAndTrunk> ReconstructHeadAndTrunk(const std::vector<View2D>& 
   }
   if (hinted.size() >= 5) head_y = Median(hinted);
   const double half_depth =
-      0.5 * std::max(head_max_x - head_min_x, top_z - head_bottom_z) + options.depth_margin_m;
+      0.5 * options.head_depth_factor * std::max(head_max_x - head_min_x, top_z - head_bottom_z) +
+      options.depth_margin_m;
   for (size_t c = 0; c < kept.size(); ++c) {
     if (!in_head[c]) continue;
     if (std::abs(kept[c].centre.y() - head_y) > half_depth + 0.5 * kept[c].side) continue;

@@ -43,6 +43,15 @@ struct HeadOptions {
   double depth_margin_m = 0.03;         // head depth = max(width, height) + 2 x this margin
   double head_min_height_m = 0.08;      // the head spans at least this far below the hull top
   double head_overlap_m = 0.04;         // the head reaches this far below the widening
+  // Peeling the canes off the silhouettes (head_peel.h; docs/reconstruction.md step 5, s18):
+  // pixels of the depth hints' canes (consecutive hints closer than peel_link_m drawn as lines
+  // peel_cane_radius_m thick) within peel_depth_px of a silhouette's rim leave that silhouette.
+  bool peel_canes = false;
+  double peel_cane_radius_m = 0.006;    // the canes' radius as drawn
+  double peel_depth_px = 12.0;          // how far into the silhouette a cane is peeled
+  double peel_link_m = 0.03;            // consecutive hints closer than this are one cane
+  // The head's depth: max(width, height) x this factor + 2 x depth_margin_m.
+  double head_depth_factor = 1.0;
 
   absl::Status Validate() const;
 };

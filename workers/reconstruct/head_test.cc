@@ -2,6 +2,8 @@
 #include "workers/reconstruct/head.h"
 
 #include <algorithm>
+#include <cmath>
+#include <string>
 
 #include "core/model_metrics.h"
 #include "gtest/gtest.h"
@@ -169,6 +171,101 @@ TEST(ReconstructHeadAndTrunk, LobeHangingOnOneSideIsEnclosed) {
   }
   EXPECT_LT(lowest, 0.80);
   EXPECT_GT(lowest_left, 0.84);
+}
+
+// A cane of `radius_m` from `from` to `to`, sampled every 1 cm.
+Cane StraightCane(int id, const Eigen::Vector3d& from, const Eigen::Vector3d& to, double radius_m) {
+  Cane cane;
+  cane.id = CaneId(id);
+  cane.parent_id = CaneId(1);
+  const int n = std::max(1, static_cast<int>(std::ceil((to - from).norm() / 0.01)));
+  for (int i = 0; i <= n; ++i) {
+    cane.polyline.points.push_back(from + (to - from) * (static_cast<double>(i) / n));
+    cane.polyline.radii.push_back(radius_m);
+  }
+  return cane;
+}
+
+// Canes crowding out of a head survive the opening that makes the silhouette (here: every cane
+// drawn 8 px wide or more is thick), so the hull grows along them: the head's extent, and its
+// depth bound with it, take in the canes' bases. Peeling the known canes (the depth hints) off
+// the silhouettes' rims keeps the head enclosed and the hull much tighter (s18,
+// docs/reconstruction.md step 5).
+TEST(ReconstructHeadAndTrunk, PeelingEnteringCanesTightensTheHullAndKeepsTheHead) {
+  const RigCalibration rig = sim::MakeRig().value();
+  VineModel vine;
+  vine.canes.push_back(VerticalTrunk(0.0, 0.8, 0.86, 0.02, 0.02));
+  for (double x : {-0.03, 0.0, 0.03}) vine.head.spheres.push_back({{x, 0.8, 0.89}, 0.03});
+  vine.canes.push_back(StraightCane(2, {-0.055, 0.8, 0.9}, {-0.30, 0.81, 0.95}, 0.005));
+  vine.canes.push_back(StraightCane(3, {0.055, 0.8, 0.9}, {0.30, 0.79, 0.96}, 0.005));
+  vine.canes.push_back(StraightCane(4, {0.01, 0.8, 0.915}, {0.05, 0.80, 1.12}, 0.005));
+  const std::vector<View2D> views = SyntheticViews(vine, rig, {}, /*thick_width_px=*/8.0);
+  std::vector<Eigen::Vector3d> hints;
+  for (size_t c = 1; c < vine.canes.size(); ++c) {
+    const std::vector<Eigen::Vector3d>& p = vine.canes[c].polyline.points;
+    hints.insert(hints.end(), p.begin(), p.end());
+  }
+  HeadOptions options;
+  const auto loose =
+      ReconstructHeadAndTrunk(views, rig, WorkingVolume(), options, Deadline::Infinite(), hints);
+  options.peel_canes = true;
+  const auto tight =
+      ReconstructHeadAndTrunk(views, rig, WorkingVolume(), options, Deadline::Infinite(), hints);
+  ASSERT_TRUE(loose.ok()) << loose.status();
+  ASSERT_TRUE(tight.ok()) << tight.status();
+  const ReconstructionMetrics m_loose = HeadMetrics(loose->head, vine.head);
+  const ReconstructionMetrics m_tight = HeadMetrics(tight->head, vine.head);
+  EXPECT_GE(m_loose.head_enclosed_fraction, 0.99);
+  EXPECT_GE(m_tight.head_enclosed_fraction, 0.99);
+  EXPECT_LT(m_tight.head_volume_ratio, 0.7 * m_loose.head_volume_ratio)
+      << "loose " << m_loose.head_volume_ratio << " tight " << m_tight.head_volume_ratio;
+  // The canes' far parts are no longer head.
+  for (const Sphere& s : tight->head.spheres) EXPECT_LT(std::abs(s.center.x()), 0.15);
+}
+
+// The head's depth bound scales with head_depth_factor: a smaller factor never deepens the
+// head, and the head stays enclosed at 0.6 (the true head here is as deep as its spheres).
+TEST(ReconstructHeadAndTrunk, DepthFactorBoundsTheHeadsDepth) {
+  const RigCalibration rig = sim::MakeRig().value();
+  VineModel vine;
+  vine.canes.push_back(VerticalTrunk(0.0, 0.8, 0.86, 0.02, 0.02));
+  for (double x : {-0.06, -0.03, 0.0, 0.03, 0.06})
+    vine.head.spheres.push_back({{x, 0.8, 0.89}, 0.03});
+  const std::vector<View2D> views = SyntheticViews(vine, rig);
+  HeadOptions options;
+  const auto deep =
+      ReconstructHeadAndTrunk(views, rig, WorkingVolume(), options, Deadline::Infinite());
+  options.head_depth_factor = 0.6;
+  const auto shallow =
+      ReconstructHeadAndTrunk(views, rig, WorkingVolume(), options, Deadline::Infinite());
+  ASSERT_TRUE(deep.ok() && shallow.ok());
+  auto depth_extent = [](const HeadModel& head) {
+    double lo = 1e9, hi = -1e9;
+    for (const Sphere& s : head.spheres) {
+      lo = std::min(lo, s.center.y() - s.radius);
+      hi = std::max(hi, s.center.y() + s.radius);
+    }
+    return hi - lo;
+  };
+  EXPECT_LT(depth_extent(shallow->head), depth_extent(deep->head) - 0.03);
+  EXPECT_GE(HeadMetrics(shallow->head, vine.head).head_enclosed_fraction, 0.99);
+}
+
+TEST(HeadOptions, RejectsBadPeelAndDepthFields) {
+  HeadOptions o;
+  o.peel_depth_px = -1;
+  EXPECT_EQ(o.Validate().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(o.Validate().message().find("peel_depth_px"), std::string::npos);
+  o = HeadOptions();
+  o.peel_cane_radius_m = 0;
+  EXPECT_NE(o.Validate().message().find("peel_cane_radius_m"), std::string::npos);
+  o = HeadOptions();
+  o.peel_link_m = std::nan("");
+  EXPECT_NE(o.Validate().message().find("peel_link_m"), std::string::npos);
+  o = HeadOptions();
+  o.head_depth_factor = 0;
+  EXPECT_NE(o.Validate().message().find("head_depth_factor"), std::string::npos);
+  EXPECT_TRUE(HeadOptions().Validate().ok());
 }
 
 }  // namespace
