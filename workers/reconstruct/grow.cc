@@ -71,7 +71,8 @@ class Grower {
     // An end the views disagree on is backed off to the last point they agree on (within
     // end_backoff_m), if any: the growth then starts there.
     Polyline3 line = input;
-    if (options_.require_end_support && !evidence_.EndSupported(line.points.back())) {
+    const double end_radius = EndRadius(input, options_.tangent_span_m);
+    if (options_.require_end_support && !evidence_.EndSupported(line.points.back(), end_radius)) {
       bool found = false;
       double cut = 0;
       while (options_.end_backoff_m > 0 && line.points.size() > 2) {
@@ -80,7 +81,7 @@ class Grower {
         line.points.pop_back();
         line.radii.pop_back();
         ++out.removed;
-        if (evidence_.EndSupported(line.points.back())) {
+        if (evidence_.EndSupported(line.points.back(), end_radius)) {
           found = true;
           out.removed_m = cut;
           break;
@@ -107,6 +108,7 @@ class Grower {
     double alongside = 0;                // length grown alongside other canes so far
     size_t run_start = 0;                // where the current alongside run began, if in one
     bool in_run = false;
+    bool in_band = false;                // the last step needed a view's band (band_support)
     out.stop = Stop::kCapped;
     for (int k = 0; k < max_steps; ++k) {
       const Eigen::Vector3d tangent = Tangent(curve);
@@ -116,8 +118,9 @@ class Grower {
         out.stop = Stop::kOutside;
         break;
       }
-      const Eigen::Vector3d p = evidence_.Correct(
-          predicted, tangent, in_run ? options_.alongside_prior_px_per_mm : options_.prior_px_per_mm);
+      double prior = in_run ? options_.alongside_prior_px_per_mm : options_.prior_px_per_mm;
+      if (in_band) prior = std::max(prior, options_.band_prior_px_per_mm);
+      const Eigen::Vector3d p = evidence_.Correct(predicted, tangent, prior, radius);
       out.stop_point = p;
       if (!volume_.Contains(p)) {
         out.stop = Stop::kOutside;
@@ -128,7 +131,7 @@ class Grower {
         out.stop = Stop::kTurned;
         break;
       }
-      if (const std::optional<Stop> s = evidence_.Check(p, step, radius); s) {
+      if (const std::optional<Stop> s = evidence_.Check(p, step, radius, &in_band); s) {
         out.stop = *s;
         break;
       }
@@ -237,7 +240,10 @@ absl::Status GrowOptions::Validate() const {
                                      {alongside_min_gap_m, "alongside_min_gap_m"},
                                      {continuation_m, "continuation_m"},
                                      {alongside_prior_px_per_mm, "alongside_prior_px_per_mm"},
-                                     {end_backoff_m, "end_backoff_m"}}) {
+                                     {end_backoff_m, "end_backoff_m"},
+                                     {band_margin_px, "band_margin_px"},
+                                     {band_tolerance_px, "band_tolerance_px"},
+                                     {band_prior_px_per_mm, "band_prior_px_per_mm"}}) {
     if (absl::Status s = CheckNonNegative(value, "grow", field); !s.ok()) return s;
   }
   for (const auto& [value, field] : {std::pair{max_turn_deg, "max_turn_deg"},
