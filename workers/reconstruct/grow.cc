@@ -8,52 +8,13 @@
 
 #include "absl/strings/str_cat.h"
 #include "core/status_macros.h"
+#include "workers/reconstruct/grow_internal.h"
 #include "workers/reconstruct/image_probes.h"
 
 namespace vb::reconstruct {
 namespace {
 
 constexpr double kDegToRad = M_PI / 180.0;
-
-// One view as the growth reads it: where a 3D point projects, how far that is from the
-// skeleton, and what the pixels around it are.
-class ViewProbe {
- public:
-  ViewProbe(const View2D& view, const CameraCalibration& camera, int margin_px)
-      : view_(view), camera_(camera), margin_(margin_px),
-        has_thick_(view.thick_mask.size() == static_cast<size_t>(view.width) * view.height) {}
-
-  // The pixel of p when it lies at least the margin inside the image.
-  std::optional<Eigen::Vector2d> Inside(const Eigen::Vector3d& p) const {
-    return ProjectInside(camera_, p, margin_);
-  }
-
-  // Distance to the skeleton at uv, bilinear between pixel centres (uv inside the image).
-  double Distance(const Eigen::Vector2d& uv) const {
-    return CentrelineDistanceBilinear(view_, uv);
-  }
-
-  bool Thick(const Eigen::Vector2d& uv) const {
-    if (!has_thick_) return false;
-    const int x = static_cast<int>(std::lround(uv.x())), y = static_cast<int>(std::lround(uv.y()));
-    return view_.thick_mask[static_cast<size_t>(y) * view_.width + x] != 0;
-  }
-
-  // Only background within the point's projected radius (at least one pixel): this view should
-  // see wood there and does not. Wires and posts are in front of canes, so they do not contradict.
-  bool Background(const Eigen::Vector2d& uv, const Eigen::Vector3d& p, double radius_m) const {
-    return !WoodInDisc(view_, uv,
-                       std::max(1.0, ProjectedRadiusPx(camera_, p, radius_m, 1e-6)));
-  }
-
-  Eigen::Vector3d Centre() const { return camera_.CentreInPlatform(); }
-
- private:
-  const View2D& view_;
-  const CameraCalibration& camera_;
-  int margin_;
-  bool has_thick_;
-};
 
 // The other canes, for the "alongside" test, each with a box grown by what growth can add.
 struct OtherCane {
@@ -102,10 +63,7 @@ class Grower {
  public:
   Grower(const std::vector<View2D>& views, const RigCalibration& rig, const WorkingVolume& volume,
          const GrowOptions& options)
-      : volume_(volume), options_(options) {
-    for (size_t i = 0; i < views.size(); ++i)
-      probes_.emplace_back(views[i], rig.cameras[i], options.image_margin_px);
-  }
+      : volume_(volume), options_(options), evidence_(views, rig, options) {}
 
   // Grows the end at line.points.back(). `others` excludes `line` itself.
   Growth GrowBack(const Polyline3& input, const std::vector<OtherCane>& others) const {
@@ -113,7 +71,8 @@ class Grower {
     // An end the views disagree on is backed off to the last point they agree on (within
     // end_backoff_m), if any: the growth then starts there.
     Polyline3 line = input;
-    if (options_.require_end_support && !EndSupported(line.points.back())) {
+    const double end_radius = EndRadius(input, options_.tangent_span_m);
+    if (options_.require_end_support && !evidence_.EndSupported(line.points.back(), end_radius)) {
       bool found = false;
       double cut = 0;
       while (options_.end_backoff_m > 0 && line.points.size() > 2) {
@@ -122,7 +81,7 @@ class Grower {
         line.points.pop_back();
         line.radii.pop_back();
         ++out.removed;
-        if (EndSupported(line.points.back())) {
+        if (evidence_.EndSupported(line.points.back(), end_radius)) {
           found = true;
           out.removed_m = cut;
           break;
@@ -149,6 +108,7 @@ class Grower {
     double alongside = 0;                // length grown alongside other canes so far
     size_t run_start = 0;                // where the current alongside run began, if in one
     bool in_run = false;
+    bool in_band = false;                // the last step needed a view's band (band_support)
     out.stop = Stop::kCapped;
     for (int k = 0; k < max_steps; ++k) {
       const Eigen::Vector3d tangent = Tangent(curve);
@@ -158,8 +118,9 @@ class Grower {
         out.stop = Stop::kOutside;
         break;
       }
-      const Eigen::Vector3d p = Correct(
-          predicted, tangent, in_run ? options_.alongside_prior_px_per_mm : options_.prior_px_per_mm);
+      double prior = in_run ? options_.alongside_prior_px_per_mm : options_.prior_px_per_mm;
+      if (in_band) prior = std::max(prior, options_.band_prior_px_per_mm);
+      const Eigen::Vector3d p = evidence_.Correct(predicted, tangent, prior, radius);
       out.stop_point = p;
       if (!volume_.Contains(p)) {
         out.stop = Stop::kOutside;
@@ -170,7 +131,7 @@ class Grower {
         out.stop = Stop::kTurned;
         break;
       }
-      if (const std::optional<Stop> s = Check(p, step, radius); s) {
+      if (const std::optional<Stop> s = evidence_.Check(p, step, radius, &in_band); s) {
         out.stop = *s;
         break;
       }
@@ -214,97 +175,6 @@ class Grower {
     return Eigen::Vector3d::UnitX();
   }
 
-  double Cost(const Eigen::Vector3d& p) const {
-    const double cap = options_.truncate_px * options_.truncate_px;
-    double cost = 0;
-    for (const ViewProbe& probe : probes_) {
-      const std::optional<Eigen::Vector2d> uv = probe.Inside(p);
-      const double d = uv ? probe.Distance(*uv) : options_.truncate_px;
-      cost += std::min(d * d, cap);
-    }
-    return cost;
-  }
-
-  // The point near `predicted`, on the plane normal to the tangent, that best fits the skeletons
-  // of all views: a coarse grid of offsets, then a 4x finer one around the best.
-  Eigen::Vector3d Correct(const Eigen::Vector3d& predicted, const Eigen::Vector3d& tangent,
-                          double prior_px_per_mm) const {
-    const Eigen::Vector3d u = tangent.unitOrthogonal();
-    const Eigen::Vector3d w = tangent.cross(u).normalized();
-    const double prior = prior_px_per_mm * 1000.0;  // px per metre of offset
-    double best_a = 0, best_b = 0, best = Cost(predicted);
-    const auto search = [&](double centre_a, double centre_b, double grid, int half) {
-      double ba = centre_a, bb = centre_b;
-      for (int i = -half; i <= half; ++i) {
-        for (int j = -half; j <= half; ++j) {
-          const double a = centre_a + i * grid, b = centre_b + j * grid;
-          if (std::abs(a) > options_.max_offset_m + 1e-12 ||
-              std::abs(b) > options_.max_offset_m + 1e-12) {
-            continue;
-          }
-          const double c = Cost(predicted + a * u + b * w) + prior * prior * (a * a + b * b);
-          if (c < best) {
-            best = c;
-            ba = a;
-            bb = b;
-          }
-        }
-      }
-      best_a = ba;
-      best_b = bb;
-    };
-    const int half = static_cast<int>(std::lround(options_.max_offset_m / options_.offset_grid_m));
-    search(0, 0, options_.offset_grid_m, half);
-    search(best_a, best_b, options_.offset_grid_m / 4, 4);
-    return predicted + best_a * u + best_b * w;
-  }
-
-  bool AlongSkeleton(const ViewProbe& probe, const Eigen::Vector3d& p,
-                     const Eigen::Vector3d& step) const {
-    if (options_.support_along_px <= 0) return true;
-    for (const double sign : {-0.5, 0.5}) {
-      const std::optional<Eigen::Vector2d> uv = probe.Inside(p + sign * options_.step_m * step);
-      if (uv && probe.Distance(*uv) > options_.support_along_px) return false;
-    }
-    return true;
-  }
-
-  bool EndSupported(const Eigen::Vector3d& p) const {
-    int supports = 0;
-    for (const ViewProbe& probe : probes_) {
-      const std::optional<Eigen::Vector2d> uv = probe.Inside(p);
-      if (!uv) continue;
-      if (probe.Distance(*uv) > options_.support_px) return false;
-      ++supports;
-    }
-    return supports >= options_.min_support_views;
-  }
-
-  // Why p is not accepted, if it is not: the views' evidence at the corrected point.
-  std::optional<Stop> Check(const Eigen::Vector3d& p, const Eigen::Vector3d& step,
-                            double radius) const {
-    std::vector<int> supports;
-    for (size_t v = 0; v < probes_.size(); ++v) {
-      const std::optional<Eigen::Vector2d> uv = probes_[v].Inside(p);
-      if (!uv) continue;
-      if (probes_[v].Thick(*uv)) return Stop::kThick;
-      if (probes_[v].Distance(*uv) <= options_.support_px) {
-        if (AlongSkeleton(probes_[v], p, step)) supports.push_back(static_cast<int>(v));
-      } else if (probes_[v].Background(*uv, p, radius)) {
-        return Stop::kContradicted;
-      }
-    }
-    if (static_cast<int>(supports.size()) < options_.min_support_views) return Stop::kUnsupported;
-    if (supports.size() == 2) {
-      // Two views fix a point along the cane only if the cane crosses their epipolar planes.
-      const Eigen::Vector3d ca = probes_[supports[0]].Centre(), cb = probes_[supports[1]].Centre();
-      const Eigen::Vector3d normal = (cb - ca).cross(p - ca).normalized();
-      if (std::abs(normal.dot(step)) < std::sin(options_.min_epipolar_angle_deg * kDegToRad))
-        return Stop::kUnsupported;
-    }
-    return std::nullopt;
-  }
-
   // The nearest other cane within other_cane_m of p that runs within along_angle_deg of the step.
   std::optional<AlongHit> Alongside(const Eigen::Vector3d& p, const Eigen::Vector3d& step,
                                     const std::vector<OtherCane>& others) const {
@@ -337,7 +207,7 @@ class Grower {
 
   const WorkingVolume& volume_;
   const GrowOptions& options_;
-  std::vector<ViewProbe> probes_;
+  const grow_internal::GrowEvidence evidence_;
 };
 
 Polyline3 Reversed(const Polyline3& line) {
@@ -370,7 +240,10 @@ absl::Status GrowOptions::Validate() const {
                                      {alongside_min_gap_m, "alongside_min_gap_m"},
                                      {continuation_m, "continuation_m"},
                                      {alongside_prior_px_per_mm, "alongside_prior_px_per_mm"},
-                                     {end_backoff_m, "end_backoff_m"}}) {
+                                     {end_backoff_m, "end_backoff_m"},
+                                     {band_margin_px, "band_margin_px"},
+                                     {band_tolerance_px, "band_tolerance_px"},
+                                     {band_prior_px_per_mm, "band_prior_px_per_mm"}}) {
     if (absl::Status s = CheckNonNegative(value, "grow", field); !s.ok()) return s;
   }
   for (const auto& [value, field] : {std::pair{max_turn_deg, "max_turn_deg"},

@@ -17,16 +17,25 @@
 // tangent, runs alongside another cane (within `other_cane_m`, directions within
 // `along_angle_deg`: that wood is reconstructed already, or the path has switched canes), or
 // after `max_length_m`. Grown points take the end's radius.
-// Growth alongside another cane (`alongside_max_m` > 0; on by default since s17): where two canes lie
-// along each other in the views they share one skeleton path, and the cane that did not get it
+// Growth alongside another cane (`alongside_max_m` > 0; on by default since s17): where two canes
+// lie along each other in the views they share one skeleton path, and the cane that did not get it
 // stops where it joins it. Growth then goes on alongside the other cane unless that cane is the
 // end's own continuation (the other cane's end lies within `continuation_m` of the point and the
 // other cane runs on ahead from it: a tip-to-tip join, which connection makes), the grown point
-// comes within `alongside_min_gap_m` of the other cane (it has merged onto it and would double
-// it), or the alongside stretch exceeds `alongside_max_m`; while alongside, the correction is
-// pulled toward the prediction by `alongside_prior_px_per_mm` (the end keeps its own course). With
-// `alongside_require_parting`, an alongside stretch is kept only if growth leaves the other
-// cane again (is accepted on evidence beyond it), else cut off where it began.
+// comes within `alongside_min_gap_m` of the other cane (it has merged onto it and would double it),
+// or the alongside stretch exceeds `alongside_max_m`; while alongside, the correction is pulled
+// toward the prediction by `alongside_prior_px_per_mm` (the end keeps its own course). With
+// `alongside_require_parting`, an alongside stretch is kept only if growth leaves the other cane
+// again (is accepted on evidence beyond it), else cut off where it began.
+// Support in bundles (`band_support`, s18; off by default: measured no recall gain, step 4d): a
+// view also supports a point that lies in a band of wood (foreground, or the wires and posts that
+// may hide it) whose half-width through the point (skeleton distance plus distance to the
+// background) exceeds the point's projected radius by `band_margin_px` (a single cane's band does
+// not: it is a bundle of canes), when the point's projected cross-section lies inside the wood
+// (within `band_tolerance_px`). In such bands the correction counts the lesser of the skeleton
+// distance and how far the cross-section reaches out of the wood (0 inside), and after a step that
+// needed such support it is pulled toward the prediction by `band_prior_px_per_mm`, so the end
+// keeps its course through the bundle.
 // Thread-safe (pure function of its inputs).
 #pragma once
 
@@ -88,6 +97,17 @@ struct GrowOptions {
   double continuation_m = 0.02;          // the other cane's end this near: its continuation
   double alongside_prior_px_per_mm = 2.0;  // pull toward the prediction while alongside
   bool alongside_require_parting = false;  // keep an alongside stretch only if growth parts
+  // Support in bundles (s18; see above; off by default). Where canes lie side by side or overlap
+  // in a view the skeleton runs between them or along the bundle's middle, and a cane's own axis
+  // projects 2-6 px off it. With `band_support` a view also supports a step whose projected
+  // cross-section (the end's radius) lies inside a band of wood wider than the cane (and so do
+  // the points half a step before and after it); `band_end_support` applies the same test to the
+  // end itself.
+  bool band_support = false;
+  bool band_end_support = false;
+  double band_margin_px = 1.0;         // a band's half-width must exceed the radius by this
+  double band_tolerance_px = 0.5;      // the cross-section may reach this far out of the wood
+  double band_prior_px_per_mm = 2.0;   // pull toward the prediction after a step in a band
 
   // INVALID_ARGUMENT naming the field for non-finite or out-of-range values.
   absl::Status Validate() const;
@@ -129,10 +149,11 @@ struct GrowSummary {
   std::vector<GrowEnd> ends;        // every end tried, in order
 };
 
-// Grows both ends (the last point only when `tips_only`) of every cane in `canes` (unoriented polylines, as AssembleCanes returns them)
-// in place, as described above; grown stretches are appended at the cane's own point spacing.
-// views[i] was seen by rig.cameras[i]. INVALID_ARGUMENT naming "views" if their count differs
-// from the rig's cameras, or the option's field if options are invalid.
+// Grows both ends (the last point only when `tips_only`) of every cane in `canes` (unoriented
+// polylines, as AssembleCanes returns them) in place, as described above; grown stretches are
+// appended at the cane's own point spacing. views[i] was seen by rig.cameras[i]. INVALID_ARGUMENT
+// naming "views" if their count differs from the rig's cameras, or the option's field if options
+// are invalid.
 absl::Status GrowCaneEnds(const std::vector<View2D>& views, const RigCalibration& rig,
                           const WorkingVolume& volume, const GrowOptions& options,
                           std::vector<Polyline3>* canes, GrowSummary* summary = nullptr,

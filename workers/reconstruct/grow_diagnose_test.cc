@@ -2,13 +2,15 @@
 // Diagnosis tool, not a test: what the two-view growth of cane ends (grow.h) adds on rendered
 // stops (VB_SEED, VB_STOPS, VB_INPUT as ReportStopsFromEnv; images by default). Run with
 // --gtest_also_run_disabled_tests --gtest_filter='Grow.DISABLED_Report'. Tuning seeds only
-// (1100-1999).
+// (1100-1999). VB_GROW_WHY=1 adds why unsupported ends failed (WhyUnsupported), VB_GROW_BAND=1
+// turns on support in bundles (GrowOptions::band_support).
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <optional>
 #include <vector>
 
 #include "core/geometry.h"
@@ -18,6 +20,7 @@
 #include "workers/reconstruct/diagnose_util.h"
 #include "workers/reconstruct/correspondence_test_util.h"
 #include "workers/reconstruct/grow.h"
+#include "workers/reconstruct/grow_internal.h"
 #include "workers/reconstruct/reconstruct.h"
 
 namespace vb::reconstruct {
@@ -145,6 +148,102 @@ void AlongsideEnds(const VineModel& truth, const std::vector<Polyline3>& grown,
   }
 }
 
+// VB_GROW_WHY=1: why the ends on the vine's canes that stopped unsupported (the end itself, or
+// a step) failed the views' test. Per end: the stop point P (the end, or the rejected step) and
+// the nearest point Q of its own true cane (within 10 mm of P). Per view that sees P: P's and Q's
+// distance to the skeleton, the wood's half-width at Q (Q's skeleton distance plus its distance
+// to the background: the band the skeleton runs in), Q's own projected radius, whether the band
+// is a bundle (half-width > own radius + band_margin_px) and whether Q's cross-section then fits
+// inside the wood (within band_tolerance_px: what band_support accepts; ViewProbe::BandExcess).
+struct WhyTally {
+  // [0] end unsupported, [1] unsupported.
+  int ends[2] = {}, views[2] = {};
+  int p_far[2] = {};                 // views with P > 2 px off the skeleton
+  int q_bins[2][4] = {};             // views by Q's distance: <= 2, 2-4, 4-6, > 6 px
+  int q_far_bundle[2] = {}, q_far_fits[2] = {};  // of the views with Q > 2 px
+  int q_near_bundle[2] = {};         // of the views with Q <= 2 px: in a bundle
+  double pq_mm[2] = {}, hw_minus_r[2] = {};      // sums: |P - Q|; over Q > 2 px views
+  int q_old_pass[2] = {}, q_band_pass[2] = {};   // ends: Q would pass the old / band rule
+  int p_two_near[2] = {};  // ends with 2+ views holding P within support_px
+  std::vector<double> q_far_d[2];
+
+  void Print() const {
+    const char* names[2] = {"end unsupported", "unsupported (a step)"};
+    for (int k = 0; k < 2; ++k) {
+      const int far = q_bins[k][1] + q_bins[k][2] + q_bins[k][3];
+      std::vector<double> d = q_far_d[k];
+      std::sort(d.begin(), d.end());
+      std::printf("WHY %s: %d ends, |P-Q| mean %.1f mm, %d views seeing P; P > 2 px in %d; Q "
+                  "<= 2 / 2-4 / 4-6 / > 6 px: %d %d %d %d; of Q > 2 px: bundle %d, fits the "
+                  "wood %d, half-width - own radius mean %.1f px, median distance %.1f px; of "
+                  "Q <= 2 px in a bundle %d; ends where Q passes the old rule %d, the band rule "
+                  "%d; ends with P within 2 px in 2+ views %d\n",
+                  names[k], ends[k], pq_mm[k] / std::max(1, ends[k]), views[k], p_far[k],
+                  q_bins[k][0], q_bins[k][1], q_bins[k][2], q_bins[k][3], q_far_bundle[k],
+                  q_far_fits[k], hw_minus_r[k] / std::max(1, far),
+                  d.empty() ? 0.0 : d[d.size() / 2], q_near_bundle[k], q_old_pass[k],
+                  q_band_pass[k], p_two_near[k]);
+    }
+  }
+};
+
+void WhyUnsupported(const VineModel& truth, const std::vector<View2D>& views,
+                    const RigCalibration& rig, const GrowOptions& options,
+                    const GrowSummary& summary, WhyTally* tally) {
+  std::vector<std::vector<float>> wood;
+  for (const View2D& view : views) wood.push_back(grow_internal::WoodRadiusMap(view));
+  std::vector<grow_internal::ViewProbe> probes;
+  for (size_t v = 0; v < views.size(); ++v)
+    probes.emplace_back(views[v], rig.cameras[v], options.image_margin_px, &wood[v]);
+  for (const GrowEnd& end : summary.ends) {
+    if (end.stop != GrowStop::kEndUnsupported && end.stop != GrowStop::kUnsupported) continue;
+    const int k = end.stop == GrowStop::kEndUnsupported ? 0 : 1;
+    double d_end = 0;
+    const int own = NearestCane(end.stop_point, truth.canes, &d_end);
+    if (own < 0 || d_end > 0.010) continue;
+    const Polyline3& true_line = truth.canes[own].polyline;
+    const double s = true_line.Project(end.stop_point);
+    const Eigen::Vector3d q = true_line.PointAt(s);
+    const double radius = true_line.RadiusAt(s);
+    ++tally->ends[k];
+    tally->pq_mm[k] += 1000 * (q - end.stop_point).norm();
+    int seeing = 0, old_ok = 0, band_ok = 0, p_near = 0;
+    for (const grow_internal::ViewProbe& probe : probes) {
+      const auto uv_p = probe.Inside(end.stop_point);
+      const auto uv_q = probe.Inside(q);
+      if (!uv_p || !uv_q) continue;
+      ++seeing;
+      ++tally->views[k];
+      tally->p_far[k] += probe.Distance(*uv_p) > options.support_px;
+      p_near += probe.Distance(*uv_p) <= options.support_px;
+      const double dq = probe.Distance(*uv_q);
+      const double r_px = probe.RadiusPx(q, radius);
+      const double half_width = dq + probe.WoodRadius(*uv_q) - 0.5;
+      const std::optional<double> excess =
+          probe.BandExcess(*uv_q, r_px, options.band_margin_px, options.band_tolerance_px);
+      const bool bundle = excess.has_value();
+      const bool fits = bundle && *excess <= 0;
+      ++tally->q_bins[k][dq <= 2 ? 0 : dq <= 4 ? 1 : dq <= 6 ? 2 : 3];
+      old_ok += dq <= options.support_px;
+      band_ok += dq <= options.support_px || fits;
+      if (dq > options.support_px) {
+        tally->q_far_bundle[k] += bundle;
+        tally->q_far_fits[k] += fits;
+        tally->hw_minus_r[k] += half_width - r_px;
+        tally->q_far_d[k].push_back(dq);
+      } else {
+        tally->q_near_bundle[k] += bundle;
+      }
+    }
+    // The end needs every seeing view; a step needs two.
+    const int need = k == 0 ? std::max(seeing, options.min_support_views)
+                            : options.min_support_views;
+    tally->q_old_pass[k] += old_ok >= need;
+    tally->q_band_pass[k] += band_ok >= need;
+    tally->p_two_near[k] += p_near >= 2;
+  }
+}
+
 GrowOptions OptionsFromEnv() {
   GrowOptions o;
   OverrideFromEnv("VB_GROW_SUPPORT_PX", &o.support_px);
@@ -166,6 +265,10 @@ GrowOptions OptionsFromEnv() {
   OverrideFromEnv("VB_GROW_ALONG_CONT", &o.continuation_m);
   OverrideFromEnv("VB_GROW_ALONG_PRIOR", &o.alongside_prior_px_per_mm);
   OverrideFromEnv("VB_GROW_ALONG_PART", &o.alongside_require_parting);
+  OverrideFromEnv("VB_GROW_BAND", &o.band_support);
+  OverrideFromEnv("VB_GROW_BAND_END", &o.band_end_support);
+  OverrideFromEnv("VB_GROW_BAND_MARGIN", &o.band_margin_px);
+  OverrideFromEnv("VB_GROW_BAND_PRIOR", &o.band_prior_px_per_mm);
   return o;
 }
 
@@ -193,6 +296,8 @@ TEST(Grow, DISABLED_Report) {
   int ends = 0, grown_ends = 0;
   GrowSummary totals;
   AlongsideTally along;
+  WhyTally why;
+  const bool explain = std::getenv("VB_GROW_WHY") != nullptr;
   std::vector<double> d_recall, d_precision, d_connectivity, d_bag_recall, d_bag_precision;
   double recall0 = 0, precision0 = 0, connectivity0 = 0;
   for (int k = 0; k < count; ++k) {
@@ -224,6 +329,7 @@ TEST(Grow, DISABLED_Report) {
     totals.ends_alongside += summary.ends_alongside;
     totals.alongside_length_m += summary.alongside_length_m;
     AlongsideEnds(stop.scene.vine, grown, summary, &along);
+    if (explain) WhyUnsupported(truth, stop.views, matched->rig, on.grow, summary, &why);
     if (base) {
       // The grown canes as a bag, before connection: the default growth against this one.
       std::vector<Polyline3> grown_base = *canes;
@@ -353,6 +459,7 @@ TEST(Grow, DISABLED_Report) {
   std::printf("grown on alongside another cane: %d ends, %.3f m per stop\n", totals.ends_alongside,
               totals.alongside_length_m / count);
   along.Print(count);
+  if (explain) why.Print();
   std::printf("added %.3f m per stop, right %.3f; from ends already > 10 mm off: %.3f m per stop, "
               "right %.3f; stage %.4f s per stop\n",
               added / count, right / std::max(added, 1e-9), added_from_wrong_end / count,

@@ -280,6 +280,97 @@ TEST(GrowCaneEnds, StopsAlongACaneThatContinuesIt) {
   EXPECT_GT(summary.ends_alongside, 0);
 }
 
+// Support in bundles (s18): band_support and band_end_support on, or both off (the old rule).
+GrowOptions Bands(bool on = true) {
+  GrowOptions options = On();
+  options.band_support = on;
+  options.band_end_support = on;
+  return options;
+}
+
+// Two canes of 6 mm radius side by side, 11 mm apart in height (overlapping by 1 mm, so every
+// view shows one band of wood), and the views' skeleton drawn along the bundle's middle, 5.5 mm
+// from each cane's axis (as a skeleton thins two fused canes): the classes come from both canes,
+// the skeleton and its distance map from the middle line.
+struct SideBySide {
+  Polyline3 own = CurvedCane(-0.3, 0.1, 0.95, 0.3);
+  Polyline3 other, middle;
+  SideBySide() {
+    for (double& r : own.radii) r = 0.006;
+    other = own;
+    middle = own;
+    for (Eigen::Vector3d& p : other.points) p.z() += 0.011;
+    for (Eigen::Vector3d& p : middle.points) p.z() += 0.0055;
+  }
+  std::vector<View2D> Views(const RigCalibration& rig) const {
+    std::vector<View2D> views = ViewsOf({own, other}, rig);
+    const std::vector<View2D> skeleton = ViewsOf({middle}, rig);
+    for (size_t v = 0; v < views.size(); ++v) {
+      views[v].segments = skeleton[v].segments;
+      views[v].nodes = skeleton[v].nodes;
+      views[v].centreline_distance_px = skeleton[v].centreline_distance_px;
+    }
+    return views;
+  }
+};
+
+TEST(GrowCaneEnds, GrowsThroughABundleWhoseSkeletonRunsBetweenTheCanes) {
+  const RigCalibration rig = sim::MakeRig().value();
+  const SideBySide scene;
+  const std::vector<View2D> views = scene.Views(rig);
+  // The control: the own cane's axis projects more than support_px off the skeleton, so the old
+  // rule finds the tip unsupported; support in bundles for the steps alone does not change that.
+  for (const bool steps_only : {false, true}) {
+    std::vector<Polyline3> canes = {Head(scene.own, 20)};
+    GrowOptions options = Bands(false);
+    options.band_support = steps_only;
+    GrowSummary summary;
+    ASSERT_TRUE(
+        GrowCaneEnds(views, rig, WorkingVolume{}, options, &canes, &summary, true).ok());
+    EXPECT_EQ(summary.end_unsupported, 1) << steps_only;
+    EXPECT_EQ(canes[0].points.size(), 20u) << steps_only;
+  }
+  std::vector<Polyline3> canes = {Head(scene.own, 20)};
+  GrowSummary summary;
+  ASSERT_TRUE(GrowCaneEnds(views, rig, WorkingVolume{}, Bands(), &canes, &summary, true).ok());
+  // The tip grew at least 8 cm on, along its own cane: every grown point within 3 mm of it and
+  // further than that from the bundle's middle.
+  EXPECT_GT(canes[0].points.back().x(), scene.own.points[19].x() + 0.08);
+  EXPECT_EQ(summary.ends_grown, 1);
+  for (size_t i = 20; i < canes[0].points.size(); ++i) {
+    EXPECT_LT(DistanceToLine(canes[0].points[i], scene.own), 0.003) << i;
+    EXPECT_GT(DistanceToLine(canes[0].points[i], scene.middle), 0.003) << i;
+  }
+}
+
+TEST(GrowCaneEnds, KeepsTheOldRuleWhereTheBandIsOneCaneWide) {
+  const RigCalibration rig = sim::MakeRig().value();
+  const Polyline3 cane = CurvedCane(-0.3, 0.1, 0.95, 0.3);
+  const std::vector<View2D> views = ViewsOf({cane}, rig);
+  // The piece's tip lies 3 mm off the axis of its 4 mm cane: inside the cane's wood, but more
+  // than support_px off the skeleton, and the band there is one cane wide: not supported.
+  Polyline3 piece = Head(cane, 20);
+  piece.points.back() += Eigen::Vector3d(0.0, 0.0, 0.003);
+  for (const bool bands : {false, true}) {
+    std::vector<Polyline3> canes = {piece};
+    GrowSummary summary;
+    ASSERT_TRUE(
+        GrowCaneEnds(views, rig, WorkingVolume{}, Bands(bands), &canes, &summary, true).ok());
+    EXPECT_EQ(summary.end_unsupported, 1) << bands;
+    EXPECT_EQ(canes[0].points.size(), 20u) << bands;
+  }
+  // A well-placed tip grows to the cane's end as before, on its own cane (within its 4 mm radius;
+  // either rule strays up to 3 mm on the first grown points here).
+  for (const bool bands : {false, true}) {
+    std::vector<Polyline3> canes = {Head(cane, 16)};
+    ASSERT_TRUE(
+        GrowCaneEnds(views, rig, WorkingVolume{}, Bands(bands), &canes, nullptr, true).ok());
+    EXPECT_GT(canes[0].points.back().x(), cane.points[16].x() + 0.1) << bands;
+    for (size_t i = 16; i < canes[0].points.size(); ++i)
+      EXPECT_LT(DistanceToLine(canes[0].points[i], cane), 0.004) << bands << " " << i;
+  }
+}
+
 TEST(GrowCaneEnds, GrowsOnlyTheTipWhenAsked) {
   const RigCalibration rig = sim::MakeRig().value();
   const Polyline3 cane = CurvedCane(-0.3, 0.1, 0.95, 0.3);
@@ -342,7 +433,10 @@ TEST(GrowCaneEnds, RejectsBadInputNamingTheField) {
            {"continuation_m", [](GrowOptions* o) { o->continuation_m = NAN; }},
            {"alongside_prior_px_per_mm",
             [](GrowOptions* o) { o->alongside_prior_px_per_mm = -1; }},
-           {"end_backoff_m", [](GrowOptions* o) { o->end_backoff_m = INFINITY; }}}) {
+           {"end_backoff_m", [](GrowOptions* o) { o->end_backoff_m = INFINITY; }},
+           {"band_margin_px", [](GrowOptions* o) { o->band_margin_px = -1; }},
+           {"band_tolerance_px", [](GrowOptions* o) { o->band_tolerance_px = NAN; }},
+           {"band_prior_px_per_mm", [](GrowOptions* o) { o->band_prior_px_per_mm = -2; }}}) {
     options = Alongside();
     change(&options);
     status = GrowCaneEnds(views, rig, WorkingVolume{}, options, &canes);
