@@ -25,6 +25,7 @@
 #include "workers/reconstruct/correspondence_test_util.h"
 #include "workers/reconstruct/connect_internal.h"
 #include "workers/reconstruct/gap_support.h"
+#include "workers/reconstruct/join_images.h"
 #include "workers/reconstruct/join_test_util.h"
 #include "workers/reconstruct/reconstruct.h"
 
@@ -127,7 +128,11 @@ TEST(ConnectLoss, DISABLED_Report) {
     const GapSupportFn gap_support = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
       return GapSupport(a, b, stop.views, rig);
     };
-    const std::vector<JoinCandidate> joins = FindJoins(*prepared, head->head, options.connect);
+    const JoinImageFn join_images = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+      return MeasureJoinImages(a, b, stop.views, rig);
+    };
+    const std::vector<JoinCandidate> joins =
+        FindJoins(*prepared, head->head, options.connect, join_images);
     ConnectSummary summary;
     const auto model =
         BuildTree(*prepared, joins, head->head, options.connect, &summary, gap_support);
