@@ -10,6 +10,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "workers/reconstruct/connect_internal.h"
+#include "workers/reconstruct/join_classifier.h"
 
 namespace vb::reconstruct {
 
@@ -177,7 +178,8 @@ absl::StatusOr<PreparedCanes> PrepareCanes(const std::vector<Polyline3>& input,
 }
 
 std::vector<JoinCandidate> FindJoins(const PreparedCanes& prepared, const HeadModel& head,
-                                     const ConnectOptions& options) {
+                                     const ConnectOptions& options,
+                                     const JoinImageFn& join_images) {
   std::vector<JoinCandidate> joins;
   if (!prepared.trunk) return joins;
   const Polyline3& trunk = *prepared.trunk;
@@ -217,6 +219,20 @@ std::vector<JoinCandidate> FindJoins(const PreparedCanes& prepared, const HeadMo
         g.point = at;
         g.gap_m = std::max(0.0, gap);
         g.point_to_head_m = to_head(at);
+        JoinImageEvidence evidence;
+        if (join_images) {
+          evidence = join_images(p, at);
+          if (target == JoinTarget::kCane) {
+            const GapSupportFn all_views = [&](const Eigen::Vector3d& a,
+                                               const Eigen::Vector3d& b) {
+              return join_images(a, b).gap_all_views;
+            };
+            evidence.past_support =
+                MeasureCrossing(canes[i], end == 1, canes[parent], at, options, all_views)
+                    .past_support;
+          }
+        }
+        g.images = join_images ? &evidence : nullptr;
         JoinCandidate c;
         c.child = static_cast<int>(i);
         c.base_is_last = end == 1;
@@ -248,10 +264,14 @@ absl::StatusOr<VineModel> ConnectCanes(const std::vector<Polyline3>& input,
                                        const std::optional<Polyline3>& trunk_in,
                                        const HeadModel& head, const ConnectOptions& options,
                                        ConnectSummary* summary,
-                                       const GapSupportFn& gap_support) {
+                                       const GapSupportFn& gap_support,
+                                       const JoinImageFn& join_images) {
   absl::StatusOr<PreparedCanes> prepared = PrepareCanes(input, trunk_in, head, options);
   if (!prepared.ok()) return prepared.status();
-  return BuildTree(*prepared, FindJoins(*prepared, head, options), head, options, summary,
-                   gap_support);
+  // Measuring the images costs time: only for weights that use them.
+  const JoinImageFn none;
+  const JoinImageFn& images = UsesImageFeatures(options.join_weights) ? join_images : none;
+  return BuildTree(*prepared, FindJoins(*prepared, head, options, images), head, options,
+                   summary, gap_support);
 }
 }  // namespace vb::reconstruct

@@ -89,6 +89,12 @@ namespace vb::reconstruct {
 using GapSupportFn =
     std::function<double(const Eigen::Vector3d& base, const Eigen::Vector3d& join_point)>;
 
+// What the images show of the join of a base to a join point (MeasureJoinImages, join_images.h;
+// past_support is measured by connection itself): the join classifier's image features. Given
+// by the caller, as GapSupportFn is. Must be thread-compatible with the call.
+using JoinImageFn = std::function<JoinImageEvidence(const Eigen::Vector3d& base,
+                                                    const Eigen::Vector3d& join_point)>;
+
 struct ConnectOptions {
   double max_attach_m = 0.15;        // joins with a wider gap than this are not considered
   double max_bridge_m = 0.04;        // a base this near its join point gets a first point there;
@@ -175,13 +181,15 @@ struct ConnectSummary {
 
 // Builds the model's canes: id 1 the trunk (from `trunk`, or if absent the thickest cane reaching
 // lowest), then attached canes with ids 2, 3, ... (parents first). `head` is copied into the
-// model. An empty input gives a model without canes. INVALID_ARGUMENT for invalid options or a
-// cane failing Polyline3::Validate (naming its index).
+// model. An empty input gives a model without canes. `join_images` is looked up only when the
+// join weights use the image features (UsesImageFeatures); without it they are 0.
+// INVALID_ARGUMENT for invalid options or a cane failing Polyline3::Validate (naming its index).
 absl::StatusOr<VineModel> ConnectCanes(const std::vector<Polyline3>& canes,
                                        const std::optional<Polyline3>& trunk,
                                        const HeadModel& head, const ConnectOptions& options,
                                        ConnectSummary* summary = nullptr,
-                                       const GapSupportFn& gap_support = {});
+                                       const GapSupportFn& gap_support = {},
+                                       const JoinImageFn& join_images = {});
 
 // The mean radius of the third of `cane` (by arc length) whose end is nearer `centre_x` along
 // the row, divided by that of the third at the other end: > 1 when the cane thins away from
@@ -227,8 +235,11 @@ struct JoinCandidate {
 absl::StatusOr<PreparedCanes> PrepareCanes(const std::vector<Polyline3>& canes,
                                            const std::optional<Polyline3>& trunk,
                                            const HeadModel& head, const ConnectOptions& options);
+// With `join_images`, every candidate's image features are measured (for joins to a cane,
+// past_support by MeasureCrossing over its gap_all_views); without it they are 0.
 std::vector<JoinCandidate> FindJoins(const PreparedCanes& prepared, const HeadModel& head,
-                                     const ConnectOptions& options);
+                                     const ConnectOptions& options,
+                                     const JoinImageFn& join_images = {});
 // Steps 3-4 on given joins (ConnectCanes = PrepareCanes, FindJoins, BuildTree). INVALID_ARGUMENT
 // for invalid options or a join naming a cane out of range or a probability outside [0, 1].
 absl::StatusOr<VineModel> BuildTree(const PreparedCanes& prepared,

@@ -26,6 +26,7 @@
 #include "workers/reconstruct/connect_internal.h"
 #include "workers/reconstruct/diagnose_util.h"
 #include "workers/reconstruct/gap_support.h"
+#include "workers/reconstruct/join_images.h"
 #include "workers/reconstruct/join_test_util.h"
 #include "workers/reconstruct/reconstruct.h"
 
@@ -117,7 +118,11 @@ TEST(ConnectLoss, DISABLED_Report) {
     const GapSupportFn gap_support = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
       return GapSupport(a, b, stop.views, rig);
     };
-    const std::vector<JoinCandidate> joins = FindJoins(*prepared, head->head, options.connect);
+    const JoinImageFn join_images = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+      return MeasureJoinImages(a, b, stop.views, rig);
+    };
+    const std::vector<JoinCandidate> joins =
+        FindJoins(*prepared, head->head, options.connect, join_images);
     ConnectSummary summary;
     const auto model =
         BuildTree(*prepared, joins, head->head, options.connect, &summary, gap_support);

@@ -10,6 +10,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "workers/reconstruct/gap_support.h"
+#include "workers/reconstruct/join_images.h"
 #include "workers/reconstruct/synthetic_views.h"
 
 namespace vb::reconstruct {
@@ -46,7 +47,10 @@ absl::StatusOr<AssembledStop> AssembleStop(const std::vector<View2D>& views,
   auto prepared = PrepareCanes(out.canes, out.head.trunk, out.head.head, options.connect);
   if (!prepared.ok()) return prepared.status();
   out.prepared = std::move(*prepared);
-  out.joins = FindJoins(out.prepared, out.head.head, options.connect);
+  const JoinImageFn join_images = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+    return MeasureJoinImages(a, b, views, rig);
+  };
+  out.joins = FindJoins(out.prepared, out.head.head, options.connect, join_images);
   return out;
 }
 

@@ -47,4 +47,28 @@ double GapSupport(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
   return static_cast<double>(supported) / (steps + 1);
 }
 
+std::vector<double> GapSupportByView(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                     const std::vector<View2D>& views, const RigCalibration& rig,
+                                     const GapSupportOptions& options) {
+  std::vector<double> out(views.size(), 0.0);
+  if (!a.allFinite() || !b.allFinite()) return out;
+  const double length = (b - a).norm();
+  const int steps = std::max(1, static_cast<int>(std::ceil(length / options.step_m)));
+  const size_t n = std::min(views.size(), rig.cameras.size());
+  for (size_t v = 0; v < n; ++v) {
+    const View2D& view = views[v];
+    if (view.classes.width <= 0) continue;
+    int wood = 0;
+    for (int k = 0; k <= steps; ++k) {
+      const Eigen::Vector3d p = a + (b - a) * (static_cast<double>(k) / steps);
+      const auto uv = rig.cameras[v].Project(p);
+      if (!uv || !rig.cameras[v].InImage(*uv)) continue;
+      wood += WoodNear(view, static_cast<int>(std::lround(uv->x())),
+                       static_cast<int>(std::lround(uv->y())), options.tolerance_px);
+    }
+    out[v] = static_cast<double>(wood) / (steps + 1);
+  }
+  return out;
+}
+
 }  // namespace vb::reconstruct

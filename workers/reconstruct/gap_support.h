@@ -26,4 +26,11 @@ double GapSupport(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                   const std::vector<View2D>& views, const RigCalibration& rig,
                   const GapSupportOptions& options = {});
 
+// Per view (one entry per view, views[i] taken by rig.cameras[i]; 0 for a view without a class
+// image), the fraction in [0, 1] of the samples along a-b (ends included) that fall inside that
+// image onto wood (options.min_views is not used). All 0 for a non-finite line.
+std::vector<double> GapSupportByView(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                     const std::vector<View2D>& views, const RigCalibration& rig,
+                                     const GapSupportOptions& options = {});
+
 }  // namespace vb::reconstruct

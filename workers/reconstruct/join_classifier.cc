@@ -41,11 +41,31 @@ JoinWeights DefaultJoinWeights() {
   // with ConnectOptions::min_join_probability 0.12 (docs/reconstruction.md section 6). Retrained
   // on the rig adopted the same day (sim/rig.h), weights reach the same AUC (0.960) and do no
   // better in the bench, so these were kept.
+  // The image features (17-21) are not used: the weights trained with them did not gain enough
+  // (ImageJoinWeights).
   JoinWeights w;
   w.cane = {-1.0182, -0.0559, -1.5357, 0.0000, 0.0000, 0.5341, 0.5073, -0.4121, 0.4987,
-            -0.6448, 0.1947, -0.1707, 1.9917, 1.7472, -0.0651, -0.4369, -1.5173};
+            -0.6448, 0.1947, -0.1707, 1.9917, 1.7472, -0.0651, -0.4369, -1.5173,
+            0.0, 0.0, 0.0, 0.0, 0.0};
   w.root = {0.1569, -0.1006, -0.1176, -0.3721, 0.3721, 0.0000, 0.3781, 0.0000, 0.0000,
-            0.1190, 0.1167, 0.0000, 2.6093, -0.7673, 0.1016, 0.0254, 1.0847};
+            0.1190, 0.1167, 0.0000, 2.6093, -0.7673, 0.1016, 0.0254, 1.0847,
+            0.0, 0.0, 0.0, 0.0, 0.0};
+  return w;
+}
+
+JoinWeights ImageJoinWeights() {
+  // Trained by JoinClassifier.DISABLED_TrainOnSimulatedStops (VB_TRAIN_STOPS=100, seeds
+  // 1000-1099, labels and images, main 6dd7b97's pipeline, session 18): 62833 joins to a cane
+  // (2146 right), 5502 to the trunk or head (3624 right); training AUC 0.9623 (the same tool
+  // without the image features 0.9590, DefaultJoinWeights 0.9591). Bench against
+  // DefaultJoinWeights: docs/reconstruction.md section 6, "Image evidence for joins".
+  JoinWeights w;
+  w.cane = {-4.3353, -0.1365, -1.0028, 0.0000, 0.0000, 0.5918, 0.4731, -0.1076, 0.5652,
+            -0.5101, 0.2909, -0.1586, 2.1806, 1.2636, -0.1646, -0.2381, -1.0754,
+            0.8973, 2.0846, 0.2113, -0.0579, -1.2897};
+  w.root = {-0.9621, 0.0148, -0.0020, -0.0193, 0.0193, 0.0000, 0.2610, 0.0000, 0.0000,
+            0.0982, 0.1470, 0.0000, 2.7461, -0.6372, 0.0650, -0.0622, 1.5927,
+            0.5225, 0.1467, -0.2386, -0.0248, 0.0000};
   return w;
 }
 
@@ -88,10 +108,25 @@ JoinFeatures ComputeJoinFeatures(const JoinGeometry& j) {
   }
   f[15] = (tip.z() - base.z()) / length;
   f[16] = std::min(j.point_to_head_m / 0.1, 5.0);
+  if (j.images != nullptr) {
+    const JoinImageEvidence& e = *j.images;
+    f[17] = e.gap_all_views;
+    f[18] = e.gap_best_two;
+    f[19] = (1.0 - e.gap_best_two) * f[1];
+    f[20] = e.junction_views;
+    f[21] = cane ? e.past_support : 0.0;
+  }
   for (double& v : f) {
     if (!std::isfinite(v)) v = 0.0;
   }
   return f;
+}
+
+bool UsesImageFeatures(const JoinWeights& weights) {
+  for (int i = kFirstImageJoinFeature; i < kJoinFeatureCount; ++i) {
+    if (weights.cane[i] != 0.0 || weights.root[i] != 0.0) return true;
+  }
+  return false;
 }
 
 double JoinProbability(const JoinFeatures& features, const JoinWeights& weights) {

@@ -19,10 +19,26 @@
 namespace vb::reconstruct {
 
 // Feature vector of a join; index 0 is the constant 1 (bias). See ComputeJoinFeatures.
-inline constexpr int kJoinFeatureCount = 17;
+inline constexpr int kJoinFeatureCount = 22;
+// The first of the image-evidence features (kFirstImageJoinFeature .. kJoinFeatureCount - 1).
+inline constexpr int kFirstImageJoinFeature = 17;
 using JoinFeatures = std::array<double, kJoinFeatureCount>;
 
 enum class JoinTarget { kCane, kTrunk, kHead };
+
+// What the images show of a join, measured by the caller over the stop's views
+// (MeasureJoinImages, join_images.h), so that the classifier stays free of 2D types. Each in
+// [0, 1].
+struct JoinImageEvidence {
+  double gap_all_views = 0.0;   // the fraction of the gap (child's base to join point) that is
+                                // wood in every view that sees it, seen by two (GapSupport)
+  double gap_best_two = 0.0;    // per view, the fraction of the gap that is inside the image
+                                // and on wood; the second largest of these (0 with < 2 views)
+  double junction_views = 0.0;  // of the views in which the join point falls inside the image,
+                                // the fraction with a skeleton junction near its projection
+  double past_support = 0.0;    // joins to a cane: CrossingEvidence::past_support (connect.h),
+                                // wood beyond the parent along the child's line (a crossing)
+};
 
 // The geometry of one join, as connect.cc measures it.
 struct JoinGeometry {
@@ -35,6 +51,7 @@ struct JoinGeometry {
   Eigen::Vector3d head_centre = Eigen::Vector3d::Zero();  // the head's (or trunk top's) centre
   double base_to_head_m = 0.0;        // from the child's base to the head's surface, >= 0
   double point_to_head_m = 0.0;       // from the join point to the head's surface, >= 0
+  const JoinImageEvidence* images = nullptr;  // null: no images (the image features are 0)
 };
 
 // Features: 1; gap / 2 cm; log(1 + gap / 3 mm); target is the head; target is the trunk;
@@ -47,7 +64,9 @@ struct JoinGeometry {
 // (0 for trunk and head); orientation: (distance of the tip from the head centre - that of the
 // base) / child length; base distance to the head's surface / 10 cm (at most 5); the child's other end's
 // distance to the target / 10 cm (at most 3); rise of the child (tip z - base z) / length;
-// join point's distance to the head's surface / 10 cm (at most 5).
+// join point's distance to the head's surface / 10 cm (at most 5). Image evidence (beyond the
+// paper's 2D features; all 0 when `images` is null): gap_all_views; gap_best_two; the gap's
+// unsupported length (1 - gap_best_two) x gap / 2 cm; junction_views; past_support.
 JoinFeatures ComputeJoinFeatures(const JoinGeometry& join);
 
 // Weights of the logistic model: P(right) = 1 / (1 + exp(-w . features)). Joins to another
@@ -58,8 +77,20 @@ struct JoinWeights {
   JoinFeatures root{};  // the target is the trunk or head
 };
 
-// The committed, trained weights (see join_classifier.cc for how they were produced).
+// The committed, trained weights (see join_classifier.cc for how they were produced). They do
+// not use the image features.
 JoinWeights DefaultJoinWeights();
+
+// Weights trained with the image features (an option, off by default: no significant gain on
+// the bench, docs/reconstruction.md section 6, "Image evidence for joins"). They need the
+// images: without them (features 17-21 all 0) every join looks unsupported and falls below
+// DefaultJoinWeights' probabilities. Set ConnectOptions::join_weights to these, with a
+// JoinImageFn for ConnectCanes.
+JoinWeights ImageJoinWeights();
+
+// Whether either model gives an image feature a non-zero weight: only then does connection
+// need to measure the images (connect.h, JoinImageFn).
+bool UsesImageFeatures(const JoinWeights& weights);
 
 // 1 / (1 + exp(-w . features)) with w the weights for the join's target (features[3] or
 // features[4] set: the root model), clamped against overflow.

@@ -12,6 +12,7 @@
 #include "workers/reconstruct/connect.h"
 #include "workers/reconstruct/connect_test_util.h"
 #include "workers/reconstruct/correspondence_test_util.h"
+#include "workers/reconstruct/join_images.h"
 #include "workers/reconstruct/join_test_util.h"
 #include "workers/reconstruct/reconstruct.h"
 
@@ -63,6 +64,119 @@ TEST(JoinClassifier, FeaturesAreFiniteForDegenerateGeometry) {
   g.target = JoinTarget::kHead;
   g.head_centre = child.points.front();
   for (double v : ComputeJoinFeatures(g)) EXPECT_TRUE(std::isfinite(v));
+}
+
+// The image features: the evidence as given, the unsupported part of the gap, and crossing
+// evidence for joins to a cane only; all 0 without images.
+TEST(JoinClassifier, ImageFeaturesCarryTheEvidenceAndAreZeroWithoutImages) {
+  const Polyline3 parent = Line({0.06, 0.8, 1.0}, {0.5, 0.8, 1.0});
+  const Polyline3 child = Line({0.3, 0.8, 1.03}, {0.3, 0.8, 1.4});
+  JoinGeometry g;
+  g.child = &child;
+  g.parent = &parent;
+  g.point = {0.3, 0.8, 1.0};
+  g.gap_m = 0.03;
+  const JoinFeatures none = ComputeJoinFeatures(g);
+  for (int i = kFirstImageJoinFeature; i < kJoinFeatureCount; ++i) EXPECT_EQ(none[i], 0.0) << i;
+  const JoinImageEvidence e{0.25, 0.75, 0.5, 0.6};
+  g.images = &e;
+  const JoinFeatures f = ComputeJoinFeatures(g);
+  EXPECT_DOUBLE_EQ(f[17], 0.25);
+  EXPECT_DOUBLE_EQ(f[18], 0.75);
+  EXPECT_DOUBLE_EQ(f[19], (1.0 - 0.75) * 0.03 / 0.02);
+  EXPECT_DOUBLE_EQ(f[20], 0.5);
+  EXPECT_DOUBLE_EQ(f[21], 0.6);
+  for (int i = 0; i < kFirstImageJoinFeature; ++i) EXPECT_EQ(f[i], none[i]) << i;
+  g.target = JoinTarget::kTrunk;
+  const JoinFeatures root = ComputeJoinFeatures(g);
+  EXPECT_DOUBLE_EQ(root[18], 0.75);
+  EXPECT_EQ(root[21], 0.0);  // crossing a cane: not for the trunk or head
+}
+
+// The weights trained with the images: a gap the images show as wood makes a join likelier, and
+// wood beyond the parent along the child's line (a crossing) makes it less likely.
+TEST(JoinClassifier, ImageWeightsFavourSeenGapsAndDisfavourCrossings) {
+  const Polyline3 parent = Line({0.06, 0.8, 1.0}, {0.5, 0.8, 1.0}, 0.006);
+  const Polyline3 child = Line({0.3, 0.8, 1.02}, {0.35, 0.8, 1.4}, 0.004);
+  JoinGeometry g;
+  g.child = &child;
+  g.parent = &parent;
+  g.point = {0.3, 0.8, 1.0};
+  g.gap_m = 0.02;
+  g.head_centre = {0, 0.8, 1.0};
+  g.base_to_head_m = 0.25;
+  g.point_to_head_m = 0.25;
+  const JoinWeights w = ImageJoinWeights();
+  EXPECT_TRUE(UsesImageFeatures(w));
+  EXPECT_FALSE(UsesImageFeatures(DefaultJoinWeights()));
+  const JoinImageEvidence seen{1.0, 1.0, 0.0, 0.0}, unseen{0.0, 0.1, 0.0, 0.0};
+  const JoinImageEvidence crossing{1.0, 1.0, 0.0, 1.0};
+  g.images = &seen;
+  const double p_seen = JoinProbability(ComputeJoinFeatures(g), w);
+  g.images = &unseen;
+  const double p_unseen = JoinProbability(ComputeJoinFeatures(g), w);
+  g.images = &crossing;
+  const double p_crossing = JoinProbability(ComputeJoinFeatures(g), w);
+  EXPECT_GT(p_seen, 2.0 * p_unseen);
+  EXPECT_GT(p_seen, 2.0 * p_crossing);
+}
+
+TEST(JoinClassifier, UsesImageFeaturesOnlyWithAWeightOnOne) {
+  JoinWeights w;
+  w.cane[1] = w.root[16] = 1.0;
+  EXPECT_FALSE(UsesImageFeatures(w));
+  w.root[kJoinFeatureCount - 1] = -0.5;
+  EXPECT_TRUE(UsesImageFeatures(w));
+  w = JoinWeights{};
+  w.cane[kFirstImageJoinFeature] = 0.1;
+  EXPECT_TRUE(UsesImageFeatures(w));
+}
+
+// Connection measures the images of every candidate join when given them, and of none when the
+// weights do not use them.
+TEST(JoinClassifier, ConnectionLooksTheImagesUpOnlyForWeightsThatUseThem) {
+  const Polyline3 trunk = Line({0, 0.8, 0}, {0, 0.8, 0.95}, 0.025);
+  const Polyline3 parent = Line({0.06, 0.8, 1.0}, {0.5, 0.8, 1.0}, 0.006);
+  const Polyline3 child = Line({0.3, 0.8, 1.0}, {0.3, 0.8, 1.3});  // from the parent, upward
+  const HeadModel head = connect_test::Head();
+  int calls = 0;
+  const JoinImageFn images = [&](const Eigen::Vector3d&, const Eigen::Vector3d&) {
+    ++calls;
+    return JoinImageEvidence{0.9, 0.4, 1.0, 0.7};
+  };
+  ConnectOptions options;
+  const auto prepared = PrepareCanes({parent, child}, trunk, head, options);
+  ASSERT_TRUE(prepared.ok());
+  ASSERT_EQ(prepared->canes.size(), 2u);
+  const std::vector<JoinCandidate> joins = FindJoins(*prepared, head, options, images);
+  bool checked_fork = false;
+  for (const JoinCandidate& j : joins) {
+    EXPECT_EQ(j.features[17], 0.9);
+    EXPECT_EQ(j.features[18], 0.4);
+    EXPECT_EQ(j.features[20], 1.0);
+    // Crossing evidence is measured, not taken from the function's past_support.
+    if (j.target != JoinTarget::kCane) {
+      EXPECT_EQ(j.features[21], 0.0);
+    }
+    if (j.child == 1 && !j.base_is_last && j.parent == 0) {
+      // The child's line continued downward past its parent: wood by the function's word.
+      EXPECT_EQ(j.features[21], 0.9);
+      checked_fork = true;
+    }
+  }
+  EXPECT_TRUE(checked_fork);
+  EXPECT_GT(calls, 0);
+  for (const JoinCandidate& j : FindJoins(*prepared, head, options)) {
+    for (int i = kFirstImageJoinFeature; i < kJoinFeatureCount; ++i) EXPECT_EQ(j.features[i], 0);
+  }
+  calls = 0;
+  for (int i = kFirstImageJoinFeature; i < kJoinFeatureCount; ++i)
+    options.join_weights.cane[i] = options.join_weights.root[i] = 0.0;
+  ASSERT_TRUE(ConnectCanes({parent, child}, trunk, head, options, nullptr, {}, images).ok());
+  EXPECT_EQ(calls, 0);
+  options.join_weights.cane[20] = 0.5;
+  ASSERT_TRUE(ConnectCanes({parent, child}, trunk, head, options, nullptr, {}, images).ok());
+  EXPECT_GT(calls, 0);
 }
 
 TEST(JoinClassifier, TrainingSeparatesSeparableJoinsAndRejectsBadExamples) {
@@ -129,31 +243,44 @@ TEST(JoinClassifier, DISABLED_TrainOnSimulatedStops) {
       ASSERT_TRUE(head.ok()) << head.status();
       const auto prepared = PrepareCanes(*canes, head->trunk, head->head, options.connect);
       ASSERT_TRUE(prepared.ok()) << prepared.status();
-      const std::vector<JoinCandidate> joins = FindJoins(*prepared, head->head, options.connect);
+      const JoinImageFn join_images = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+        return MeasureJoinImages(a, b, stop.views, matched->rig);
+      };
+      const std::vector<JoinCandidate> joins =
+          FindJoins(*prepared, head->head, options.connect, join_images);
       const std::vector<LabelledJoin> labelled = LabelJoins(*prepared, joins, stop.scene.vine);
       examples.insert(examples.end(), labelled.begin(), labelled.end());
     }
   }
-  std::vector<LabelledJoin> to_cane, to_root;
-  for (const LabelledJoin& e : examples)
-    (e.features[3] != 0.0 || e.features[4] != 0.0 ? to_root : to_cane).push_back(e);
-  JoinWeights w;
-  for (auto [name, set, out] : {std::tuple{"cane", &to_cane, &w.cane},
-                                std::tuple{"root", &to_root, &w.root}}) {
-    int right = 0;
-    for (const LabelledJoin& e : *set) right += e.right ? 1 : 0;
-    const auto trained = TrainJoinClassifier(*set);
-    ASSERT_TRUE(trained.ok()) << trained.status();
-    *out = *trained;
-    std::printf("seeds 1000-%d, labels and images, joins to a %s: %zu candidates, %d right\n",
-                1000 + stops - 1, name, set->size(), right);
-  }
-  std::printf("training AUC %.3f (committed weights %.3f)\n", Auc(examples, w),
-              Auc(examples, DefaultJoinWeights()));
-  for (auto [name, v] : {std::pair{"cane", &w.cane}, std::pair{"root", &w.root}}) {
-    std::printf("  w.%s = {", name);
-    for (int i = 0; i < kJoinFeatureCount; ++i) std::printf("%s%.4f", i ? ", " : "", (*v)[i]);
-    std::printf("};\n");
+  // Trained twice on the same joins: with the image features, and without them (a control:
+  // what retraining alone gains on today's pipeline).
+  for (bool with_images : {true, false}) {
+    std::vector<LabelledJoin> to_cane, to_root;
+    for (LabelledJoin e : examples) {
+      if (!with_images) {
+        std::fill(e.features.begin() + kFirstImageJoinFeature, e.features.end(), 0.0);
+      }
+      (e.features[3] != 0.0 || e.features[4] != 0.0 ? to_root : to_cane).push_back(e);
+    }
+    JoinWeights w;
+    for (auto [name, set, out] : {std::tuple{"cane", &to_cane, &w.cane},
+                                  std::tuple{"root", &to_root, &w.root}}) {
+      int right = 0;
+      for (const LabelledJoin& e : *set) right += e.right ? 1 : 0;
+      const auto trained = TrainJoinClassifier(*set);
+      ASSERT_TRUE(trained.ok()) << trained.status();
+      *out = *trained;
+      std::printf("seeds 1000-%d, labels and images, joins to a %s: %zu candidates, %d right\n",
+                  1000 + stops - 1, name, set->size(), right);
+    }
+    std::printf("%s image features: training AUC %.4f (committed weights %.4f)\n",
+                with_images ? "with" : "without", Auc(examples, w),
+                Auc(examples, DefaultJoinWeights()));
+    for (auto [name, v] : {std::pair{"cane", &w.cane}, std::pair{"root", &w.root}}) {
+      std::printf("  w.%s = {", name);
+      for (int i = 0; i < kJoinFeatureCount; ++i) std::printf("%s%.4f", i ? ", " : "", (*v)[i]);
+      std::printf("};\n");
+    }
   }
 }
 

@@ -10,6 +10,7 @@
 #include "absl/strings/str_cat.h"
 #include "core/status_macros.h"
 #include "workers/reconstruct/gap_support.h"
+#include "workers/reconstruct/join_images.h"
 
 namespace vb::reconstruct {
 namespace {
@@ -189,8 +190,12 @@ absl::StatusOr<ReconstructResult> ReconstructFromViews(const std::vector<View2D>
   const GapSupportFn gap_support = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
     return GapSupport(a, b, views, rig);
   };
+  // The join classifier's image features (join_images.h), if its weights use them.
+  const JoinImageFn join_images = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+    return MeasureJoinImages(a, b, views, rig);
+  };
   VB_ASSIGN_OR_RETURN(result.model, ConnectCanes(canes, head.trunk, head.head, options.connect,
-                                                 &result.connect, gap_support));
+                                                 &result.connect, gap_support, join_images));
   result.timings.connect_s = SecondsSince(t);
 
   if (options.grow.after_connection) {  // step 4d on the tree: tips only (bases are pinned)
