@@ -11,6 +11,7 @@
 
 #include "app/commands.h"
 #include "app/decide_evaluation.h"
+#include "app/reconstruct_flags.h"
 #include "app/reconstruct_report.h"
 #include "core/model_metrics.h"
 #include "core/statistics.h"
@@ -116,6 +117,9 @@ absl::Status RunBenchReconstruct(Flags& flags) {
     return absl::InvalidArgumentError("--rig-refine must be off, canes or trellis");
   if (input != "images" && input != "labels" && input != "truth")
     return absl::InvalidArgumentError("--input must be images, labels or truth");
+  // --alpha, --select-context, --context-alpha: the match selection (app/reconstruct_flags.h).
+  reconstruct::ReconstructOptions options;
+  VB_RETURN_IF_ERROR(ReadSelectionFlags(flags, &options.correspondence));
   VB_RETURN_IF_ERROR(flags.Finish());
   if (!(truth_break_px >= 0.0 && truth_break_px <= 100.0))
     return absl::InvalidArgumentError("--truth-break-px must be in [0, 100]");
@@ -133,7 +137,6 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   sim_options.render.pixel_format = format;
   sim_options.fiducials = fiducials;
   VB_RETURN_IF_ERROR(sim_options.Validate());
-  reconstruct::ReconstructOptions options;
   options.threads = static_cast<int>(threads);
   options.rig_refine.enabled = rig_refine != "off";
   options.rig_refine.use_trellis = rig_refine == "trellis";

@@ -2,6 +2,7 @@
 #include <iostream>
 
 #include "app/commands.h"
+#include "app/reconstruct_flags.h"
 #include "app/reconstruct_report.h"
 #include "core/status_macros.h"
 #include "core/vine_model_json.h"
@@ -16,6 +17,8 @@ absl::Status RunReconstruct(Flags& flags) {
   VB_ASSIGN_OR_RETURN(const double deadline_s, flags.Double("deadline-s", 30.0));
   VB_ASSIGN_OR_RETURN(const std::string segmenter_path, flags.String("segmenter", ""));
   VB_ASSIGN_OR_RETURN(const int64_t threads, flags.Int("threads", 2));
+  reconstruct::ReconstructOptions options;
+  VB_RETURN_IF_ERROR(ReadSelectionFlags(flags, &options.correspondence));
   VB_RETURN_IF_ERROR(flags.Finish());
   if (!(deadline_s > 0)) return absl::InvalidArgumentError("--deadline-s must be > 0");
   if (threads < 1 || threads > 64) return absl::InvalidArgumentError("--threads must be in [1, 64]");
@@ -34,7 +37,6 @@ absl::Status RunReconstruct(Flags& flags) {
     images.push_back(std::move(rgb));
   }
   rig.fiducials = bundle.calibration.fiducials;  // the platform's, if the bundle lists any
-  reconstruct::ReconstructOptions options;
   options.threads = static_cast<int>(threads);
   VB_ASSIGN_OR_RETURN(const reconstruct::ReconstructResult result,
                       reconstruct::Reconstruct(images, rig, segmenter, options, deadline));

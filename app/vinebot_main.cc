@@ -31,7 +31,10 @@ const std::vector<Command>& Commands() {
        "[--pixel-format F]",
        vb::app::RunCapture},
       {"bundle info", "--bundle DIR", vb::app::RunBundleInfo},
-      {"reconstruct", "--bundle DIR --out model.json [--deadline-s T]", vb::app::RunReconstruct},
+      {"reconstruct",
+       "--bundle DIR --out model.json [--deadline-s T] [--alpha A] [--select-context]"
+       " [--context-alpha A]",
+       vb::app::RunReconstruct},
       {"evaluate",
        "--model model.json --truth ground_truth.json [--policy policy.json] "
        "[--calibration calibration.yaml]",
@@ -47,7 +50,8 @@ const std::vector<Command>& Commands() {
        vb::app::RunPhenomics},
       {"bench reconstruct",
        "--vines N --seed-base S [--calibration-error-px X] [--policy policy.json]"
-       " [--input images|labels|truth] [--rig-refine off|canes|trellis]",
+       " [--input images|labels|truth] [--rig-refine off|canes|trellis] [--alpha A]"
+       " [--select-context] [--context-alpha A]",
        vb::app::RunBenchReconstruct},
       {"plan",
        "--model model.json --cuts cut_plan.json --out trajectory.json [--tool mill_end|secateur] "

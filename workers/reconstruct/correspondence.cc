@@ -214,6 +214,11 @@ absl::Status CorrespondenceOptions::Validate() const {
     return Invalid("gibbs", std::string(s.message()));
   }
   if (!(alpha > 0.0)) return Invalid("alpha", absl::StrCat("must be > 0, got ", alpha));
+  VB_RETURN_IF_ERROR(context.Validate());
+  if (context.enabled && !(context.alpha >= alpha)) {
+    return Invalid("context.alpha", absl::StrCat("must be >= alpha (", alpha, "), got ",
+                                                 context.alpha));
+  }
   return absl::OkStatus();
 }
 
@@ -449,7 +454,16 @@ absl::StatusOr<std::vector<Piece3D>> MatchSegments(const std::vector<View2D>& vi
       CandidateConflicts(candidates, options, views, samples, rig);
   VB_RETURN_IF_ERROR(deadline.Check("correspondence"));
   const std::vector<double> marginals = GibbsMarginals(probabilities, conflicts, options.gibbs);
-  const std::vector<int> kept = SelectMinimumExpectedLoss(marginals, options.alpha);
+  std::vector<int> kept = SelectMinimumExpectedLoss(marginals, options.alpha);
+  if (options.context.enabled) {
+    std::vector<std::vector<Eigen::Vector3d>> curves;
+    curves.reserve(candidates.size());
+    for (const ScoredCandidate& c : candidates) curves.push_back(c.fit.control_points);
+    const std::vector<int> added =
+        SelectInContext(curves, marginals, conflicts, kept, options.context);
+    kept.insert(kept.end(), added.begin(), added.end());
+    std::sort(kept.begin(), kept.end());
+  }
   VB_RETURN_IF_ERROR(deadline.Check("correspondence"));
 
   std::vector<Piece3D> pieces;

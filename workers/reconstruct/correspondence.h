@@ -20,7 +20,9 @@
 //  4. Gibbs sampling under the one-to-one constraint (candidates of the same view pair claiming
 //     overlapping parts of one 2D segment exclude each other; optionally not where two canes lie
 //     along each other in one view: SharedClaimOptions) gives marginal probabilities, and
-//     the minimum expected loss selection keeps those above 1 / (1 + alpha) (gibbs.h).
+//     the minimum expected loss selection keeps those above 1 / (1 + alpha) (gibbs.h);
+//     optionally (context, off) candidates a little below that which continue a kept piece
+//     are kept too (context_selection.h).
 // Duplicate pieces of one cane from different view pairs are expected; cane assembly merges them.
 // Thread-safe (pure functions).
 #pragma once
@@ -31,6 +33,7 @@
 #include "absl/status/statusor.h"
 #include "core/calibration.h"
 #include "core/deadline.h"
+#include "workers/reconstruct/context_selection.h"
 #include "workers/reconstruct/gibbs.h"
 #include "workers/reconstruct/match_candidates.h"
 #include "workers/reconstruct/match_classifier.h"
@@ -114,12 +117,17 @@ struct CorrespondenceOptions {
   // classifier's refinement features (match_classifier.h) and the weights retrained with them on
   // the rig of 2026-11-22: with the committed weights 5 gained recall but lost precision.
   double alpha = 3.5;
+  // After the selection above, candidates between it and 1 / (1 + context.alpha) that continue a
+  // kept piece and conflict with none (context_selection.h). Off by default
+  // (docs/reconstruction.md, section 3, "Selection in context (session 18)").
+  ContextSelectionOptions context;
 
   // INVALID_ARGUMENT naming the field for non-finite or out-of-range values (sample_step_px
   // outside [0.5, 50], min_epipolar_sin or min_epipolar_sin_refined outside [0, 1), min_hits < 2, max_gap_samples < 0,
   // max_ill_conditioned_gap_samples < 0, other_views out of range,
-  // empty volume, alpha <= 0 or NaN, non-finite classifier weights, invalid gibbs or
-  // shared_claims options (the field named as "shared_claims.min_separation_m", ...)...).
+  // empty volume, alpha <= 0 or NaN, non-finite classifier weights, invalid gibbs,
+  // shared_claims or context options (the field named as "shared_claims.min_separation_m",
+  // "context.alpha", ...), context enabled with context.alpha < alpha...).
   absl::Status Validate() const;
 };
 

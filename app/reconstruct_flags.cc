@@ -1,0 +1,34 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "app/reconstruct_flags.h"
+
+#include <cmath>
+
+#include "absl/strings/str_cat.h"
+#include "core/status_macros.h"
+
+namespace vb::app {
+
+absl::Status ReadSelectionFlags(Flags& flags, reconstruct::CorrespondenceOptions* options) {
+  VB_ASSIGN_OR_RETURN(const double alpha, flags.Double("alpha", options->alpha));
+  VB_ASSIGN_OR_RETURN(const bool context,
+                      flags.Bool("select-context", options->context.enabled));
+  VB_ASSIGN_OR_RETURN(const double context_alpha,
+                      flags.Double("context-alpha", options->context.alpha));
+  if (!(alpha > 0.0) || !std::isfinite(alpha)) {
+    return absl::InvalidArgumentError(absl::StrCat("--alpha must be finite and > 0, got ", alpha));
+  }
+  if (!(context_alpha > 0.0) || !std::isfinite(context_alpha)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("--context-alpha must be finite and > 0, got ", context_alpha));
+  }
+  if (context && context_alpha < alpha) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "--context-alpha (", context_alpha, ") must be >= --alpha (", alpha, ")"));
+  }
+  options->alpha = alpha;
+  options->context.enabled = context;
+  options->context.alpha = context_alpha;
+  return absl::OkStatus();
+}
+
+}  // namespace vb::app

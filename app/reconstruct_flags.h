@@ -1,0 +1,22 @@
+// SPDX-License-Identifier: Apache-2.0
+// Flags shared by `vinebot reconstruct` and `vinebot bench reconstruct` that set the match
+// selection of correspondence (step 3; workers/reconstruct/correspondence.h).
+#pragma once
+
+#include "absl/status/status.h"
+#include "app/flags.h"
+#include "workers/reconstruct/correspondence.h"
+
+namespace vb::app {
+
+// Reads into *options (defaults: its values as given):
+//   --alpha A: the minimum expected loss selection's alpha (keep marginal P > 1 / (1 + A)), of
+//     both passes (the first pass's matters only where the rig refinement is not applied: the
+//     refinement takes pieces with P >= 0.8 whatever alpha);
+//   --select-context true|false: the context-aware selection (context_selection.h);
+//   --context-alpha A: its lower threshold 1 / (1 + A), at least --alpha.
+// INVALID_ARGUMENT naming the flag: a value that does not parse, --alpha or --context-alpha not
+// finite or <= 0, --context-alpha below --alpha with --select-context on.
+absl::Status ReadSelectionFlags(Flags& flags, reconstruct::CorrespondenceOptions* options);
+
+}  // namespace vb::app
