@@ -26,7 +26,7 @@ Curve Line(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
 ContextSelectionOptions On() {
   ContextSelectionOptions options;
   options.enabled = true;
-  options.alpha = 9.0;  // lower threshold 0.1 (the selection's alpha 3.5: 0.222)
+  options.alpha = 9.0;  // lower threshold 0.1 (the scene's selection alpha 3.5: 0.222)
   return options;
 }
 
