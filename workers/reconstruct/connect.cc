@@ -232,7 +232,7 @@ std::vector<JoinCandidate> FindJoins(const PreparedCanes& prepared, const HeadMo
                     .past_support;
           }
         }
-        g.images = join_images ? &evidence : nullptr;
+        g.images = join_images ? &evidence : nullptr;  // read below, then cleared
         JoinCandidate c;
         c.child = static_cast<int>(i);
         c.base_is_last = end == 1;
@@ -240,6 +240,7 @@ std::vector<JoinCandidate> FindJoins(const PreparedCanes& prepared, const HeadMo
         c.target = target;
         c.point = at;
         c.features = ComputeJoinFeatures(g);
+        g.images = nullptr;  // `evidence` is this call's local
         c.probability = JoinProbability(c.features, options.join_weights);
         joins.push_back(c);
       };

@@ -186,7 +186,8 @@ TEST(ConnectLoss, DISABLED_Report) {
         continue;
       }
       bool in_model = false;
-      for (const Cane& m : model->canes) in_model = in_model || HoldsEnds(prepared->canes[p], m.polyline);
+      for (const Cane& m : model->canes)
+        in_model = in_model || HoldsEnds(prepared->canes[p], m.polyline);
       if (in_model) continue;
       const Polyline3& c = prepared->canes[p];
       bool near = true;
@@ -215,7 +216,8 @@ TEST(ConnectLoss, DISABLED_Report) {
           if (jc.child != p) continue;
           bool to_tree = jc.parent < 0;
           for (const Cane& m : model->canes)
-            to_tree = to_tree || (jc.parent >= 0 && HoldsEnds(prepared->canes[jc.parent], m.polyline));
+            to_tree = to_tree ||
+                      (jc.parent >= 0 && HoldsEnds(prepared->canes[jc.parent], m.polyline));
           if (to_tree && (tree_best < 0 || jc.probability > joins[tree_best].probability))
             tree_best = static_cast<int>(k);
         }

@@ -9,7 +9,7 @@
 // normal selection; and the vine's true length within 10 mm of a piece without and with them.
 // Run with
 //   VB_INPUT=images VB_SEED=1300 VB_STOPS=20 [VB_CONTEXT_ALPHA=9] [VB_CONTEXT_GAP_M=0.015]
-//   [VB_CONTEXT_MIN_COS=0.9] [VB_CONTEXT_NEW=0.25] [VB_ALPHA=3.5] vb_reconstruct_test
+//   [VB_CONTEXT_MIN_COS=0.9] [VB_CONTEXT_NEW=0.25] [VB_ALPHA=4.5] vb_reconstruct_test
 //     --gtest_also_run_disabled_tests --gtest_filter='ContextSelection.DISABLED_Report'
 // Tuning seeds only (1100-1999; docs/reconstruction.md "Seeds").
 #include <algorithm>

@@ -100,7 +100,7 @@ TEST(MatchSegments, TheDefaultsKeepPrecisionAgainstNoRefinement) {
 }
 
 // Harder: neighbours' canes intrude, segments are broken and wobble (correspondence_test_util.h).
-// At alpha 2: the default (4) trades piece precision for recall, as cane assembly drops most
+// At alpha 2: the default (4.5) trades piece precision for recall, as cane assembly drops most
 // ghosts; this checks the classifier and Gibbs selection at a precision-oriented setting.
 TEST(MatchSegments, DegradedStopWithNeighboursIsMostlyRight) {
   CorrespondenceOptions options;

@@ -27,7 +27,7 @@
 // toward the prediction by `alongside_prior_px_per_mm` (the end keeps its own course). With
 // `alongside_require_parting`, an alongside stretch is kept only if growth leaves the other cane
 // again (is accepted on evidence beyond it), else cut off where it began.
-// Support in bundles (`band_support`, s18; off by default: measured no recall gain, step 4d): a
+// Support in bundles (`band_support`, s18; off by default: no recall gain on 1100-1199, step 4d): a
 // view also supports a point that lies in a band of wood (foreground, or the wires and posts that
 // may hide it) whose half-width through the point (skeleton distance plus distance to the
 // background) exceeds the point's projected radius by `band_margin_px` (a single cane's band does

@@ -65,6 +65,9 @@ class GrowEvidence {
  public:
   GrowEvidence(const std::vector<View2D>& views, const RigCalibration& rig,
                const GrowOptions& options);
+  // The probes point into this object's own radius maps: not copyable.
+  GrowEvidence(const GrowEvidence&) = delete;
+  GrowEvidence& operator=(const GrowEvidence&) = delete;
 
   // The point near `predicted`, on the plane normal to the tangent, that best fits the skeletons
   // of all views (truncated squared distances plus prior_px_per_mm of pull per mm of offset): a

@@ -60,7 +60,7 @@ double ViewProbe::RadiusPx(const Eigen::Vector3d& p, double radius_m) const {
 }
 
 double ViewProbe::WoodRadius(const Eigen::Vector2d& uv) const {
-  if (wood_radius_ == nullptr) return 0.0;
+  if (wood_radius_ == nullptr || view_.width < 2 || view_.height < 2) return 0.0;
   const int x0 = std::clamp(static_cast<int>(std::floor(uv.x())), 0, view_.width - 2);
   const int y0 = std::clamp(static_cast<int>(std::floor(uv.y())), 0, view_.height - 2);
   const double fx = std::clamp(uv.x() - x0, 0.0, 1.0), fy = std::clamp(uv.y() - y0, 0.0, 1.0);

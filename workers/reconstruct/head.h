@@ -40,7 +40,8 @@ struct HeadOptions {
   int min_views = 3;                    // a cube must be inside the image of at least this many
   double slab_m = 0.02;                 // height of the slabs used to split trunk from head
   double head_width_factor = 1.6;       // a slab wider than this x trunk width is head
-  double depth_margin_m = 0.03;         // head depth = max(width, height) + 2 x this margin
+  double depth_margin_m = 0.03;         // head depth = head_depth_factor x max(width, height)
+                                        // + 2 x this margin
   double head_min_height_m = 0.08;      // the head spans at least this far below the hull top
   double head_overlap_m = 0.04;         // the head reaches this far below the widening
   // Peeling the canes off the silhouettes (head_peel.h; docs/reconstruction.md step 5, s18):

@@ -21,8 +21,10 @@ namespace vb::reconstruct {
 // `view`'s thick_mask (row-major, nonzero = silhouette) without the peeled pixels. `canes` are
 // 3D points of canes in order (ReconstructHeadAndTrunk's depth hints): consecutive points closer
 // than options.peel_link_m are drawn as a line options.peel_cane_radius_m thick through `camera`
-// (a point with no such neighbour as a disc). `camera` must be the view's (sizes agree; the
-// caller checks). Pure function, thread-safe.
+// (a point with no such neighbour as a disc). The hints carry no cane boundaries, so the last
+// point of one cane and the first of the next are linked too when they lie that close (a known
+// flaw of this off-by-default option: passing the canes as polylines would fix it). `camera`
+// must be the view's (sizes agree; the caller checks). Pure function, thread-safe.
 std::vector<uint8_t> PeelCanesOffSilhouette(const View2D& view, const CameraCalibration& camera,
                                             const std::vector<Eigen::Vector3d>& canes,
                                             const HeadOptions& options);

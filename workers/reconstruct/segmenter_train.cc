@@ -331,10 +331,12 @@ absl::StatusOr<SegmenterTrainResult> TrainSegmenter(const std::vector<LabelledVi
   VB_RETURN_IF_ERROR(options.Validate());
   if (train.empty()) return absl::InvalidArgumentError("train: no views");
   for (size_t v = 0; v < train.size(); ++v) {
-    VB_RETURN_IF_ERROR(segmenter_internal::CheckLabelledView(train[v], absl::StrCat("train[", v, "]")));
+    VB_RETURN_IF_ERROR(
+        segmenter_internal::CheckLabelledView(train[v], absl::StrCat("train[", v, "]")));
   }
   for (size_t v = 0; v < held_out.size(); ++v) {
-    VB_RETURN_IF_ERROR(segmenter_internal::CheckLabelledView(held_out[v], absl::StrCat("held_out[", v, "]")));
+    VB_RETURN_IF_ERROR(
+        segmenter_internal::CheckLabelledView(held_out[v], absl::StrCat("held_out[", v, "]")));
   }
   std::mt19937_64 rng(options.seed);
   SegmenterTrainResult result;

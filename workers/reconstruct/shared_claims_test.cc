@@ -167,7 +167,7 @@ TEST(SharedClaims, GhostSharingASegmentStillConflicts) {
 
 // Two candidates of view pair (0, 1) sharing segment 0 of view 0 over [0, 100] px (and not
 // their segments of view 1): i's four points there lie 10, 20, 30 and 50 mm from j's curve, j's
-// two lie 0.5 m from i's. The separation is the lower median: (20 + 30) / 2 = 25 mm (the median
+// two lie 0.5 m from i's. The separation is the median: (20 + 30) / 2 = 25 mm (the median
 // of an even count is the mean of the middle two, core/statistics.h). No view outside the pair:
 // no support.
 TEST(SharedClaims, SeparationIsTheMedianDistanceOverTheSharedStretch) {
