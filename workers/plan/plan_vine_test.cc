@@ -249,9 +249,12 @@ TEST(PlanVine, TransitsTheMarginsCloseArePlannedWithoutThem) {
   // transit that finds no path in the inflated scene is planned again without margins (and the
   // trajectory still touches nothing); without it, its cut is given up. (Unreached cuts are not
   // retried in a later pass here: the retry reaches some of them anyway, from elsewhere.)
+  // Every query ends at a bound in work (max_tree_states, the walled-in and elbow-flip bounds),
+  // never at the time limit, so the plans are the same whatever the machine's load.
   const RobotModel robot = DefaultUr5(SecateurTool());
   const PlatformGeometry platform = DefaultPlatform();
   PlanOptions fallback = Options();
+  fallback.path.time_limit_s = 60.0;
   fallback.margins.max_margin_m = 0.3;
   fallback.retry_unreached = false;
   fallback.undo_walled_in = false;  // it recovers some of the same cuts another way

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "absl/strings/str_cat.h"
+#include "core/geometry.h"
 
 namespace vb::reconstruct {
 namespace {
@@ -17,20 +18,19 @@ absl::Status Invalid(const std::string& field, const std::string& message) {
 }
 
 // Distance from p to the polyline and the unit direction of its nearest segment (zero if the
-// polyline has no segment of positive length).
+// polyline has no segment of positive length). Not connect_internal's DistanceToPolyline: the
+// selection needs the segment's direction, not the nearest point, and takes bare point lists.
 double NearestOnPolyline(const Eigen::Vector3d& p, const std::vector<Eigen::Vector3d>& line,
                          Eigen::Vector3d* direction) {
   double best = std::numeric_limits<double>::infinity();
   direction->setZero();
   for (size_t k = 0; k + 1 < line.size(); ++k) {
     const Eigen::Vector3d d = line[k + 1] - line[k];
-    const double dd = d.squaredNorm();
-    if (!(dd > 0.0)) continue;
-    const double t = std::clamp((p - line[k]).dot(d) / dd, 0.0, 1.0);
-    const double dist = (p - line[k] - t * d).norm();
+    if (!(d.squaredNorm() > 0.0)) continue;
+    const double dist = PointSegmentDistance(p, line[k], line[k + 1]);
     if (dist < best) {
       best = dist;
-      *direction = d / std::sqrt(dd);
+      *direction = d.normalized();
     }
   }
   return best;

@@ -10,6 +10,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "workers/reconstruct/gap_support.h"
+#include "workers/reconstruct/grow.h"
 #include "workers/reconstruct/join_images.h"
 #include "workers/reconstruct/synthetic_views.h"
 
@@ -28,20 +29,53 @@ absl::StatusOr<RenderedMatch> RenderAndMatch(uint64_t seed, bool images, bool fi
   return out;
 }
 
+namespace {
+
+// AssembleCanes on `pieces`, the canes mostly outside options.volume dropped.
+absl::StatusOr<std::vector<Polyline3>> AssembleInVolume(const std::vector<Piece3D>& pieces,
+                                                        const ReconstructOptions& options) {
+  auto canes = AssembleCanes(pieces, options.assembly, Deadline::Infinite());
+  if (!canes.ok()) return canes.status();
+  std::erase_if(*canes,
+                [&](const Polyline3& cane) { return options.volume.MostlyOutside(cane); });
+  return canes;
+}
+
+std::vector<Eigen::Vector3d> PointsOf(const std::vector<Polyline3>& lines) {
+  std::vector<Eigen::Vector3d> points;
+  for (const Polyline3& l : lines) points.insert(points.end(), l.points.begin(), l.points.end());
+  return points;
+}
+
+}  // namespace
+
+absl::StatusOr<GrownCanes> AssembleAndGrow(const std::vector<View2D>& views,
+                                           const RigCalibration& rig,
+                                           const std::vector<Piece3D>& pieces,
+                                           const ReconstructOptions& options) {
+  auto canes = AssembleInVolume(pieces, options);
+  if (!canes.ok()) return canes.status();
+  GrownCanes out;
+  out.canes = std::move(*canes);
+  if (!options.grow.after_connection) {
+    const absl::Status grown = GrowCaneEnds(views, rig, options.volume, options.grow, &out.canes);
+    if (!grown.ok()) return grown;
+  }
+  out.hints = PointsOf(out.canes);
+  return out;
+}
+
 absl::StatusOr<AssembledStop> AssembleStop(const std::vector<View2D>& views,
                                            const RigCalibration& rig,
                                            const std::vector<Piece3D>& pieces,
                                            const ReconstructOptions& options) {
   const Deadline deadline = Deadline::Infinite();
   AssembledStop out;
-  auto canes = AssembleCanes(pieces, options.assembly, deadline);
+  auto canes = AssembleInVolume(pieces, options);
   if (!canes.ok()) return canes.status();
   out.canes = std::move(*canes);
-  std::erase_if(out.canes,
-                [&](const Polyline3& cane) { return options.volume.MostlyOutside(cane); });
-  std::vector<Eigen::Vector3d> hints;
-  for (const Polyline3& c : out.canes) hints.insert(hints.end(), c.points.begin(), c.points.end());
-  auto head = ReconstructHeadAndTrunk(views, rig, options.volume, options.head, deadline, hints);
+  auto head = ReconstructHeadAndTrunk(views, rig, options.volume, options.head, deadline,
+                                      PointsOf(out.canes));
   if (!head.ok()) return head.status();
   out.head = std::move(*head);
   auto prepared = PrepareCanes(out.canes, out.head.trunk, out.head.head, options.connect);

@@ -41,6 +41,20 @@ struct RenderedMatch {
 absl::StatusOr<RenderedMatch> RenderAndMatch(uint64_t seed, bool images, bool fiducials,
                                              const ReconstructOptions& options);
 
+// The assembled canes as the head reports set them up (HeadHull.DISABLED_Report,
+// HeadExit.DISABLED_Report), with `options`' fields of each stage and no deadline: AssembleCanes
+// on `pieces`, the canes mostly outside options.volume dropped, then GrowCaneEnds on `views`
+// through `rig` when options.grow grows before connection (as ReconstructFromViews does).
+struct GrownCanes {
+  std::vector<Polyline3> canes;
+  std::vector<Eigen::Vector3d> hints;  // every point of `canes`, in order: the head's hints
+};
+// Errors: AssembleCanes' and GrowCaneEnds'.
+absl::StatusOr<GrownCanes> AssembleAndGrow(const std::vector<View2D>& views,
+                                           const RigCalibration& rig,
+                                           const std::vector<Piece3D>& pieces,
+                                           const ReconstructOptions& options);
+
 // The stages after correspondence as the diagnosis reports run them (not all of
 // ReconstructFromViews: no extension, no left-out wood), with `options`' fields of each stage and
 // no deadline: AssembleCanes on `pieces`, the canes mostly outside options.volume dropped;

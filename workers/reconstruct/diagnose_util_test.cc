@@ -129,6 +129,49 @@ TEST(FirstLostStage, TheFirstStageThatFailsInPipelineOrder) {
   EXPECT_EQ(FirstLostStage(p, e, grids, threshold), kLossInImage);
 }
 
+// The middle half of a drawn cane, one piece seen by views 0 and 1, and a piece outside the
+// working volume: the outside one is dropped, the other assembled and, when grow runs before
+// connection (the default), grown along the drawn cane beyond its ends; the hints are the canes'
+// points in order.
+TEST(AssembleAndGrow, DropsCanesOutsideTheVolumeAndGrowsBeforeConnectionOnly) {
+  const Eigen::Vector3d a(-0.15, 0.78, 0.9), b(0.1, 0.85, 1.25);
+  const auto [model, rig, views] = DrawOneCane(a, b, 3);
+  auto piece = [](const Eigen::Vector3d& from, const Eigen::Vector3d& to) {
+    Piece3D out;
+    for (int k = 0; k <= 20; ++k) {
+      out.polyline.points.push_back(from + (to - from) * (k / 20.0));
+      out.polyline.radii.push_back(0.004);
+    }
+    out.probability = 0.9;
+    out.support = 1.0;
+    out.view_a = 0;
+    out.view_b = 1;
+    out.segment_a = out.segment_b = 0;
+    return out;
+  };
+  const Eigen::Vector3d far(0.0, 3.0, 1.0);  // beyond the volume's y <= 1.2
+  const std::vector<Piece3D> pieces = {piece(a + 0.25 * (b - a), a + 0.75 * (b - a)),
+                                       piece(far, far + Eigen::Vector3d(0.0, 0.0, 0.2))};
+  ReconstructOptions options;
+  ASSERT_FALSE(options.grow.after_connection);
+  const auto grown = AssembleAndGrow(views, rig, pieces, options);
+  ASSERT_TRUE(grown.ok()) << grown.status();
+  ASSERT_EQ(grown->canes.size(), 1u);
+  const Polyline3& cane = grown->canes[0];
+  EXPECT_GT(cane.Length(), 0.5 * (b - a).norm() + 0.05);
+  for (const Eigen::Vector3d& p : cane.points) {
+    EXPECT_LT(DistanceToLines(p, {model.canes[0].polyline}), 0.003);
+  }
+  EXPECT_EQ(grown->hints, cane.points);
+
+  options.grow.after_connection = true;
+  const auto assembled = AssembleAndGrow(views, rig, pieces, options);
+  ASSERT_TRUE(assembled.ok()) << assembled.status();
+  ASSERT_EQ(assembled->canes.size(), 1u);
+  EXPECT_NEAR(assembled->canes[0].Length(), 0.5 * (b - a).norm(), 0.01);
+  EXPECT_EQ(assembled->hints, assembled->canes[0].points);
+}
+
 // Each stage's output lands in its own grid, at its own place (1 m apart along x).
 TEST(MakeStageGrids, EachStagesPointsInItsGrid) {
   auto at = [](double x) { return Eigen::Vector3d(x, 0.8, 1.0); };

@@ -3,20 +3,31 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
+
+#include "workers/reconstruct/image_probes.h"
 
 namespace vb::reconstruct {
 namespace {
 
-bool WoodNear(const View2D& view, int x, int y, int tolerance) {
-  for (int dy = -tolerance; dy <= tolerance; ++dy) {
-    for (int dx = -tolerance; dx <= tolerance; ++dx) {
-      const int xx = x + dx, yy = y + dy;
-      if (xx < 0 || yy < 0 || xx >= view.classes.width || yy >= view.classes.height) continue;
-      // Any non-background class: cane wood, or a wire or post in front of it.
-      if (view.classes.at(xx, yy) != PixelClass::kBackground) return true;
-    }
-  }
-  return false;
+// The samples along a-b: steps + 1 of them, ends included, at most step_m apart.
+int Steps(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const GapSupportOptions& options) {
+  return std::max(1, static_cast<int>(std::ceil((b - a).norm() / options.step_m)));
+}
+
+Eigen::Vector3d Sample(const Eigen::Vector3d& a, const Eigen::Vector3d& b, int k, int steps) {
+  return a + (b - a) * (static_cast<double>(k) / steps);
+}
+
+// Whether the view shows wood (any non-background class: cane wood, or a wire or post in front
+// of it) near p's projection through `camera`; empty where the view has no class image or p does
+// not fall inside the image.
+std::optional<bool> WoodSeen(const View2D& view, const CameraCalibration& camera,
+                             const Eigen::Vector3d& p, const GapSupportOptions& options) {
+  if (view.classes.width <= 0) return std::nullopt;
+  const auto uv = camera.Project(p);
+  if (!uv || !camera.InImage(*uv)) return std::nullopt;
+  return WoodNear(view, *uv, options.tolerance_px);
 }
 
 }  // namespace
@@ -25,22 +36,18 @@ double GapSupport(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                   const std::vector<View2D>& views, const RigCalibration& rig,
                   const GapSupportOptions& options) {
   if (!a.allFinite() || !b.allFinite()) return 0.0;
-  const double length = (b - a).norm();
-  const int steps = std::max(1, static_cast<int>(std::ceil(length / options.step_m)));
+  const int steps = Steps(a, b, options);
   const size_t n = std::min(views.size(), rig.cameras.size());
   int supported = 0;
   for (int k = 0; k <= steps; ++k) {
-    const Eigen::Vector3d p = a + (b - a) * (static_cast<double>(k) / steps);
+    const Eigen::Vector3d p = Sample(a, b, k, steps);
     int seen = 0;
     bool wood = true;
     for (size_t v = 0; v < n && wood; ++v) {
-      const View2D& view = views[v];
-      if (view.classes.width <= 0) continue;
-      const auto uv = rig.cameras[v].Project(p);
-      if (!uv || !rig.cameras[v].InImage(*uv)) continue;
+      const std::optional<bool> at = WoodSeen(views[v], rig.cameras[v], p, options);
+      if (!at) continue;
       ++seen;
-      wood = WoodNear(view, static_cast<int>(std::lround(uv->x())),
-                      static_cast<int>(std::lround(uv->y())), options.tolerance_px);
+      wood = *at;
     }
     supported += wood && seen >= options.min_views;
   }
@@ -52,19 +59,12 @@ std::vector<double> GapSupportByView(const Eigen::Vector3d& a, const Eigen::Vect
                                      const GapSupportOptions& options) {
   std::vector<double> out(views.size(), 0.0);
   if (!a.allFinite() || !b.allFinite()) return out;
-  const double length = (b - a).norm();
-  const int steps = std::max(1, static_cast<int>(std::ceil(length / options.step_m)));
+  const int steps = Steps(a, b, options);
   const size_t n = std::min(views.size(), rig.cameras.size());
   for (size_t v = 0; v < n; ++v) {
-    const View2D& view = views[v];
-    if (view.classes.width <= 0) continue;
     int wood = 0;
     for (int k = 0; k <= steps; ++k) {
-      const Eigen::Vector3d p = a + (b - a) * (static_cast<double>(k) / steps);
-      const auto uv = rig.cameras[v].Project(p);
-      if (!uv || !rig.cameras[v].InImage(*uv)) continue;
-      wood += WoodNear(view, static_cast<int>(std::lround(uv->x())),
-                       static_cast<int>(std::lround(uv->y())), options.tolerance_px);
+      wood += WoodSeen(views[v], rig.cameras[v], Sample(a, b, k, steps), options).value_or(false);
     }
     out[v] = static_cast<double>(wood) / (steps + 1);
   }

@@ -227,17 +227,11 @@ TEST(HeadHull, DISABLED_Report) {
     const RigCalibration& rig = rendered->matched.rig;
     const VineModel& truth = rendered->stop.scene.vine;
     const Deadline deadline = Deadline::Infinite();
-    auto canes = AssembleCanes(rendered->matched.pieces, options.assembly, deadline);
-    ASSERT_TRUE(canes.ok());
-    std::erase_if(*canes, [&](const Polyline3& c) { return options.volume.MostlyOutside(c); });
-    if (!options.grow.after_connection) {
-      ASSERT_TRUE(GrowCaneEnds(views, rig, options.volume, options.grow, &*canes).ok());
-    }
-    std::vector<Eigen::Vector3d> hints;
-    for (const Polyline3& c : *canes) hints.insert(hints.end(), c.points.begin(), c.points.end());
+    const auto grown = AssembleAndGrow(views, rig, rendered->matched.pieces, options);
+    ASSERT_TRUE(grown.ok()) << grown.status();
     for (size_t i = 0; i < variants.size(); ++i) {
       const auto head = ReconstructHeadAndTrunk(views, rig, options.volume, variants[i].second,
-                                                deadline, hints);
+                                                deadline, grown->hints);
       ASSERT_TRUE(head.ok());
       if (verbose) std::printf("%s\n", variants[i].first.c_str());
       AddStop(seed, truth, head->head, verbose, &tallies[i]);

@@ -28,7 +28,6 @@
 #include "workers/reconstruct/connect_internal.h"
 #include "workers/reconstruct/diagnose_util.h"
 #include "workers/reconstruct/gap_support.h"
-#include "workers/reconstruct/grow.h"
 #include "workers/reconstruct/join_test_util.h"
 #include "workers/reconstruct/reconstruct.h"
 
@@ -202,19 +201,12 @@ TEST(HeadExit, DISABLED_Report) {
     const std::vector<View2D>& views = rendered->stop.views;
     const RigCalibration& rig = rendered->matched.rig;
     const VineModel& truth = rendered->stop.scene.vine;
-    const Deadline deadline = Deadline::Infinite();
-    auto canes = AssembleCanes(rendered->matched.pieces, options.assembly, deadline);
-    ASSERT_TRUE(canes.ok());
-    std::erase_if(*canes, [&](const Polyline3& c) { return options.volume.MostlyOutside(c); });
-    if (!options.grow.after_connection) {
-      ASSERT_TRUE(GrowCaneEnds(views, rig, options.volume, options.grow, &*canes).ok());
-    }
-    std::vector<Eigen::Vector3d> hints;
-    for (const Polyline3& c : *canes) hints.insert(hints.end(), c.points.begin(), c.points.end());
-    const auto head =
-        ReconstructHeadAndTrunk(views, rig, options.volume, options.head, deadline, hints);
+    const auto grown = AssembleAndGrow(views, rig, rendered->matched.pieces, options);
+    ASSERT_TRUE(grown.ok()) << grown.status();
+    const auto head = ReconstructHeadAndTrunk(views, rig, options.volume, options.head,
+                                              Deadline::Infinite(), grown->hints);
     ASSERT_TRUE(head.ok());
-    const auto prepared = PrepareCanes(*canes, head->trunk, head->head, options.connect);
+    const auto prepared = PrepareCanes(grown->canes, head->trunk, head->head, options.connect);
     ASSERT_TRUE(prepared.ok());
     const std::vector<JoinCandidate> joins = FindJoins(*prepared, head->head, options.connect);
     ConnectOptions off = options.connect;

@@ -3,8 +3,23 @@
 
 #include <algorithm>
 #include <functional>
+#include <utility>
+
+#include "workers/reconstruct/image_probes.h"
 
 namespace vb::reconstruct {
+
+absl::Status JoinImageOptions::Validate() const {
+  if (absl::Status s = CheckPositive(gap.step_m, "join_images", "gap.step_m"); !s.ok()) return s;
+  const std::pair<double, const char*> non_negative[] = {
+      {static_cast<double>(gap.tolerance_px), "gap.tolerance_px"},
+      {static_cast<double>(gap.min_views), "gap.min_views"},
+      {junction_radius_px, "junction_radius_px"}};
+  for (const auto& [value, field] : non_negative) {
+    if (absl::Status s = CheckNonNegative(value, "join_images", field); !s.ok()) return s;
+  }
+  return absl::OkStatus();
+}
 
 JoinImageEvidence MeasureJoinImages(const Eigen::Vector3d& base, const Eigen::Vector3d& point,
                                     const std::vector<View2D>& views, const RigCalibration& rig,

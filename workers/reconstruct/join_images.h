@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "Eigen/Core"
+#include "absl/status/status.h"
 #include "core/calibration.h"
 #include "workers/reconstruct/gap_support.h"
 #include "workers/reconstruct/join_classifier.h"
@@ -19,6 +20,11 @@ namespace vb::reconstruct {
 struct JoinImageOptions {
   GapSupportOptions gap;             // sampling of the gap (GapSupport, GapSupportByView)
   double junction_radius_px = 5.0;   // a junction node this near the projected join point counts
+
+  // INVALID_ARGUMENT naming the field ("join_images.gap.step_m must be finite and > 0, is 0"):
+  // gap.step_m not finite and > 0; gap.tolerance_px, gap.min_views or junction_radius_px not
+  // finite and >= 0.
+  absl::Status Validate() const;
 };
 
 // The evidence of the join of a base at `base` to a parent at `point`: gap_all_views
@@ -26,7 +32,8 @@ struct JoinImageOptions {
 // views), junction_views (of the views with a class image in which `point` falls inside the
 // image, the fraction that have a skeleton node with three or more segments within
 // junction_radius_px of its projection; 0 if none). past_support is left 0 (connection measures
-// it). rig.cameras[i] took views[i]. All 0 for a non-finite base or point.
+// it). rig.cameras[i] took views[i]. All 0 for a non-finite base or point. `options` must be
+// valid (Validate).
 JoinImageEvidence MeasureJoinImages(const Eigen::Vector3d& base, const Eigen::Vector3d& point,
                                     const std::vector<View2D>& views, const RigCalibration& rig,
                                     const JoinImageOptions& options = {});

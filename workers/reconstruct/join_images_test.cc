@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "gtest/gtest.h"
@@ -104,6 +105,36 @@ TEST(JoinImages, ANonFiniteLineHasNoEvidence) {
   EXPECT_EQ(e.junction_views, 0.0);
   EXPECT_EQ(GapSupportByView(OnTheCane(0.0), {NAN, 0.8, 1.0}, views, rig),
             std::vector<double>(views.size(), 0.0));
+}
+
+TEST(JoinImageOptions, RejectsBadValuesNamingTheField) {
+  EXPECT_TRUE(JoinImageOptions{}.Validate().ok());
+  JoinImageOptions zero;  // the edges of the ranges are valid
+  zero.gap.tolerance_px = 0;
+  zero.gap.min_views = 0;
+  zero.junction_radius_px = 0.0;
+  EXPECT_TRUE(zero.Validate().ok()) << zero.Validate();
+  const auto rejects = [](const JoinImageOptions& o, const std::string& field) {
+    const absl::Status s = o.Validate();
+    EXPECT_EQ(s.code(), absl::StatusCode::kInvalidArgument) << field;
+    EXPECT_NE(s.message().find("join_images." + field + " "), std::string::npos) << s;
+  };
+  for (const double bad : {0.0, -0.005, std::nan(""), HUGE_VAL}) {
+    JoinImageOptions o;
+    o.gap.step_m = bad;
+    rejects(o, "gap.step_m");
+  }
+  JoinImageOptions o;
+  o.gap.tolerance_px = -1;
+  rejects(o, "gap.tolerance_px");
+  o = {};
+  o.gap.min_views = -1;
+  rejects(o, "gap.min_views");
+  for (const double bad : {-1.0, std::nan(""), HUGE_VAL}) {
+    o = {};
+    o.junction_radius_px = bad;
+    rejects(o, "junction_radius_px");
+  }
 }
 
 }  // namespace

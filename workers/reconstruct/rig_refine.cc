@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "absl/strings/str_cat.h"
+#include "core/statistics.h"
 #include "core/status_macros.h"
 #include "Eigen/Eigenvalues"
 #include "workers/reconstruct/ceres_camera.h"
@@ -27,13 +28,6 @@ double DistanceAt(const View2D& view, const Eigen::Vector2d& uv) {
   const int x = std::clamp(static_cast<int>(std::lround(uv.x())), 0, view.width - 1);
   const int y = std::clamp(static_cast<int>(std::lround(uv.y())), 0, view.height - 1);
   return view.centreline_distance_px[static_cast<size_t>(y) * view.width + x];
-}
-
-double Median(std::vector<double> values) {
-  if (values.empty()) return 0.0;
-  const size_t mid = values.size() / 2;
-  std::nth_element(values.begin(), values.begin() + mid, values.end());
-  return values[mid];
 }
 
 CameraCalibration Corrected(const CameraCalibration& camera, const double w[3],

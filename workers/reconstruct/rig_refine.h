@@ -96,8 +96,8 @@ struct RigRefineSummary {
   double fiducial_rms_before_px = 0.0;  // RMS reprojection error of the kept detections through
   double fiducial_rms_after_px = 0.0;   // the calibrated and the refined rig
   std::vector<std::string> fiducial_log;  // one line per rejected or invalid detection
-  double median_before_px = 0.0;  // median distance to the skeleton before and after
-  double median_after_px = 0.0;
+  double median_before_px = 0.0;  // median distance to the skeleton before and after (Median of
+  double median_after_px = 0.0;   // core/statistics.h: the two middle ones' mean for an even count)
   // Per camera: the largest of rotation angle x focal length, focal scale x half width and the
   // principal point's shift, in pixels.
   std::vector<double> correction_px;
