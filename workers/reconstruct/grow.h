@@ -36,6 +36,10 @@
 // distance and how far the cross-section reaches out of the wood (0 inside), and after a step that
 // needed such support it is pulled toward the prediction by `band_prior_px_per_mm`, so the end
 // keeps its course through the bundle.
+// Refit of the grown stretch (`refit_span_m`, s19; off by default: recall +0.002 and +0.004 on the
+// tuning ranges for precision -0.002, step 4d "Depth that does not drift"): after each corrected
+// step the last refit_span_m of grown points are refitted jointly to every view's skeleton with a
+// bending cost (grow_refit.cc), and the step is checked at its refitted position.
 // Thread-safe (pure function of its inputs).
 #pragma once
 
@@ -108,8 +112,9 @@ struct GrowOptions {
   double band_margin_px = 1.0;         // a band's half-width must exceed the radius by this
   double band_tolerance_px = 0.5;      // the cross-section may reach this far out of the wood
   double band_prior_px_per_mm = 2.0;   // pull toward the prediction after a step in a band
-  // Refit of the grown stretch (s19; off by default; docs/reconstruction.md step 4d, "Depth that
-  // does not drift"): after each corrected step, the last `refit_span_m` of grown points (the new
+  // Refit of the grown stretch (s19; off by default: recall +0.0020 / +0.0037 on 1100-1199 /
+  // 1200-1299 at precision -0.0023 / -0.0022, docs/reconstruction.md step 4d, "Depth that does
+  // not drift"): after each corrected step, the last `refit_span_m` of grown points (the new
   // one included) are refitted jointly against every view's skeleton (nearest along the normal to
   // the projected cane, within refit_search_px) with a bending cost, anchored by the
   // `refit_anchor_m` of curve before them; the step is then checked at its refitted position.

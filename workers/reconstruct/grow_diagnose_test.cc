@@ -4,7 +4,8 @@
 // --gtest_also_run_disabled_tests --gtest_filter='Grow.DISABLED_Report'. Tuning seeds only
 // (1100-1999). VB_GROW_WHY=1 adds why unsupported ends failed (WhyUnsupported), VB_GROW_BAND=1
 // turns on support in bundles (GrowOptions::band_support), VB_GROW_DRIFT=1 adds how far the grown
-// points lie off their true cane (DriftTally, grow_drift_diagnose.h).
+// points lie off their true cane (DriftTally, grow_drift_diagnose.h), VB_GROW_REFIT=M refits the
+// grown stretch (GrowOptions::refit_span_m; VB_GROW_REFIT_END, _SMOOTH, _PX, _ANCHOR).
 
 #include <algorithm>
 #include <chrono>
