@@ -105,6 +105,12 @@ absl::Status RunBenchReconstruct(Flags& flags) {
                       flags.Bool("extend", reconstruct::ExtendOptions{}.enabled));
   // --grow on|off: two-view growth of assembled cane ends (step 4d); default as GrowOptions.
   VB_ASSIGN_OR_RETURN(const bool grow, flags.Bool("grow", reconstruct::GrowOptions{}.enabled));
+  // --grow-refit M: GrowOptions::refit_span_m, the grown stretch refitted jointly (0: off);
+  // --grow-max-length M: GrowOptions::max_length_m (and alongside_max_m at most M).
+  VB_ASSIGN_OR_RETURN(const double grow_refit,
+                      flags.Double("grow-refit", reconstruct::GrowOptions{}.refit_span_m));
+  VB_ASSIGN_OR_RETURN(const double grow_max_length,
+                      flags.Double("grow-max-length", reconstruct::GrowOptions{}.max_length_m));
   // --head-peel, --head-min-cell, --head-depth-factor: the head's options of those names
   // (reconstruct::HeadOptions peel_canes, min_cell_m, head_depth_factor); defaults as there.
   const reconstruct::HeadOptions head_defaults;
@@ -142,6 +148,9 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   options.rig_refine.use_trellis = rig_refine == "trellis";
   options.extend.enabled = extend;
   options.grow.enabled = grow;
+  options.grow.refit_span_m = grow_refit;
+  options.grow.max_length_m = grow_max_length;
+  options.grow.alongside_max_m = std::min(options.grow.alongside_max_m, grow_max_length);
   options.head.peel_canes = head_peel;
   options.head.min_cell_m = head_min_cell;
   options.head.head_depth_factor = head_depth_factor;

@@ -41,6 +41,10 @@ struct Growth {
   int other = -1;
   int removed = 0;        // points backed off the end before growing (end_backoff_m)
   double removed_m = 0.0; // their length
+  Eigen::Vector3d start = Eigen::Vector3d::Zero();  // the end grown from
+  // refit_end_m: the refitted positions of the end's last points (replacing as many of its
+  // points, after any backed off), applied only with the growth.
+  std::vector<Eigen::Vector3d> end_points;
 };
 
 // Mean radius over the last span_m of the line (its end's thickness, less noisy than one point).
@@ -68,6 +72,7 @@ class Grower {
   // Grows the end at line.points.back(). `others` excludes `line` itself.
   Growth GrowBack(const Polyline3& input, const std::vector<OtherCane>& others) const {
     Growth out;
+    out.start = input.points.back();
     // An end the views disagree on is backed off to the last point they agree on (within
     // end_backoff_m), if any: the growth then starts there.
     Polyline3 line = input;
@@ -95,9 +100,23 @@ class Grower {
       }
     }
     std::vector<Eigen::Vector3d> curve = line.points;
+    const size_t grown_begin = curve.size();  // curve[grown_begin..] are grown
+    // curve[movable_begin..grown_begin) are the end's own points that a refit may move.
+    size_t movable_begin = grown_begin;
+    if (options_.refit_span_m > 0 && options_.refit_end_m > 0 && grown_begin >= 3) {
+      movable_begin = grown_begin - 1;  // the end itself; two points at least stay as anchors
+      double s = 0;
+      while (movable_begin > 2) {
+        s += (curve[movable_begin] - curve[movable_begin - 1]).norm();
+        if (s > options_.refit_end_m + 1e-12) break;
+        --movable_begin;
+      }
+    }
+    out.end_points.assign(curve.begin() + movable_begin, curve.end());
     const double length = line.Length();
     const std::vector<double> arc = line.ArcLengths();
     const Eigen::Vector3d end = line.points.back();
+    out.start = end;
     const Eigen::Vector3d start_tangent =
         (end - line.PointAt(std::max(0.0, length - options_.tangent_span_m), arc)).normalized();
     const double radius = EndRadius(line, options_.tangent_span_m);
@@ -120,13 +139,23 @@ class Grower {
       }
       double prior = in_run ? options_.alongside_prior_px_per_mm : options_.prior_px_per_mm;
       if (in_band) prior = std::max(prior, options_.band_prior_px_per_mm);
-      const Eigen::Vector3d p = evidence_.Correct(predicted, tangent, prior, radius);
+      Eigen::Vector3d p = evidence_.Correct(predicted, tangent, prior, radius);
+      // With refit_span_m, the step's refitted stretch (from `refit_from` in `curve`), written
+      // back only once the step is accepted.
+      std::vector<Eigen::Vector3d> refit;
+      size_t refit_from = 0;
+      if (options_.refit_span_m > 0) {
+        refit_from = RefitStretch(curve, movable_begin, p, &refit);
+        p = refit.back();
+      }
       out.stop_point = p;
       if (!volume_.Contains(p)) {
         out.stop = Stop::kOutside;
         break;
       }
-      const Eigen::Vector3d step = (p - curve.back()).normalized();
+      // (After a refit, from the refitted point before it.)
+      const Eigen::Vector3d& previous = refit.size() >= 2 ? refit[refit.size() - 2] : curve.back();
+      const Eigen::Vector3d step = (p - previous).normalized();
       if (step.dot(start_tangent) < cos_turn) {
         out.stop = Stop::kTurned;
         break;
@@ -137,7 +166,7 @@ class Grower {
       }
       const std::optional<AlongHit> hit = Alongside(p, step, others);
       if (hit) {
-        const double step_length = (p - curve.back()).norm();
+        const double step_length = (p - previous).norm();
         if (!may_run_along || hit->continuation || hit->distance < options_.alongside_min_gap_m ||
             alongside + step_length > options_.alongside_max_m + 1e-12) {
           out.stop = Stop::kAlongside;
@@ -149,6 +178,15 @@ class Grower {
         alongside += step_length;
       } else {
         in_run = false;
+      }
+      for (size_t i = 0; i + 1 < refit.size(); ++i) {
+        const size_t j = refit_from + i;
+        curve[j] = refit[i];
+        if (j >= grown_begin) {
+          out.points[j - grown_begin] = refit[i];
+        } else if (j >= movable_begin) {
+          out.end_points[j - movable_begin] = refit[i];
+        }
       }
       curve.push_back(p);
       out.points.push_back(p);
@@ -164,6 +202,31 @@ class Grower {
   }
 
  private:
+  // The stretch of `curve` + p to refit (refit_span_m): the points from `movable_begin` on
+  // within refit_span_m of p, anchored by refit_anchor_m of curve before them (at least two
+  // points). Returns where in `curve` the stretch begins; `stretch` receives it refitted, p last.
+  size_t RefitStretch(const std::vector<Eigen::Vector3d>& curve, size_t movable_begin,
+                      const Eigen::Vector3d& p, std::vector<Eigen::Vector3d>* stretch) const {
+    size_t first_free = curve.size();  // p's index in curve + p
+    double s = 0;
+    Eigen::Vector3d next = p;
+    while (first_free > movable_begin) {
+      s += (next - curve[first_free - 1]).norm();
+      if (s > options_.refit_span_m + 1e-12) break;
+      next = curve[--first_free];
+    }
+    size_t from = first_free;
+    s = 0;
+    while (from > 0 && (first_free - from < 2 || s < options_.refit_anchor_m - 1e-12)) {
+      if (from < first_free) s += (curve[from] - curve[from - 1]).norm();
+      --from;
+    }
+    stretch->assign(curve.begin() + from, curve.end());
+    stretch->push_back(p);
+    evidence_.Refit(stretch, first_free - from);
+    return from;
+  }
+
   // Unit chord over the last tangent_span_m of the curve.
   Eigen::Vector3d Tangent(const std::vector<Eigen::Vector3d>& curve) const {
     const Eigen::Vector3d& end = curve.back();
@@ -243,7 +306,10 @@ absl::Status GrowOptions::Validate() const {
                                      {end_backoff_m, "end_backoff_m"},
                                      {band_margin_px, "band_margin_px"},
                                      {band_tolerance_px, "band_tolerance_px"},
-                                     {band_prior_px_per_mm, "band_prior_px_per_mm"}}) {
+                                     {band_prior_px_per_mm, "band_prior_px_per_mm"},
+                                     {refit_span_m, "refit_span_m"},
+                                     {refit_end_m, "refit_end_m"},
+                                     {refit_smooth_px_per_mm, "refit_smooth_px_per_mm"}}) {
     if (absl::Status s = CheckNonNegative(value, "grow", field); !s.ok()) return s;
   }
   for (const auto& [value, field] : {std::pair{max_turn_deg, "max_turn_deg"},
@@ -282,6 +348,21 @@ absl::Status GrowOptions::Validate() const {
                                                    alongside_min_gap_m,
                                                    ") must be below other_cane_m (", other_cane_m,
                                                    ")"));
+  }
+  if (refit_span_m > 0) {
+    for (const auto& [value, field] : {std::pair{refit_anchor_m, "refit_anchor_m"},
+                                       {refit_search_px, "refit_search_px"}}) {
+      if (absl::Status s = CheckPositive(value, "grow", field); !s.ok()) return s;
+    }
+    if (refit_span_m > max_length_m || refit_anchor_m > max_length_m) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          "grow.refit_span_m (", refit_span_m, ") and refit_anchor_m (", refit_anchor_m,
+          ") must not exceed max_length_m (", max_length_m, ")"));
+    }
+    if (refit_search_px > 50) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("grow.refit_search_px must be at most 50, is ", refit_search_px));
+    }
   }
   if (min_support_views < 2) {
     return absl::InvalidArgumentError(
@@ -344,6 +425,8 @@ absl::Status GrowCaneEnds(const std::vector<View2D>& views, const RigCalibration
       record.stop = stop;
       record.stop_point = growth.stop_point;
       record.other_cane = growth.other;
+      record.start_point = growth.start;
+      record.steps = growth.points;
       summary->ends.push_back(record);
       switch (stop) {
         case Stop::kEndUnsupported: ++summary->end_unsupported; break;
@@ -368,6 +451,8 @@ absl::Status GrowCaneEnds(const std::vector<View2D>& views, const RigCalibration
         }
       }
       if (kept.empty()) continue;  // (`line` is not written back)
+      std::copy(growth.end_points.begin(), growth.end_points.end(),
+                line.points.end() - static_cast<std::ptrdiff_t>(growth.end_points.size()));
       Polyline3 tail;
       tail.points.push_back(line.points.back());
       for (const Eigen::Vector3d& p : kept) tail.points.push_back(p);

@@ -36,6 +36,10 @@
 // distance and how far the cross-section reaches out of the wood (0 inside), and after a step that
 // needed such support it is pulled toward the prediction by `band_prior_px_per_mm`, so the end
 // keeps its course through the bundle.
+// Refit of the grown stretch (`refit_span_m`, s19; off by default: recall +0.002 and +0.004 on the
+// tuning ranges for precision -0.002, step 4d "Depth that does not drift"): after each corrected
+// step the last refit_span_m of grown points are refitted jointly to every view's skeleton with a
+// bending cost (grow_refit.cc), and the step is checked at its refitted position.
 // Thread-safe (pure function of its inputs).
 #pragma once
 
@@ -108,6 +112,21 @@ struct GrowOptions {
   double band_margin_px = 1.0;         // a band's half-width must exceed the radius by this
   double band_tolerance_px = 0.5;      // the cross-section may reach this far out of the wood
   double band_prior_px_per_mm = 2.0;   // pull toward the prediction after a step in a band
+  // Refit of the grown stretch (s19; off by default: recall +0.0020 / +0.0037 on 1100-1199 /
+  // 1200-1299 at precision -0.0023 / -0.0022, docs/reconstruction.md step 4d, "Depth that does
+  // not drift"): after each corrected step, the last `refit_span_m` of grown points (the new
+  // one included) are refitted jointly against every view's skeleton (nearest along the normal to
+  // the projected cane, within refit_search_px) with a bending cost, anchored by the
+  // `refit_anchor_m` of curve before them; the step is then checked at its refitted position.
+  // Where only two views hold the point and the step runs near their epipolar plane the views
+  // leave the depth free, and the bending cost holds the curve's course there. 0: off.
+  double refit_span_m = 0.0;
+  double refit_anchor_m = 0.02;        // fixed curve before the refitted stretch
+  // The end's own last points within this of it may move in the refit too (replaced only if the
+  // growth is kept): the end growth starts from is often off in depth itself. 0: they stay.
+  double refit_end_m = 0.0;
+  double refit_search_px = 4.0;        // a view's skeleton is looked for this far off
+  double refit_smooth_px_per_mm = 2.0; // cost (px) per mm a point lies off its neighbours' chord
 
   // INVALID_ARGUMENT naming the field for non-finite or out-of-range values.
   absl::Status Validate() const;
@@ -130,6 +149,8 @@ struct GrowEnd {
   int other_cane = -1;
   double grown_m = 0.0;      // length added to this end (0 if nothing was kept)
   double alongside_m = 0.0;  // of which grown alongside another cane
+  Eigen::Vector3d start_point = Eigen::Vector3d::Zero();  // the end growth started from
+  std::vector<Eigen::Vector3d> steps;  // every accepted step, in order, before the trim
 };
 
 struct GrowSummary {

@@ -50,6 +50,19 @@ class ViewProbe {
   // tolerance_px (0: it lies inside the band); nullopt otherwise and without the map.
   std::optional<double> BandExcess(const Eigen::Vector2d& uv, double radius_px, double margin_px,
                                    double tolerance_px) const;
+  // A skeleton observation of a point p on a cane running along the unit `tangent` (refit,
+  // grow_refit.cc): the skeleton point nearest p's projection along the normal to the
+  // projected tangent, within search_px (where the skeleton crosses that normal: its distance
+  // there is at most a pixel). `residual_px` is the projection's signed offset from it along
+  // the normal, `jacobian` the residual's change per mm of p's offset along u and along w.
+  // nullopt where the view does not see p, the cane runs along the ray, or no skeleton is near.
+  struct Observation {
+    double residual_px = 0.0;
+    Eigen::Vector2d jacobian = Eigen::Vector2d::Zero();
+  };
+  std::optional<Observation> Observe(const Eigen::Vector3d& p, const Eigen::Vector3d& tangent,
+                                     const Eigen::Vector3d& u, const Eigen::Vector3d& w,
+                                     double search_px) const;
 
  private:
   const View2D& view_;
@@ -85,6 +98,13 @@ class GrowEvidence {
   // view supported p only by lying inside a band (band_support).
   std::optional<GrowStop> Check(const Eigen::Vector3d& p, const Eigen::Vector3d& step,
                                 double radius_m, bool* banded = nullptr) const;
+  // Refits curve[first_free..] jointly (refit_span_m; grow_refit.cc): each point moves on the
+  // plane normal to the curve there, to minimise the squared pixel offsets of its projections
+  // from the skeleton of every view that holds it within refit_search_px (ViewProbe::Observe)
+  // plus refit_smooth_px_per_mm of cost per mm that a point lies off the chord of its two
+  // neighbours; curve[..first_free) are fixed and anchor the bend. A few Gauss-Newton
+  // iterations, the observations found again in each. Needs first_free >= 2; else a no-op.
+  void Refit(std::vector<Eigen::Vector3d>* curve, size_t first_free) const;
 
  private:
   double Cost(const Eigen::Vector3d& p, double radius_m) const;
