@@ -31,4 +31,16 @@ absl::Status ReadSelectionFlags(Flags& flags, reconstruct::CorrespondenceOptions
   return absl::OkStatus();
 }
 
+absl::Status ReadSweepFlags(Flags& flags, reconstruct::DepthSweepOptions* options) {
+  VB_ASSIGN_OR_RETURN(const bool enabled, flags.Bool("sweep", options->enabled));
+  VB_ASSIGN_OR_RETURN(const int64_t min_views, flags.Int("sweep-min-views", options->min_views));
+  if (min_views < 2 || min_views > 64) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("--sweep-min-views must be in [2, 64], got ", min_views));
+  }
+  options->enabled = enabled;
+  options->min_views = static_cast<int>(min_views);
+  return absl::OkStatus();
+}
+
 }  // namespace vb::app

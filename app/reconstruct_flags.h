@@ -1,11 +1,13 @@
 // SPDX-License-Identifier: Apache-2.0
 // Flags shared by `vinebot reconstruct` and `vinebot bench reconstruct` that set the match
-// selection of correspondence (step 3; workers/reconstruct/correspondence.h).
+// selection of correspondence (step 3; workers/reconstruct/correspondence.h) and the depth sweep
+// (step 4e; workers/reconstruct/depth_sweep.h).
 #pragma once
 
 #include "absl/status/status.h"
 #include "app/flags.h"
 #include "workers/reconstruct/correspondence.h"
+#include "workers/reconstruct/depth_sweep.h"
 
 namespace vb::app {
 
@@ -18,5 +20,12 @@ namespace vb::app {
 // INVALID_ARGUMENT naming the flag: a value that does not parse, --alpha or --context-alpha not
 // finite or <= 0, --context-alpha below --alpha with --select-context on.
 absl::Status ReadSelectionFlags(Flags& flags, reconstruct::CorrespondenceOptions* options);
+
+// Reads into *options (defaults: its values as given) the depth sweep of step 4e
+// (workers/reconstruct/depth_sweep.h):
+//   --sweep true|false: run it;
+//   --sweep-min-views N: views (the swept one included) that must hold a sample, >= 2.
+// INVALID_ARGUMENT naming the flag: a value that does not parse, --sweep-min-views < 2.
+absl::Status ReadSweepFlags(Flags& flags, reconstruct::DepthSweepOptions* options);
 
 }  // namespace vb::app
