@@ -24,8 +24,11 @@ absl::Status ReadSelectionFlags(Flags& flags, reconstruct::CorrespondenceOptions
 // Reads into *options (defaults: its values as given) the depth sweep of step 4e
 // (workers/reconstruct/depth_sweep.h):
 //   --sweep true|false: run it;
-//   --sweep-min-views N: views (the swept one included) that must hold a sample, >= 2.
-// INVALID_ARGUMENT naming the flag: a value that does not parse, --sweep-min-views < 2.
+//   --sweep-min-views N, --sweep-max-step N, --sweep-accept-px X, --sweep-unique-steps N,
+//   --sweep-max-ambiguous X, --sweep-min-stretch-share X: its fields min_views, max_step,
+//     accept_px, unique_exclusion_steps, max_ambiguous_share and min_stretch_accepted_share.
+// INVALID_ARGUMENT naming the flag: a value that does not parse or is out of the field's range
+// (DepthSweepOptions::Validate).
 absl::Status ReadSweepFlags(Flags& flags, reconstruct::DepthSweepOptions* options);
 
 }  // namespace vb::app

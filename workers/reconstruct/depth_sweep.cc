@@ -63,6 +63,25 @@ bool NearThick(const View2D& view, int x, int y, int margin) {
   return false;
 }
 
+// Whether pixel uv lies within margin_px beyond the half-width of one of `lines` (wires or
+// posts, in normalised coordinates) and within its extent (plus the same margin).
+bool NearLine(const std::vector<Line2D>& lines, const CameraCalibration& camera,
+              const Eigen::Vector2d& uv, double margin_px) {
+  if (lines.empty()) return false;
+  const Eigen::Vector2d n = camera.PixelToNormalised(uv);
+  const double fx = camera.camera_matrix(0, 0);
+  for (const Line2D& line : lines) {
+    const double reach = (margin_px + 0.5 * line.width_px) / fx;
+    if (std::abs(line.line.dot(Eigen::Vector3d(n.x(), n.y(), 1.0))) > reach) continue;
+    const Eigen::Vector2d along = line.end - line.begin;
+    const double length = along.norm();
+    if (length <= 0) continue;
+    const double u = (n - line.begin).dot(along) / length;
+    if (u >= -reach && u <= length + reach) return true;
+  }
+  return false;
+}
+
 // An unexplained run of one segment, resampled every ~sample_px.
 struct Stretch {
   std::vector<Eigen::Vector2d> uv;
@@ -106,7 +125,9 @@ std::vector<Stretch> FindStretches(const View2D& view, const CameraCalibration& 
       const int x = std::clamp(static_cast<int>(std::lround(p.x())), 0, view.width - 1);
       const int y = std::clamp(static_cast<int>(std::lround(p.y())), 0, view.height - 1);
       free[j] = !mask[static_cast<size_t>(y) * view.width + x] &&
-                !NearThick(view, x, y, options.thick_margin_px);
+                !NearThick(view, x, y, options.thick_margin_px) &&
+                !NearLine(view.wires, camera, p, options.line_margin_px) &&
+                !NearLine(view.posts, camera, p, options.line_margin_px);
       *unexplained += free[j];
     }
     for (size_t a = 0; a < n;) {
@@ -178,6 +199,7 @@ absl::Status DepthSweepOptions::Validate() const {
   constexpr const char* kStage = "sweep";
   VB_RETURN_IF_ERROR(CheckNonNegative(explained_px, kStage, "explained_px"));
   VB_RETURN_IF_ERROR(CheckNonNegative(min_stretch_px, kStage, "min_stretch_px"));
+  VB_RETURN_IF_ERROR(CheckNonNegative(line_margin_px, kStage, "line_margin_px"));
   VB_RETURN_IF_ERROR(CheckPositive(sample_px, kStage, "sample_px"));
   VB_RETURN_IF_ERROR(CheckPositive(depth_step_px, kStage, "depth_step_px"));
   VB_RETURN_IF_ERROR(CheckPositive(cap_px, kStage, "cap_px"));
@@ -204,6 +226,15 @@ absl::Status DepthSweepOptions::Validate() const {
   if (min_views < 2)
     return absl::InvalidArgumentError(
         absl::StrCat("sweep.min_views must be >= 2, is ", min_views));
+  if (unique_exclusion_steps < 0)
+    return absl::InvalidArgumentError(absl::StrCat(
+        "sweep.unique_exclusion_steps must be >= 0, is ", unique_exclusion_steps));
+  if (!(max_ambiguous_share >= 0.0 && max_ambiguous_share <= 1.0))
+    return absl::InvalidArgumentError(absl::StrCat(
+        "sweep.max_ambiguous_share must be in [0, 1], is ", max_ambiguous_share));
+  if (!(min_stretch_accepted_share >= 0.0 && min_stretch_accepted_share <= 1.0))
+    return absl::InvalidArgumentError(absl::StrCat(
+        "sweep.min_stretch_accepted_share must be in [0, 1], is ", min_stretch_accepted_share));
   if (image_margin_px < 0)
     return absl::InvalidArgumentError(
         absl::StrCat("sweep.image_margin_px must be >= 0, is ", image_margin_px));
@@ -212,9 +243,15 @@ absl::Status DepthSweepOptions::Validate() const {
 
 namespace {
 
-// The sweep of one stretch of view v: the depth of each sample along its ray (inverse depth q,
-// 0 where the sample has none) as the Viterbi path of the costs described in the header.
-std::vector<double> SweepStretch(const Stretch& stretch, int v, const std::vector<View2D>& views,
+// The depth of each sample of a stretch along its ray (inverse depth q, 0 where the sample has
+// none) and whether another depth is consistent too.
+struct StretchDepths {
+  std::vector<double> q;
+  std::vector<bool> ambiguous;
+};
+
+// The sweep of one stretch of view v: the Viterbi path of the costs described in the header.
+StretchDepths SweepStretch(const Stretch& stretch, int v, const std::vector<View2D>& views,
                                  const RigCalibration& rig, const WorkingVolume& volume,
                                  const DepthSweepOptions& options,
                                  const std::vector<Eigen::Vector3d>& rays) {
@@ -230,7 +267,8 @@ std::vector<double> SweepStretch(const Stretch& stretch, int v, const std::vecto
     t_hi = std::max(t_hi, range[i]->second);
     if (middle < 0 || std::abs(i - n / 2) < std::abs(middle - n / 2)) middle = i;
   }
-  if (middle < 0) return std::vector<double>(n, 0.0);
+  const StretchDepths none{std::vector<double>(n, 0.0), std::vector<bool>(n, false)};
+  if (middle < 0) return none;
   // Depths evenly spaced in inverse depth: the projection in a nearby view moves about evenly.
   const double q_lo = 1.0 / t_hi, q_hi = 1.0 / t_lo;
   double span_px = 0.0;
@@ -240,7 +278,7 @@ std::vector<double> SweepStretch(const Stretch& stretch, int v, const std::vecto
     const auto b = rig.cameras[w].Project(c + rays[middle] / q_hi);
     if (a && b) span_px = std::max(span_px, (*a - *b).norm());
   }
-  if (!(span_px > 0.0)) return std::vector<double>(n, 0.0);
+  if (!(span_px > 0.0)) return none;
   const int depths =
       std::clamp(static_cast<int>(std::ceil(span_px / options.depth_step_px)) + 1, 2,
                  options.max_depths);
@@ -326,7 +364,16 @@ std::vector<double> SweepStretch(const Stretch& stretch, int v, const std::vecto
     }
     q[i] = u[kk] < kExcluded ? q_lo + (kk + offset) * dq : 0.0;
   }
-  std::vector<double> smoothed(n, 0.0);
+  StretchDepths out{std::vector<double>(n, 0.0), std::vector<bool>(n, false)};
+  std::vector<double>& smoothed = out.q;
+  const double consistent = options.accept_px * options.accept_px * (views.size() - 1);
+  for (int i = 0; i < n; ++i) {
+    const double* u = &unary[static_cast<size_t>(i) * depths];
+    for (int kk = 0; kk < depths && !out.ambiguous[i]; ++kk) {
+      out.ambiguous[i] = std::abs(kk - path[i]) > options.unique_exclusion_steps &&
+                         u[kk] <= consistent;
+    }
+  }
   for (int i = 0; i < n; ++i) {
     if (q[i] == 0.0) continue;
     int r = 2;
@@ -340,21 +387,27 @@ std::vector<double> SweepStretch(const Stretch& stretch, int v, const std::vecto
     }
     smoothed[i] = sum / count;
   }
-  return smoothed;
+  return out;
 }
 
 struct SweptSample {
   Eigen::Vector3d p = Eigen::Vector3d::Zero();
   bool accepted = false;
+  bool ambiguous = false;
   std::vector<double> distance_px;  // per view, -1 where the view does not see p
   double radius_m = 0.0;
 };
 
-// The canes of one stretch's accepted runs.
+// The canes of one stretch's accepted runs, and what *added records of each.
 std::vector<Polyline3> RunsOf(const std::vector<SweptSample>& samples, size_t views,
-                              const DepthSweepOptions& options) {
+                              const DepthSweepOptions& options, int view,
+                              std::vector<SweptCane>* added) {
   std::vector<Polyline3> out;
   const size_t n = samples.size();
+  int accepted = 0;
+  for (const SweptSample& sample : samples) accepted += sample.accepted;
+  const double stretch_share = n > 0 ? static_cast<double>(accepted) / n : 0.0;
+  if (stretch_share < options.min_stretch_accepted_share) return out;
   for (size_t a = 0; a < n;) {
     if (!samples[a].accepted) {
       ++a;
@@ -368,7 +421,9 @@ std::vector<Polyline3> RunsOf(const std::vector<SweptSample>& samples, size_t vi
     std::vector<double> radii;
     std::vector<double> sum2(views, 0.0);
     std::vector<int> seen(views, 0);
+    int ambiguous = 0;
     for (size_t i = a; i <= b; ++i) {
+      ambiguous += samples[i].ambiguous;
       run.points.push_back(samples[i].p);
       radii.push_back(samples[i].radius_m);
       for (size_t w = 0; w < views; ++w) {
@@ -377,7 +432,10 @@ std::vector<Polyline3> RunsOf(const std::vector<SweptSample>& samples, size_t vi
         ++seen[w];
       }
     }
+    const int run_samples = static_cast<int>(b - a + 1);
     a = b + 1;
+    const double ambiguous_share = static_cast<double>(ambiguous) / run_samples;
+    if (ambiguous_share > options.max_ambiguous_share) continue;
     bool consistent = true;
     for (size_t w = 0; w < views; ++w)
       if (seen[w] > 0 && std::sqrt(sum2[w] / seen[w]) > options.accept_rms_px) consistent = false;
@@ -396,6 +454,7 @@ std::vector<Polyline3> RunsOf(const std::vector<SweptSample>& samples, size_t vi
       cane.radii.push_back(radius);
     }
     out.push_back(std::move(cane));
+    added->push_back({view, ambiguous_share, stretch_share, run_samples});
   }
   return out;
 }
@@ -440,14 +499,16 @@ absl::Status SweepUnexplainedPaths(const std::vector<View2D>& views, const RigCa
       VB_RETURN_IF_ERROR(deadline.Check("depth sweep"));
       std::vector<Eigen::Vector3d> rays;
       for (const Eigen::Vector2d& uv : stretch.uv) rays.push_back(camera.RayInPlatform(uv));
-      const std::vector<double> q =
+      const StretchDepths depths =
           SweepStretch(stretch, static_cast<int>(v), views, rig, volume, options, rays);
+      const std::vector<double>& q = depths.q;
       std::vector<SweptSample> samples(q.size());
       const Eigen::Vector3d c = camera.CentreInPlatform();
       for (size_t i = 0; i < q.size(); ++i) {
         SweptSample& sample = samples[i];
         sample.distance_px.assign(views.size(), -1.0);
         if (q[i] <= 0.0) continue;
+        sample.ambiguous = depths.ambiguous[i];
         sample.p = c + rays[i] / q[i];
         const double depth = (camera_from_platform * sample.p).z();
         sample.radius_m = 0.5 * stretch.width_px[i] * depth / fx;
@@ -473,7 +534,8 @@ absl::Status SweepUnexplainedPaths(const std::vector<View2D>& views, const RigCa
         ++out.samples;
         out.accepted_samples += sample.accepted;
       }
-      for (Polyline3& cane : RunsOf(samples, views.size(), options)) {
+      for (Polyline3& cane :
+           RunsOf(samples, views.size(), options, static_cast<int>(v), &out.added)) {
         out.added_length_m += cane.Length();
         ++out.added_canes;
         boxes.push_back(BoxOf(cane));

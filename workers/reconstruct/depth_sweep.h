@@ -8,7 +8,8 @@
 //  1. Per view v, the current canes are projected with their radii; a skeleton point of v's
 //     segments (View2D::segments) is explained when it lies within `explained_px` of a cane's
 //     projected cross-section. Unexplained runs of at least `min_stretch_px` along a segment,
-//     away from the thick (head/trunk) region by `thick_margin_px`, are the stretches.
+//     away from the thick (head/trunk) region by `thick_margin_px` and from the view's wire and
+//     post lines by `line_margin_px` beyond their half-width, are the stretches.
 //  2. A stretch is sampled every `sample_px`. Each sample's ray from camera v is cut by the
 //     working volume and hypothesised at depths evenly spaced in inverse depth, so that the
 //     projection in the other views moves by about `depth_step_px` per step. The unary cost of
@@ -27,6 +28,11 @@
 //     as canes (points every ~`point_step_m`, radius from the stretch's median 2D width:
 //     width_px / 2 * depth / fx). They explain the other views' pixels before the next view is
 //     swept.
+//  5. Against ghosts (a wrong depth finding support in dense skeleton): a sample is ambiguous
+//     when a depth more than `unique_exclusion_steps` steps from the chosen one is consistent
+//     too (its unary cost at most accept_px squared per other view); a run with a larger share
+//     of ambiguous samples than `max_ambiguous_share` is not added, nor is any run of a stretch
+//     whose accepted share of samples is below `min_stretch_accepted_share`.
 // Thread-safe (a pure function of its inputs).
 #pragma once
 
@@ -48,13 +54,14 @@ struct DepthSweepOptions {
   double explained_px = 3.0;          // a cane's cross-section this near explains a skeleton px
   double min_stretch_px = 25.0;       // shorter unexplained runs of a segment are left
   int thick_margin_px = 3;            // skeleton points this near the thick region are left
+  double line_margin_px = 4.0;        // ... and this far beyond a wire's or post's half-width
   double sample_px = 3.5;             // spacing of the samples along a stretch
   double depth_step_px = 1.0;         // projection shift in the other views per depth step
   int max_depths = 1200;              // at most this many depths per stretch
   double cap_px = 4.0;                // a view's skeleton distance is capped at this
   double missing_view_cost_px2 = 8.0; // cost of an other view that does not see the point
   double smooth_px2 = 1.0;            // cost per squared change of the depth step (indices)
-  int max_step = 3;                   // largest depth index change between samples
+  int max_step = 2;                   // largest depth index change between samples
   double accept_px = 1.5;             // a view supports a sample within this of its skeleton
   int min_views = 3;                  // views (the swept one included) that must support it
   double accept_rms_px = 1.2;         // RMS skeleton distance of a run, per view
@@ -63,9 +70,20 @@ struct DepthSweepOptions {
   double point_step_m = 0.005;        // spacing of an added cane's points
   double max_radius_m = 0.012;        // an added cane's radius is clamped to [0.5 mm, this]
   int image_margin_px = 3;            // a view sees a point this far inside its image
+  int unique_exclusion_steps = 4;     // another consistent depth this far away: ambiguous
+  double max_ambiguous_share = 1.0;   // runs with more ambiguous samples are dropped (1: off)
+  double min_stretch_accepted_share = 0.0;  // stretches accepted less are dropped (0: off)
 
   // INVALID_ARGUMENT naming the field ("sweep.<field>") for non-finite or out-of-range values.
   absl::Status Validate() const;
+};
+
+// One added cane, for diagnosis.
+struct SweptCane {
+  int view = -1;                  // the view whose stretch it came from
+  double ambiguous_share = 0.0;   // of its samples, those with another consistent depth
+  double stretch_accepted_share = 0.0;  // accepted samples of its stretch
+  int samples = 0;                // samples of its run
 };
 
 struct DepthSweepSummary {
@@ -75,6 +93,7 @@ struct DepthSweepSummary {
   int accepted_samples = 0;         // of which accepted
   int added_canes = 0;              // canes appended to the input
   double added_length_m = 0.0;
+  std::vector<SweptCane> added;     // per added cane, in the order appended
 };
 
 // Sweeps views[0], views[1], ... in turn as described above and appends the canes found to

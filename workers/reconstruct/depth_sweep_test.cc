@@ -141,6 +141,40 @@ TEST(SweepUnexplainedPaths, AddsNothingWhereTheThreeViewsDisagree) {
   EXPECT_TRUE(canes_two.empty());
 }
 
+// A straight cane along a wire: its skeleton lies on the wire's line in every view, where a
+// wrongly segmented wire would lie too, and is left; without the wire lines it is found.
+TEST(SweepUnexplainedPaths, LeavesSkeletonAlongAWireLine) {
+  const RigCalibration rig = sim::MakeRig().value();
+  Polyline3 cane;
+  for (double x = -0.2; x <= 0.2 + 1e-9; x += 0.01) {
+    cane.points.emplace_back(x, 0.85, 1.0);
+    cane.radii.push_back(0.003);
+  }
+  VineModel model;
+  Cane trunk;
+  trunk.id = CaneId(1);
+  trunk.kind = CaneKind::kTrunk;
+  trunk.polyline = cane;
+  model.canes.push_back(trunk);
+  Wire wire;
+  wire.id = WireId(1);
+  wire.points = {Eigen::Vector3d(-0.5, 0.85, 1.0), Eigen::Vector3d(0.5, 0.85, 1.0)};
+  model.wires.push_back(wire);
+  SyntheticViewOptions drawn;
+  drawn.draw_head = false;
+  std::vector<View2D> views = SyntheticViews(model, rig, drawn, 40.0);
+  for (const View2D& view : views) ASSERT_FALSE(view.wires.empty());
+  std::vector<Polyline3> canes;
+  ASSERT_TRUE(SweepUnexplainedPaths(views, rig, WorkingVolume{}, On(), Deadline::Infinite(),
+                                    &canes).ok());
+  EXPECT_TRUE(canes.empty());
+  for (View2D& view : views) view.wires.clear();
+  ASSERT_TRUE(SweepUnexplainedPaths(views, rig, WorkingVolume{}, On(), Deadline::Infinite(),
+                                    &canes).ok());
+  ASSERT_FALSE(canes.empty());
+  for (const Eigen::Vector3d& p : canes[0].points) EXPECT_LT(DistanceToLine(p, cane), 0.004);
+}
+
 TEST(SweepUnexplainedPaths, LeavesTheCanesWhenDisabled) {
   const RigCalibration rig = sim::MakeRig().value();
   const Polyline3 truth = CurvedCane(-0.25, 0.15, 0.9, 0.4);
@@ -195,6 +229,9 @@ TEST(DepthSweepOptions, ValidateRejectsBadFieldsByName) {
   o = {};
   o.min_length_m = -0.1;
   expect_rejected(o, "sweep.min_length_m");
+  o = {};
+  o.line_margin_px = -1;
+  expect_rejected(o, "sweep.line_margin_px");
   o = {};
   o.thick_margin_px = -1;
   expect_rejected(o, "sweep.thick_margin_px");
