@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "workers/reconstruct/depth_sweep.h"
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -139,6 +140,32 @@ TEST(SweepUnexplainedPaths, AddsNothingWhereTheThreeViewsDisagree) {
   ASSERT_TRUE(SweepUnexplainedPaths(views, rig, WorkingVolume{}, two, Deadline::Infinite(),
                                     &canes_two).ok());
   EXPECT_TRUE(canes_two.empty());
+}
+
+// Views 0 and 1 show a cane, view 2 sees the same place with no skeleton near it: even where
+// two supporting views are enough (min_views 2), a view that sees the samples and holds them far
+// from its skeleton rejects them.
+TEST(SweepUnexplainedPaths, RejectsSamplesThatASeeingViewContradicts) {
+  const RigCalibration rig = sim::MakeRig().value();
+  const Polyline3 truth = CurvedCane(-0.25, 0.15, 0.9, 0.4);
+  std::vector<View2D> views = ViewsOf({truth}, rig);
+  DepthSweepOptions two = On();
+  two.min_views = 2;
+  std::vector<Polyline3> control;
+  ASSERT_TRUE(SweepUnexplainedPaths(views, rig, WorkingVolume{}, two, Deadline::Infinite(),
+                                    &control).ok());
+  ASSERT_FALSE(control.empty());  // with all three views the cane is found
+  views[2].segments.clear();
+  views[2].nodes.clear();
+  std::fill(views[2].centreline_distance_px.begin(), views[2].centreline_distance_px.end(),
+            kCentrelineDistanceCapPx);
+  std::vector<Polyline3> canes;
+  DepthSweepSummary summary;
+  ASSERT_TRUE(SweepUnexplainedPaths(views, rig, WorkingVolume{}, two, Deadline::Infinite(),
+                                    &canes, &summary).ok());
+  EXPECT_GT(summary.samples, 0);
+  EXPECT_EQ(summary.accepted_samples, 0);
+  EXPECT_TRUE(canes.empty());
 }
 
 // A straight cane along a wire: its skeleton lies on the wire's line in every view, where a
