@@ -126,6 +126,7 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   // --alpha, --select-context, --context-alpha: the match selection (app/reconstruct_flags.h).
   reconstruct::ReconstructOptions options;
   VB_RETURN_IF_ERROR(ReadSelectionFlags(flags, &options.correspondence));
+  VB_RETURN_IF_ERROR(ReadSweepFlags(flags, &options.sweep));  // --sweep (step 4e)
   VB_RETURN_IF_ERROR(flags.Finish());
   if (!(truth_break_px >= 0.0 && truth_break_px <= 100.0))
     return absl::InvalidArgumentError("--truth-break-px must be in [0, 100]");
@@ -297,6 +298,7 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   stage("correspondence_s", &reconstruct::StageTimings::correspondence_s);
   stage("rig_refine_s", &reconstruct::StageTimings::rig_refine_s);
   stage("assembly_s", &reconstruct::StageTimings::assembly_s);
+  stage("sweep_s", &reconstruct::StageTimings::sweep_s);
   stage("grow_s", &reconstruct::StageTimings::grow_s);
   stage("head_s", &reconstruct::StageTimings::head_s);
   stage("connect_s", &reconstruct::StageTimings::connect_s);

@@ -31,4 +31,50 @@ absl::Status ReadSelectionFlags(Flags& flags, reconstruct::CorrespondenceOptions
   return absl::OkStatus();
 }
 
+absl::Status ReadSweepFlags(Flags& flags, reconstruct::DepthSweepOptions* options) {
+  VB_ASSIGN_OR_RETURN(const bool enabled, flags.Bool("sweep", options->enabled));
+  VB_ASSIGN_OR_RETURN(const int64_t min_views, flags.Int("sweep-min-views", options->min_views));
+  VB_ASSIGN_OR_RETURN(const int64_t max_step, flags.Int("sweep-max-step", options->max_step));
+  VB_ASSIGN_OR_RETURN(const double accept_px, flags.Double("sweep-accept-px", options->accept_px));
+  VB_ASSIGN_OR_RETURN(const int64_t unique_steps,
+                      flags.Int("sweep-unique-steps", options->unique_exclusion_steps));
+  VB_ASSIGN_OR_RETURN(const double max_ambiguous,
+                      flags.Double("sweep-max-ambiguous", options->max_ambiguous_share));
+  VB_ASSIGN_OR_RETURN(const double min_stretch_share,
+                      flags.Double("sweep-min-stretch-share",
+                                   options->min_stretch_accepted_share));
+  if (min_views < 2 || min_views > 64) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("--sweep-min-views must be in [2, 64], got ", min_views));
+  }
+  if (max_step < 1 || max_step > 20) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("--sweep-max-step must be in [1, 20], got ", max_step));
+  }
+  if (unique_steps < 0 || unique_steps > 1000) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("--sweep-unique-steps must be in [0, 1000], got ", unique_steps));
+  }
+  if (!(accept_px > 0.0) || !std::isfinite(accept_px)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("--sweep-accept-px must be finite and > 0, got ", accept_px));
+  }
+  if (!(max_ambiguous >= 0.0 && max_ambiguous <= 1.0)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("--sweep-max-ambiguous must be in [0, 1], got ", max_ambiguous));
+  }
+  if (!(min_stretch_share >= 0.0 && min_stretch_share <= 1.0)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("--sweep-min-stretch-share must be in [0, 1], got ", min_stretch_share));
+  }
+  options->enabled = enabled;
+  options->min_views = static_cast<int>(min_views);
+  options->max_step = static_cast<int>(max_step);
+  options->accept_px = accept_px;
+  options->unique_exclusion_steps = static_cast<int>(unique_steps);
+  options->max_ambiguous_share = max_ambiguous;
+  options->min_stretch_accepted_share = min_stretch_share;
+  return absl::OkStatus();
+}
+
 }  // namespace vb::app

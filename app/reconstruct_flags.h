@@ -1,11 +1,13 @@
 // SPDX-License-Identifier: Apache-2.0
 // Flags shared by `vinebot reconstruct` and `vinebot bench reconstruct` that set the match
-// selection of correspondence (step 3; workers/reconstruct/correspondence.h).
+// selection of correspondence (step 3; workers/reconstruct/correspondence.h) and the depth sweep
+// (step 4e; workers/reconstruct/depth_sweep.h).
 #pragma once
 
 #include "absl/status/status.h"
 #include "app/flags.h"
 #include "workers/reconstruct/correspondence.h"
+#include "workers/reconstruct/depth_sweep.h"
 
 namespace vb::app {
 
@@ -18,5 +20,15 @@ namespace vb::app {
 // INVALID_ARGUMENT naming the flag: a value that does not parse, --alpha or --context-alpha not
 // finite or <= 0, --context-alpha below --alpha with --select-context on.
 absl::Status ReadSelectionFlags(Flags& flags, reconstruct::CorrespondenceOptions* options);
+
+// Reads into *options (defaults: its values as given) the depth sweep of step 4e
+// (workers/reconstruct/depth_sweep.h):
+//   --sweep true|false: run it;
+//   --sweep-min-views N, --sweep-max-step N, --sweep-accept-px X, --sweep-unique-steps N,
+//   --sweep-max-ambiguous X, --sweep-min-stretch-share X: its fields min_views, max_step,
+//     accept_px, unique_exclusion_steps, max_ambiguous_share and min_stretch_accepted_share.
+// INVALID_ARGUMENT naming the flag: a value that does not parse or is out of the field's range
+// (DepthSweepOptions::Validate).
+absl::Status ReadSweepFlags(Flags& flags, reconstruct::DepthSweepOptions* options);
 
 }  // namespace vb::app

@@ -64,5 +64,49 @@ TEST(ReconstructFlags, RejectsBadValuesNamingTheFlag) {
   EXPECT_DOUBLE_EQ(options.alpha, 6.0);
 }
 
+TEST(ReconstructFlags, SweepFlagsKeepTheDefaultsOrSetTheSweep) {
+  auto absent = ParseAll({});
+  ASSERT_TRUE(absent.ok());
+  reconstruct::DepthSweepOptions options;
+  ASSERT_TRUE(ReadSweepFlags(*absent, &options).ok());
+  EXPECT_EQ(options.enabled, reconstruct::DepthSweepOptions{}.enabled);
+  EXPECT_EQ(options.min_views, reconstruct::DepthSweepOptions{}.min_views);
+  auto flags = ParseAll({"--sweep", "true", "--sweep-min-views", "2", "--sweep-max-step", "3",
+                         "--sweep-accept-px", "1.25", "--sweep-max-ambiguous", "0.3",
+                         "--sweep-min-stretch-share", "0.4", "--sweep-unique-steps", "2"});
+  ASSERT_TRUE(flags.ok());
+  ASSERT_TRUE(ReadSweepFlags(*flags, &options).ok());
+  EXPECT_TRUE(options.enabled);
+  EXPECT_EQ(options.min_views, 2);
+  EXPECT_EQ(options.max_step, 3);
+  EXPECT_DOUBLE_EQ(options.accept_px, 1.25);
+  EXPECT_DOUBLE_EQ(options.max_ambiguous_share, 0.3);
+  EXPECT_DOUBLE_EQ(options.min_stretch_accepted_share, 0.4);
+  EXPECT_EQ(options.unique_exclusion_steps, 2);
+  EXPECT_TRUE(flags->Finish().ok());
+  EXPECT_TRUE(options.Validate().ok());
+}
+
+TEST(ReconstructFlags, SweepFlagsRejectBadValuesNamingTheFlag) {
+  const std::vector<std::pair<std::vector<const char*>, std::string>> cases = {
+      {{"--sweep", "maybe"}, "--sweep"},
+      {{"--sweep-min-views", "1"}, "--sweep-min-views"},
+      {{"--sweep-min-views", "x"}, "--sweep-min-views"},
+      {{"--sweep-max-step", "0"}, "--sweep-max-step"},
+      {{"--sweep-accept-px", "0"}, "--sweep-accept-px"},
+      {{"--sweep-unique-steps", "-1"}, "--sweep-unique-steps"},
+      {{"--sweep-max-ambiguous", "1.5"}, "--sweep-max-ambiguous"},
+      {{"--sweep-min-stretch-share", "-0.1"}, "--sweep-min-stretch-share"},
+  };
+  for (const auto& [args, name] : cases) {
+    auto flags = ParseAll(args);
+    ASSERT_TRUE(flags.ok());
+    reconstruct::DepthSweepOptions options;
+    const absl::Status status = ReadSweepFlags(*flags, &options);
+    EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument) << args[0] << " " << args[1];
+    EXPECT_NE(status.message().find(name), std::string::npos) << status.message();
+  }
+}
+
 }  // namespace
 }  // namespace vb::app

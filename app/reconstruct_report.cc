@@ -9,7 +9,7 @@ nlohmann::json TimingsToJson(const reconstruct::StageTimings& t) {
           {"assembly_s", t.assembly_s},     {"grow_s", t.grow_s},
           {"head_s", t.head_s},             {"connect_s", t.connect_s},
           {"refine_s", t.refine_s},         {"extend_s", t.extend_s},
-          {"trellis_s", t.trellis_s},
+          {"trellis_s", t.trellis_s},       {"sweep_s", t.sweep_s},
           {"total_s", t.total_s}};
 }
 

@@ -117,6 +117,7 @@ absl::Status ReconstructOptions::Validate() const {
     }
   }
   VB_RETURN_IF_ERROR(assembly.Validate());
+  VB_RETURN_IF_ERROR(sweep.Validate());
   VB_RETURN_IF_ERROR(grow.Validate());
   VB_RETURN_IF_ERROR(head.Validate());
   VB_RETURN_IF_ERROR(connect.Validate());
@@ -168,6 +169,11 @@ absl::StatusOr<ReconstructResult> ReconstructFromViews(const std::vector<View2D>
                 [&](const Polyline3& cane) { return options.volume.MostlyOutside(cane); });
   result.assembled_canes = static_cast<int>(canes.size());
   result.timings.assembly_s = SecondsSince(t);
+
+  t = std::chrono::steady_clock::now();
+  VB_RETURN_IF_ERROR(SweepUnexplainedPaths(views, rig, options.volume, options.sweep, deadline,
+                                           &canes, &result.sweep));
+  result.timings.sweep_s = SecondsSince(t);
 
   t = std::chrono::steady_clock::now();
   if (!options.grow.after_connection) {

@@ -7,6 +7,8 @@
 //   3. correspondence across views, Gibbs sampling  6. connect canes into one tree (connect.h)
 //      and minimum expected loss (correspondence.h) 7. joint Ceres refinement (cane_fit.h)
 //   4. assemble 3D pieces into canes (cane_assembly.h) 8. wires and posts (trellis3d.h)
+//   4e. canes found by a depth sweep along the skeleton paths no assembled cane explains
+//       (depth_sweep.h; off by default), before 4d
 //   4d. the assembled canes' ends grown through junctions on two-view evidence (grow.h; on by
 //       default), before 5
 //   7b. cane tips continued in one view (extend.h; on by default; "4c" in
@@ -30,6 +32,7 @@
 #include "workers/reconstruct/cane_fit.h"
 #include "workers/reconstruct/connect.h"
 #include "workers/reconstruct/correspondence.h"
+#include "workers/reconstruct/depth_sweep.h"
 #include "workers/reconstruct/extend.h"
 #include "workers/reconstruct/fiducials.h"
 #include "workers/reconstruct/grow.h"
@@ -48,6 +51,7 @@ struct ReconstructOptions {
   Structure2DOptions structure;
   CorrespondenceOptions correspondence;
   AssemblyOptions assembly;
+  DepthSweepOptions sweep;               // step 4e: unexplained skeleton paths (depth_sweep.h)
   GrowOptions grow;                      // step 4d: assembled cane ends grown in >= 2 views (grow.h)
   HeadOptions head;
   ConnectOptions connect;
@@ -71,6 +75,7 @@ struct StageTimings {
   double segment_s = 0, structure_s = 0, correspondence_s = 0, assembly_s = 0, grow_s = 0,
          head_s = 0, connect_s = 0, refine_s = 0, extend_s = 0, rig_refine_s = 0, trellis_s = 0,
          total_s = 0;
+  double sweep_s = 0;  // step 4e
 };
 
 struct ReconstructResult {
@@ -80,6 +85,7 @@ struct ReconstructResult {
   int pieces = 0;                // 3D pieces from correspondence
   int assembled_canes = 0;       // canes after assembly
   GrowSummary grow;              // step 4d
+  DepthSweepSummary sweep;       // step 4e
   ConnectSummary connect;
   FitSummary fit;
   ExtendSummary extend;
