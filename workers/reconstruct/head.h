@@ -69,11 +69,9 @@ struct HeadAndTrunk {
 // depth is poorly constrained). INVALID_ARGUMENT for a count mismatch, invalid options or
 // a view whose thick_mask size disagrees with its calibration; DEADLINE_EXCEEDED. No thick
 // foreground anywhere gives an empty result (not an error).
-absl::StatusOr<HeadAndTrunk> ReconstructHeadAndTrunk(const std::vector<View2D>& views,
-                                                     const RigCalibration& rig,
-                                                     const WorkingVolume& volume,
-                                                     const HeadOptions& options,
-                                                     const Deadline& deadline,
-                                                     const std::vector<Eigen::Vector3d>& depth_hints = {});
+absl::StatusOr<HeadAndTrunk> ReconstructHeadAndTrunk(
+    const std::vector<View2D>& views, const RigCalibration& rig, const WorkingVolume& volume,
+    const HeadOptions& options, const Deadline& deadline,
+    const std::vector<Eigen::Vector3d>& depth_hints = {});
 
 }  // namespace vb::reconstruct
