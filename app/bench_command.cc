@@ -105,14 +105,6 @@ absl::Status RunBenchReconstruct(Flags& flags) {
                       flags.Bool("extend", reconstruct::ExtendOptions{}.enabled));
   // --grow on|off: two-view growth of assembled cane ends (step 4d); default as GrowOptions.
   VB_ASSIGN_OR_RETURN(const bool grow, flags.Bool("grow", reconstruct::GrowOptions{}.enabled));
-  // --head-peel, --head-min-cell, --head-depth-factor: the head's options of those names
-  // (reconstruct::HeadOptions peel_canes, min_cell_m, head_depth_factor); defaults as there.
-  const reconstruct::HeadOptions head_defaults;
-  VB_ASSIGN_OR_RETURN(const bool head_peel, flags.Bool("head-peel", head_defaults.peel_canes));
-  VB_ASSIGN_OR_RETURN(const double head_min_cell,
-                      flags.Double("head-min-cell", head_defaults.min_cell_m));
-  VB_ASSIGN_OR_RETURN(const double head_depth_factor,
-                      flags.Double("head-depth-factor", head_defaults.head_depth_factor));
   if (rig_refine != "off" && rig_refine != "canes" && rig_refine != "trellis")
     return absl::InvalidArgumentError("--rig-refine must be off, canes or trellis");
   if (input != "images" && input != "labels" && input != "truth")
@@ -120,6 +112,9 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   // --alpha, --select-context, --context-alpha: the match selection (app/reconstruct_flags.h).
   reconstruct::ReconstructOptions options;
   VB_RETURN_IF_ERROR(ReadSelectionFlags(flags, &options.correspondence));
+  // --head-peel, --head-min-cell, --head-depth-factor, --head-leaf-fraction,
+  // --head-centre-on-trunk: the head's options (app/reconstruct_flags.h).
+  VB_RETURN_IF_ERROR(ReadHeadFlags(flags, &options.head));
   VB_RETURN_IF_ERROR(flags.Finish());
   if (!(truth_break_px >= 0.0 && truth_break_px <= 100.0))
     return absl::InvalidArgumentError("--truth-break-px must be in [0, 100]");
@@ -142,9 +137,6 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   options.rig_refine.use_trellis = rig_refine == "trellis";
   options.extend.enabled = extend;
   options.grow.enabled = grow;
-  options.head.peel_canes = head_peel;
-  options.head.min_cell_m = head_min_cell;
-  options.head.head_depth_factor = head_depth_factor;
   const reconstruct::SegmenterModel& segmenter = reconstruct::BuiltinSegmenterModel();
 
   std::vector<ReconstructionMetrics> metrics;

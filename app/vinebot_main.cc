@@ -52,7 +52,7 @@ const std::vector<Command>& Commands() {
        "--vines N --seed-base S [--calibration-error-px X] [--policy policy.json]"
        " [--input images|labels|truth] [--rig-refine off|canes|trellis] [--alpha A]"
        " [--select-context] [--context-alpha A] [--head-peel] [--head-min-cell M]"
-       " [--head-depth-factor F]",
+       " [--head-depth-factor F] [--head-leaf-fraction F] [--head-centre-on-trunk]",
        vb::app::RunBenchReconstruct},
       {"plan",
        "--model model.json --cuts cut_plan.json --out trajectory.json [--tool mill_end|secateur] "

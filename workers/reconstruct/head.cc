@@ -46,6 +46,10 @@ absl::Status HeadOptions::Validate() const {
     return absl::InvalidArgumentError("head options: depth_margin_m must be >= 0");
   if (!std::isfinite(peel_depth_px) || peel_depth_px < 0)
     return absl::InvalidArgumentError("head options: peel_depth_px must be >= 0");
+  if (!std::isfinite(leaf_radius_fraction) || leaf_radius_fraction < 0 ||
+      leaf_radius_fraction > 1) {
+    return absl::InvalidArgumentError("head options: leaf_radius_fraction must be in [0, 1]");
+  }
   if (min_views < 1) return absl::InvalidArgumentError("head options: min_views must be >= 1");
   return absl::OkStatus();
 }
@@ -321,7 +325,9 @@ absl::StatusOr<HeadAndTrunk> ReconstructHeadAndTrunk(
       hinted.push_back(p.y());
     }
   }
-  if (hinted.size() >= 5) head_y = Median(hinted);
+  if (hinted.size() >= 5 && !(options.head_centre_on_trunk && result.trunk)) {
+    head_y = Median(hinted);
+  }
   const double half_depth =
       0.5 * options.head_depth_factor * std::max(head_max_x - head_min_x, top_z - head_bottom_z) +
       options.depth_margin_m;

@@ -53,7 +53,8 @@ Carver::Carver(const std::vector<View2D>& views, const RigCalibration& rig,
 
 Carver::~Carver() = default;
 
-CubeVerdict Carver::Judge(const Cube& cube, bool* seen_as_wood) const {
+CubeVerdict Carver::Judge(const Cube& cube, bool* seen_as_wood,
+                          double radius_fraction) const {
   const double radius = 0.5 * std::sqrt(3.0) * cube.side;
   int seen = 0;
   bool all_inside = true;
@@ -70,7 +71,9 @@ CubeVerdict Carver::Judge(const Cube& cube, bool* seen_as_wood) const {
     const double r_px = 1.1 * camera.camera_matrix(0, 0) * radius / depth;
     const int x = std::clamp(static_cast<int>(std::lround(uv->x())), 0, maps_[v].width - 1);
     const int y = std::clamp(static_cast<int>(std::lround(uv->y())), 0, maps_[v].height - 1);
-    if (maps_[v].to_silhouette.at<float>(y, x) > r_px + options_.silhouette_margin_px) {
+    // Only the outside test takes radius_fraction: a smaller sphere never proves a cube whole.
+    if (maps_[v].to_silhouette.at<float>(y, x) >
+        radius_fraction * r_px + options_.silhouette_margin_px) {
       return CubeVerdict::kOutside;
     }
     if (maps_[v].to_background.at<float>(y, x) < r_px) all_inside = false;
@@ -86,10 +89,12 @@ CubeVerdict Carver::Judge(const Cube& cube, bool* seen_as_wood) const {
 
 void Carver::Carve(const Cube& cube, std::vector<Cube>* kept) const {
   bool seen_as_wood = true;
-  const CubeVerdict verdict = Judge(cube, &seen_as_wood);
+  const bool leaf = cube.side <= options_.min_cell_m * 1.0001;
+  const CubeVerdict verdict =
+      Judge(cube, &seen_as_wood, leaf ? options_.leaf_radius_fraction : 1.0);
   // A post's shadow is no evidence of a head (it runs the height of the images).
   if (verdict == CubeVerdict::kOutside || verdict == CubeVerdict::kHidden) return;
-  if (verdict == CubeVerdict::kInside || cube.side <= options_.min_cell_m * 1.0001) {
+  if (verdict == CubeVerdict::kInside || leaf) {
     kept->push_back({cube.centre, cube.side, seen_as_wood});
     return;
   }

@@ -5,7 +5,8 @@
 //
 // A cube whose bounding sphere projects entirely outside the (dilated) silhouette of some view is
 // carved; one inside every view is kept whole; the rest are split down to min_cell_m and then
-// kept. A post in front hides what is behind it: its pixels do not carve, but neither do they
+// kept (a smallest cube is tested with a sphere of leaf_radius_fraction of its bounding
+// radius). A post in front hides what is behind it: its pixels do not carve, but neither do they
 // prove a cube whole, and a cube near thick wood in no view at all (behind posts in every view)
 // is not kept. Carver is immutable after construction and thread-safe to share.
 #pragma once
@@ -44,8 +45,9 @@ class Carver {
   Carver& operator=(const Carver&) = delete;
 
   // The cube's verdict; *seen_as_wood is false if some view that sees it finds no thick wood
-  // near it (it is kept only because a post hides it there).
-  CubeVerdict Judge(const Cube& cube, bool* seen_as_wood) const;
+  // near it (it is kept only because a post hides it there). `radius_fraction` (in [0, 1])
+  // scales the sphere of the outside test only (HeadOptions::leaf_radius_fraction).
+  CubeVerdict Judge(const Cube& cube, bool* seen_as_wood, double radius_fraction = 1.0) const;
   // Appends to *kept the leaves of `cube`'s octree that survive carving.
   void Carve(const Cube& cube, std::vector<Cube>* kept) const;
 

@@ -251,6 +251,80 @@ TEST(ReconstructHeadAndTrunk, DepthFactorBoundsTheHeadsDepth) {
   EXPECT_GE(HeadMetrics(shallow->head, vine.head).head_enclosed_fraction, 0.99);
 }
 
+// The x extent of the spheres beyond [lo, hi] (the larger side), and the y centre of their box.
+double XOvershoot(const HeadModel& head, double lo, double hi) {
+  double out = 0.0;
+  for (const Sphere& s : head.spheres) {
+    out = std::max(out, lo - (s.center.x() - s.radius));
+    out = std::max(out, s.center.x() + s.radius - hi);
+  }
+  return out;
+}
+double YCentre(const HeadModel& head) {
+  double lo = 1e9, hi = -1e9;
+  for (const Sphere& s : head.spheres) {
+    lo = std::min(lo, s.center.y() - s.radius);
+    hi = std::max(hi, s.center.y() + s.radius);
+  }
+  return 0.5 * (lo + hi);
+}
+
+// Tight leaves (leaf_radius_fraction 0): a smallest cube is kept only if its centre projects
+// onto every silhouette, so the head reaches at most one bounding radius (0.87 cm) plus the
+// silhouette margin beyond the true head across the views, where the bounding-sphere test
+// (fraction 1) reaches further; the head stays enclosed and is smaller.
+TEST(ReconstructHeadAndTrunk, TightLeavesShrinkTheHullAndKeepTheHead) {
+  const RigCalibration rig = sim::MakeRig().value();
+  VineModel vine;
+  vine.canes.push_back(VerticalTrunk(0.0, 0.8, 0.86, 0.02, 0.02));
+  for (double x : {-0.06, -0.03, 0.0, 0.03, 0.06})
+    vine.head.spheres.push_back({{x, 0.8, 0.89}, 0.03});
+  const std::vector<View2D> views = SyntheticViews(vine, rig);
+  HeadOptions options;
+  const auto loose =
+      ReconstructHeadAndTrunk(views, rig, WorkingVolume(), options, Deadline::Infinite());
+  options.leaf_radius_fraction = 0.0;
+  const auto tight =
+      ReconstructHeadAndTrunk(views, rig, WorkingVolume(), options, Deadline::Infinite());
+  ASSERT_TRUE(loose.ok() && tight.ok());
+  const ReconstructionMetrics m_loose = HeadMetrics(loose->head, vine.head);
+  const ReconstructionMetrics m_tight = HeadMetrics(tight->head, vine.head);
+  EXPECT_GE(m_tight.head_enclosed_fraction, 0.99);
+  EXPECT_LT(m_tight.head_volume_ratio, 0.9 * m_loose.head_volume_ratio)
+      << "loose " << m_loose.head_volume_ratio << " tight " << m_tight.head_volume_ratio;
+  // Across the views (x), the true head spans [-0.09, 0.09]; a leaf's bounding radius is
+  // 0.0087 m and 3 px of margin at 0.8 m is under 2 mm, plus half a cell of grid placement.
+  const double tight_out = XOvershoot(tight->head, -0.09, 0.09);
+  const double loose_out = XOvershoot(loose->head, -0.09, 0.09);
+  EXPECT_LT(tight_out, 0.0087 + 0.002 + 0.005) << "tight " << tight_out;
+  EXPECT_LT(tight_out, loose_out - 0.003) << "tight " << tight_out << " loose " << loose_out;
+}
+
+// Depth hints that lie behind the head (canes crossing behind it, say) pull the head's depth
+// centre off the trunk; head_centre_on_trunk keeps it on the trunk's top, where it sits.
+TEST(ReconstructHeadAndTrunk, CentreOnTrunkIgnoresHintsOffTheHead) {
+  const RigCalibration rig = sim::MakeRig().value();
+  VineModel vine;
+  vine.canes.push_back(VerticalTrunk(0.0, 0.8, 0.86, 0.02, 0.02));
+  for (double x : {-0.06, -0.03, 0.0, 0.03, 0.06})
+    vine.head.spheres.push_back({{x, 0.8, 0.89}, 0.03});
+  const std::vector<View2D> views = SyntheticViews(vine, rig);
+  std::vector<Eigen::Vector3d> hints;
+  for (double x = -0.05; x <= 0.05; x += 0.01) hints.push_back({x, 0.86, 0.9});
+  HeadOptions options;
+  options.head_depth_factor = 0.6;
+  const auto on_hints =
+      ReconstructHeadAndTrunk(views, rig, WorkingVolume(), options, Deadline::Infinite(), hints);
+  options.head_centre_on_trunk = true;
+  const auto on_trunk =
+      ReconstructHeadAndTrunk(views, rig, WorkingVolume(), options, Deadline::Infinite(), hints);
+  ASSERT_TRUE(on_hints.ok() && on_trunk.ok());
+  ASSERT_TRUE(on_trunk->trunk.has_value());
+  EXPECT_GT(YCentre(on_hints->head), 0.8 + 0.03) << "the hints should have moved the head";
+  EXPECT_NEAR(YCentre(on_trunk->head), 0.8, 0.015);
+  EXPECT_GE(HeadMetrics(on_trunk->head, vine.head).head_enclosed_fraction, 0.99);
+}
+
 TEST(HeadOptions, RejectsBadPeelAndDepthFields) {
   HeadOptions o;
   o.peel_depth_px = -1;
@@ -265,6 +339,14 @@ TEST(HeadOptions, RejectsBadPeelAndDepthFields) {
   o = HeadOptions();
   o.head_depth_factor = 0;
   EXPECT_NE(o.Validate().message().find("head_depth_factor"), std::string::npos);
+  for (double bad : {-0.1, 1.1, std::nan("")}) {
+    o = HeadOptions();
+    o.leaf_radius_fraction = bad;
+    EXPECT_NE(o.Validate().message().find("leaf_radius_fraction"), std::string::npos) << bad;
+  }
+  o = HeadOptions();
+  o.leaf_radius_fraction = 0.0;
+  EXPECT_TRUE(o.Validate().ok());
   EXPECT_TRUE(HeadOptions().Validate().ok());
 }
 
