@@ -332,7 +332,7 @@ absl::StatusOr<HeadAndTrunk> ReconstructHeadAndTrunk(
       0.5 * options.head_depth_factor * std::max(head_max_x - head_min_x, top_z - head_bottom_z) +
       options.depth_margin_m;
   for (size_t c = 0; c < kept.size(); ++c) {
-    if (!in_head[c]) continue;
+    if (!in_head[c] || !kept[c].tight) continue;
     if (std::abs(kept[c].centre.y() - head_y) > half_depth + 0.5 * kept[c].side) continue;
     result.head.spheres.push_back({kept[c].centre, 0.5 * std::sqrt(3.0) * kept[c].side});
   }

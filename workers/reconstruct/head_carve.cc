@@ -89,13 +89,17 @@ CubeVerdict Carver::Judge(const Cube& cube, bool* seen_as_wood,
 
 void Carver::Carve(const Cube& cube, std::vector<Cube>* kept) const {
   bool seen_as_wood = true;
-  const bool leaf = cube.side <= options_.min_cell_m * 1.0001;
-  const CubeVerdict verdict =
-      Judge(cube, &seen_as_wood, leaf ? options_.leaf_radius_fraction : 1.0);
+  const CubeVerdict verdict = Judge(cube, &seen_as_wood);
   // A post's shadow is no evidence of a head (it runs the height of the images).
   if (verdict == CubeVerdict::kOutside || verdict == CubeVerdict::kHidden) return;
+  const bool leaf = cube.side <= options_.min_cell_m * 1.0001;
   if (verdict == CubeVerdict::kInside || leaf) {
-    kept->push_back({cube.centre, cube.side, seen_as_wood});
+    bool tight = true;
+    if (verdict == CubeVerdict::kBoundary && options_.leaf_radius_fraction < 1.0) {
+      bool unused = true;
+      tight = Judge(cube, &unused, options_.leaf_radius_fraction) != CubeVerdict::kOutside;
+    }
+    kept->push_back({cube.centre, cube.side, seen_as_wood, tight});
     return;
   }
   const double q = cube.side / 4.0;

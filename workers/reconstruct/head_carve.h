@@ -5,10 +5,11 @@
 //
 // A cube whose bounding sphere projects entirely outside the (dilated) silhouette of some view is
 // carved; one inside every view is kept whole; the rest are split down to min_cell_m and then
-// kept (a smallest cube is tested with a sphere of leaf_radius_fraction of its bounding
-// radius). A post in front hides what is behind it: its pixels do not carve, but neither do they
-// prove a cube whole, and a cube near thick wood in no view at all (behind posts in every view)
-// is not kept. Carver is immutable after construction and thread-safe to share.
+// kept (and a kept smallest cube on the boundary is marked `tight` if a sphere of
+// leaf_radius_fraction of its bounding radius also touches every silhouette). A post in front
+// hides what is behind it: its pixels do not carve, but neither do they prove a cube whole, and
+// a cube near thick wood in no view at all (behind posts in every view) is not kept. Carver is
+// immutable after construction and thread-safe to share.
 #pragma once
 
 #include <cstddef>
@@ -29,6 +30,7 @@ struct Cube {
   Eigen::Vector3d centre;
   double side;
   bool seen_as_wood = true;  // near thick wood in every view that sees it (not kept by a post)
+  bool tight = true;         // not a leaf that the tight test (leaf_radius_fraction) carves
 };
 
 struct SilhouetteMaps;  // distance maps of one view (head_carve.cc)

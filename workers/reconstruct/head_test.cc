@@ -56,8 +56,10 @@ TEST(ReconstructHeadAndTrunk, EnclosesTheTrueHeadAndFindsTheTrunk) {
     for (const Eigen::Vector3d& p : result->trunk->points) {
       double best = 1e9;
       for (size_t i = 0; i + 1 < truth_trunk.points.size(); ++i)
-        best = std::min(best, PointSegmentDistance(p, truth_trunk.points[i], truth_trunk.points[i + 1]));
-      EXPECT_LT(best, p.z() < 0.01 ? 0.05 : 0.03) << "seed " << seed << " trunk point " << p.transpose();
+        best = std::min(best, PointSegmentDistance(p, truth_trunk.points[i],
+                                                   truth_trunk.points[i + 1]));
+      EXPECT_LT(best, p.z() < 0.01 ? 0.05 : 0.03)
+          << "seed " << seed << " trunk point " << p.transpose();
     }
   }
 }
