@@ -2,7 +2,7 @@
 // A diagnosis tool, not a test: how much larger than the true head the reconstructed head
 // (head.h) is, and where the excess lies, on rendered stops as the bench renders them, with the
 // head carved as ReconstructFromViews carves it (assembled and grown canes as depth hints). Per
-// stop and in sum, for the head as configured, for each option of s18 and s19 alone (and two
+// stop and in sum, for the head as configured, for each option of s18 and s19 alone (and some
 // combinations) and for a variant (options from the environment):
 //  - volume ratio (model / true head) and enclosed fraction, as the bench's metrics;
 //  - the error of each face of the model head's bounding box against the true head's;
