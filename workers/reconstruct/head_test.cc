@@ -9,6 +9,7 @@
 #include "gtest/gtest.h"
 #include "sim/rig.h"
 #include "sim/vine_generator.h"
+#include "workers/reconstruct/reconstruct.h"
 #include "workers/reconstruct/synthetic_views.h"
 
 namespace vb::reconstruct {
@@ -325,6 +326,25 @@ TEST(ReconstructHeadAndTrunk, CentreOnTrunkIgnoresHintsOffTheHead) {
   EXPECT_GT(YCentre(on_hints->head), 0.8 + 0.03) << "the hints should have moved the head";
   EXPECT_NEAR(YCentre(on_trunk->head), 0.8, 0.015);
   EXPECT_GE(HeadMetrics(on_trunk->head, vine.head).head_enclosed_fraction, 0.99);
+}
+
+// With tight leaves the pipeline gives connection the head grown back by what the tight test
+// takes off, and the model keeps the tight spheres: every model head sphere is a kept cube's
+// bounding sphere (radius sqrt(3)/2 x a side of min_cell_m x 2^k), none grown.
+TEST(ReconstructFromViews, TightLeavesKeepTheModelsHeadUngrown) {
+  const RigCalibration rig = sim::MakeRig().value();
+  const sim::Scene scene = sim::GenerateScene(1003, 1).value();
+  const std::vector<View2D> views = SyntheticViews(scene.vine, rig);
+  ReconstructOptions options;
+  options.head.leaf_radius_fraction = 0.5;
+  const auto result = ReconstructFromViews(views, rig, options, Deadline::Infinite());
+  ASSERT_TRUE(result.ok()) << result.status();
+  ASSERT_FALSE(result->model.head.spheres.empty());
+  for (const Sphere& s : result->model.head.spheres) {
+    const double cells = s.radius / (0.5 * std::sqrt(3.0) * options.head.min_cell_m);
+    const double k = std::log2(cells);
+    EXPECT_NEAR(k, std::round(k), 1e-6) << "radius " << s.radius;
+  }
 }
 
 TEST(HeadOptions, RejectsBadPeelAndDepthFields) {
