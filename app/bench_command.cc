@@ -111,14 +111,6 @@ absl::Status RunBenchReconstruct(Flags& flags) {
                       flags.Double("grow-refit", reconstruct::GrowOptions{}.refit_span_m));
   VB_ASSIGN_OR_RETURN(const double grow_max_length,
                       flags.Double("grow-max-length", reconstruct::GrowOptions{}.max_length_m));
-  // --head-peel, --head-min-cell, --head-depth-factor: the head's options of those names
-  // (reconstruct::HeadOptions peel_canes, min_cell_m, head_depth_factor); defaults as there.
-  const reconstruct::HeadOptions head_defaults;
-  VB_ASSIGN_OR_RETURN(const bool head_peel, flags.Bool("head-peel", head_defaults.peel_canes));
-  VB_ASSIGN_OR_RETURN(const double head_min_cell,
-                      flags.Double("head-min-cell", head_defaults.min_cell_m));
-  VB_ASSIGN_OR_RETURN(const double head_depth_factor,
-                      flags.Double("head-depth-factor", head_defaults.head_depth_factor));
   if (rig_refine != "off" && rig_refine != "canes" && rig_refine != "trellis")
     return absl::InvalidArgumentError("--rig-refine must be off, canes or trellis");
   if (input != "images" && input != "labels" && input != "truth")
@@ -127,6 +119,9 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   reconstruct::ReconstructOptions options;
   VB_RETURN_IF_ERROR(ReadSelectionFlags(flags, &options.correspondence));
   VB_RETURN_IF_ERROR(ReadSweepFlags(flags, &options.sweep));  // --sweep (step 4e)
+  // --head-peel, --head-min-cell, --head-depth-factor, --head-leaf-fraction,
+  // --head-centre-on-trunk: the head's options (app/reconstruct_flags.h).
+  VB_RETURN_IF_ERROR(ReadHeadFlags(flags, &options.head));
   VB_RETURN_IF_ERROR(flags.Finish());
   if (!(truth_break_px >= 0.0 && truth_break_px <= 100.0))
     return absl::InvalidArgumentError("--truth-break-px must be in [0, 100]");
@@ -152,9 +147,6 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   options.grow.refit_span_m = grow_refit;
   options.grow.max_length_m = grow_max_length;
   options.grow.alongside_max_m = std::min(options.grow.alongside_max_m, grow_max_length);
-  options.head.peel_canes = head_peel;
-  options.head.min_cell_m = head_min_cell;
-  options.head.head_depth_factor = head_depth_factor;
   const reconstruct::SegmenterModel& segmenter = reconstruct::BuiltinSegmenterModel();
 
   std::vector<ReconstructionMetrics> metrics;

@@ -77,4 +77,33 @@ absl::Status ReadSweepFlags(Flags& flags, reconstruct::DepthSweepOptions* option
   return absl::OkStatus();
 }
 
+absl::Status ReadHeadFlags(Flags& flags, reconstruct::HeadOptions* options) {
+  VB_ASSIGN_OR_RETURN(const bool peel, flags.Bool("head-peel", options->peel_canes));
+  VB_ASSIGN_OR_RETURN(const double min_cell, flags.Double("head-min-cell", options->min_cell_m));
+  VB_ASSIGN_OR_RETURN(const double depth_factor,
+                      flags.Double("head-depth-factor", options->head_depth_factor));
+  VB_ASSIGN_OR_RETURN(const double leaf_fraction,
+                      flags.Double("head-leaf-fraction", options->leaf_radius_fraction));
+  VB_ASSIGN_OR_RETURN(const bool centre_on_trunk,
+                      flags.Bool("head-centre-on-trunk", options->head_centre_on_trunk));
+  if (!(min_cell > 0.0) || !(min_cell <= options->coarse_cell_m)) {
+    return absl::InvalidArgumentError(absl::StrCat("--head-min-cell must be in (0, ",
+                                                   options->coarse_cell_m, "], got ", min_cell));
+  }
+  if (!(depth_factor > 0.0) || !std::isfinite(depth_factor)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("--head-depth-factor must be finite and > 0, got ", depth_factor));
+  }
+  if (!(leaf_fraction >= 0.0 && leaf_fraction <= 1.0)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("--head-leaf-fraction must be in [0, 1], got ", leaf_fraction));
+  }
+  options->peel_canes = peel;
+  options->min_cell_m = min_cell;
+  options->head_depth_factor = depth_factor;
+  options->leaf_radius_fraction = leaf_fraction;
+  options->head_centre_on_trunk = centre_on_trunk;
+  return absl::OkStatus();
+}
+
 }  // namespace vb::app

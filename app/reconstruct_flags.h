@@ -1,13 +1,15 @@
 // SPDX-License-Identifier: Apache-2.0
 // Flags shared by `vinebot reconstruct` and `vinebot bench reconstruct` that set the match
-// selection of correspondence (step 3; workers/reconstruct/correspondence.h) and the depth sweep
-// (step 4e; workers/reconstruct/depth_sweep.h).
+// selection of correspondence (step 3; workers/reconstruct/correspondence.h), the depth sweep
+// (step 4e; workers/reconstruct/depth_sweep.h) and the head's options (step 5;
+// workers/reconstruct/head.h).
 #pragma once
 
 #include "absl/status/status.h"
 #include "app/flags.h"
 #include "workers/reconstruct/correspondence.h"
 #include "workers/reconstruct/depth_sweep.h"
+#include "workers/reconstruct/head.h"
 
 namespace vb::app {
 
@@ -30,5 +32,13 @@ absl::Status ReadSelectionFlags(Flags& flags, reconstruct::CorrespondenceOptions
 // INVALID_ARGUMENT naming the flag: a value that does not parse or is out of the field's range
 // (DepthSweepOptions::Validate).
 absl::Status ReadSweepFlags(Flags& flags, reconstruct::DepthSweepOptions* options);
+
+// Reads into *options (defaults: its values as given) the HeadOptions of those names:
+//   --head-peel true|false (peel_canes), --head-min-cell M (min_cell_m),
+//   --head-depth-factor F (head_depth_factor), --head-leaf-fraction F (leaf_radius_fraction),
+//   --head-centre-on-trunk true|false (head_centre_on_trunk).
+// INVALID_ARGUMENT naming the flag: a value that does not parse, --head-min-cell not in
+// (0, coarse_cell_m], --head-depth-factor not finite or <= 0, --head-leaf-fraction not in [0, 1].
+absl::Status ReadHeadFlags(Flags& flags, reconstruct::HeadOptions* options);
 
 }  // namespace vb::app

@@ -108,5 +108,50 @@ TEST(ReconstructFlags, SweepFlagsRejectBadValuesNamingTheFlag) {
   }
 }
 
+TEST(ReconstructFlags, HeadFlagsSetTheHeadOptionsAndDefaultsStay) {
+  auto none = ParseAll({});
+  ASSERT_TRUE(none.ok());
+  reconstruct::HeadOptions options;
+  ASSERT_TRUE(ReadHeadFlags(*none, &options).ok());
+  const reconstruct::HeadOptions defaults;
+  EXPECT_EQ(options.peel_canes, defaults.peel_canes);
+  EXPECT_EQ(options.min_cell_m, defaults.min_cell_m);
+  EXPECT_EQ(options.head_depth_factor, defaults.head_depth_factor);
+  EXPECT_EQ(options.leaf_radius_fraction, defaults.leaf_radius_fraction);
+  EXPECT_EQ(options.head_centre_on_trunk, defaults.head_centre_on_trunk);
+  auto flags = ParseAll({"--head-peel", "--head-min-cell", "0.005", "--head-depth-factor=0.6",
+                         "--head-leaf-fraction", "0.5", "--head-centre-on-trunk"});
+  ASSERT_TRUE(flags.ok());
+  ASSERT_TRUE(ReadHeadFlags(*flags, &options).ok());
+  EXPECT_TRUE(options.peel_canes);
+  EXPECT_DOUBLE_EQ(options.min_cell_m, 0.005);
+  EXPECT_DOUBLE_EQ(options.head_depth_factor, 0.6);
+  EXPECT_DOUBLE_EQ(options.leaf_radius_fraction, 0.5);
+  EXPECT_TRUE(options.head_centre_on_trunk);
+  EXPECT_TRUE(flags->Finish().ok());  // every flag was read
+  EXPECT_TRUE(options.Validate().ok());
+}
+
+TEST(ReconstructFlags, RejectsBadHeadValuesNamingTheFlag) {
+  const std::vector<std::pair<std::vector<const char*>, std::string>> cases = {
+      {{"--head-min-cell", "0"}, "--head-min-cell"},
+      {{"--head-min-cell", "0.05"}, "--head-min-cell"},  // above coarse_cell_m
+      {{"--head-depth-factor", "0"}, "--head-depth-factor"},
+      {{"--head-depth-factor", "inf"}, "--head-depth-factor"},
+      {{"--head-leaf-fraction", "-0.1"}, "--head-leaf-fraction"},
+      {{"--head-leaf-fraction", "1.5"}, "--head-leaf-fraction"},
+      {{"--head-leaf-fraction", "nan"}, "--head-leaf-fraction"},
+      {{"--head-centre-on-trunk", "maybe"}, "--head-centre-on-trunk"},
+  };
+  for (const auto& [args, name] : cases) {
+    auto flags = ParseAll(args);
+    ASSERT_TRUE(flags.ok());
+    reconstruct::HeadOptions options;
+    const absl::Status status = ReadHeadFlags(*flags, &options);
+    EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument) << args[0] << " " << args[1];
+    EXPECT_NE(status.message().find(name), std::string::npos) << status.message();
+  }
+}
+
 }  // namespace
 }  // namespace vb::app

@@ -2,6 +2,7 @@
 #include "tests/cut_loss_stop.h"
 
 #include <algorithm>
+#include <cstdlib>
 #include <filesystem>
 #include <map>
 #include <set>
@@ -44,6 +45,18 @@ absl::StatusOr<Stop> MakeStop(uint64_t seed, const std::string& input, const std
     rig.cameras.push_back(capture->bundle.CalibrationOf(c));
   rig.fiducials = capture->bundle.calibration.fiducials;
   reconstruct::ReconstructOptions options;
+  // Head variants (docs/reconstruction.md step 5, s19), for the head oracles; give each variant
+  // its own VB_CACHE: VB_HEAD_DEPTH_FACTOR, VB_HEAD_LEAF_FRACTION, VB_HEAD_MIN_CELL (numbers),
+  // VB_HEAD_CENTRE_ON_TRUNK, VB_HEAD_PEEL (0 or 1).
+  if (const char* v = std::getenv("VB_HEAD_DEPTH_FACTOR"))
+    options.head.head_depth_factor = std::atof(v);
+  if (const char* v = std::getenv("VB_HEAD_LEAF_FRACTION"))
+    options.head.leaf_radius_fraction = std::atof(v);
+  if (const char* v = std::getenv("VB_HEAD_MIN_CELL")) options.head.min_cell_m = std::atof(v);
+  if (const char* v = std::getenv("VB_HEAD_CENTRE_ON_TRUNK"))
+    options.head.head_centre_on_trunk = std::atoi(v) != 0;
+  if (const char* v = std::getenv("VB_HEAD_PEEL")) options.head.peel_canes = std::atoi(v) != 0;
+  if (auto s = options.head.Validate(); !s.ok()) return s;
   absl::StatusOr<reconstruct::ReconstructResult> result;
   if (input == "images") {
     std::vector<Image> images;

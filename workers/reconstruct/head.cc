@@ -6,144 +6,20 @@
 #include <string>
 
 #include "absl/strings/str_cat.h"
-#include "opencv2/imgproc.hpp"
-#include "workers/reconstruct/head_peel.h"
+#include "workers/reconstruct/head_carve.h"
 
 namespace vb::reconstruct {
 namespace {
 
-// Distances from every pixel to the silhouette (0 inside) and to the background (0 outside).
-struct SilhouetteMaps {
-  int width = 0;
-  int height = 0;
-  cv::Mat to_silhouette;   // CV_32F
-  cv::Mat to_background;   // CV_32F
-  cv::Mat to_thick;        // CV_32F: distance to thick foreground alone (posts excluded)
-};
+using head_internal::Carver;
+using head_internal::Cube;
+using head_internal::CubeVerdict;
+using head_internal::LabelLargestComponent;
+using head_internal::VoxelGrid;
 
-// `silhouette`: the view's thick mask, or that mask with the canes peeled off (head_peel.h).
-SilhouetteMaps MakeMaps(const View2D& view, const std::vector<uint8_t>& silhouette) {
-  SilhouetteMaps maps;
-  maps.width = view.width;
-  maps.height = view.height;
-  cv::Mat mask(view.height, view.width, CV_8U, const_cast<uint8_t*>(silhouette.data()));
-  // A post in front hides whatever is behind it: its pixels may not carve (they count as
-  // silhouette for the outside test), but neither do they prove a cube whole.
-  cv::Mat classes(view.height, view.width, CV_8U, const_cast<uint8_t*>(view.classes.data.data()));
-  cv::Mat inside = mask != 0;
-  cv::Mat outside = (mask == 0) & (classes != static_cast<int>(PixelClass::kPost));
-  cv::distanceTransform(outside, maps.to_silhouette, cv::DIST_L2, 3);
-  cv::distanceTransform(inside, maps.to_background, cv::DIST_L2, 3);
-  cv::Mat not_thick = mask == 0;
-  cv::distanceTransform(not_thick, maps.to_thick, cv::DIST_L2, 3);
-  return maps;
-}
-
-// kHidden: not carved by any view, but near no thick wood in any view either: it is behind
-// posts in every view that sees it.
-enum class CubeVerdict { kOutside, kInside, kBoundary, kHidden };
-
-struct Cube {
-  Eigen::Vector3d centre;
-  double side;
-  bool seen_as_wood = true;  // near thick wood in every view that sees it (not kept by a post)
-};
-
-class Carver {
- public:
-  // `canes`: 3D cane points to peel off the silhouettes when options.peel_canes.
-  Carver(const std::vector<View2D>& views, const RigCalibration& rig, const HeadOptions& options,
-         const std::vector<Eigen::Vector3d>& canes)
-      : rig_(rig), options_(options) {
-    for (size_t v = 0; v < views.size(); ++v) {
-      maps_.push_back(MakeMaps(views[v], options.peel_canes ? PeelCanesOffSilhouette(
-                                                                  views[v], rig.cameras[v],
-                                                                  canes, options)
-                                                            : views[v].thick_mask));
-    }
-  }
-
-  CubeVerdict Judge(const Cube& cube, bool* seen_as_wood) const {
-    const double radius = 0.5 * std::sqrt(3.0) * cube.side;
-    int seen = 0;
-    bool all_inside = true;
-    bool touches_wood = false;  // behind posts in every view is not evidence of a head
-    *seen_as_wood = true;
-    for (size_t v = 0; v < maps_.size(); ++v) {
-      const CameraCalibration& camera = rig_.cameras[v];
-      const auto uv = camera.Project(cube.centre);
-      if (!uv || !camera.InImage(*uv)) continue;
-      const double depth = (camera.camera_from_platform() * cube.centre).z();
-      if (depth <= radius) continue;
-      ++seen;
-      // 10% slack for the lens distortion's change of scale across the image.
-      const double r_px = 1.1 * camera.camera_matrix(0, 0) * radius / depth;
-      const int x = std::clamp(static_cast<int>(std::lround(uv->x())), 0, maps_[v].width - 1);
-      const int y = std::clamp(static_cast<int>(std::lround(uv->y())), 0, maps_[v].height - 1);
-      if (maps_[v].to_silhouette.at<float>(y, x) > r_px + options_.silhouette_margin_px) {
-        return CubeVerdict::kOutside;
-      }
-      if (maps_[v].to_background.at<float>(y, x) < r_px) all_inside = false;
-      if (maps_[v].to_thick.at<float>(y, x) <= r_px + options_.silhouette_margin_px)
-        touches_wood = true;
-      else
-        *seen_as_wood = false;
-    }
-    if (seen < options_.min_views) return CubeVerdict::kOutside;
-    if (!touches_wood) return CubeVerdict::kHidden;
-    return all_inside ? CubeVerdict::kInside : CubeVerdict::kBoundary;
-  }
-
-  void Carve(const Cube& cube, std::vector<Cube>* kept) const {
-    bool seen_as_wood = true;
-    const CubeVerdict verdict = Judge(cube, &seen_as_wood);
-    // A post's shadow is no evidence of a head (it runs the height of the images).
-    if (verdict == CubeVerdict::kOutside || verdict == CubeVerdict::kHidden) return;
-    if (verdict == CubeVerdict::kInside || cube.side <= options_.min_cell_m * 1.0001) {
-      kept->push_back({cube.centre, cube.side, seen_as_wood});
-      return;
-    }
-    const double q = cube.side / 4.0;
-    for (int i = 0; i < 8; ++i) {
-      const Eigen::Vector3d offset((i & 1) ? q : -q, (i & 2) ? q : -q, (i & 4) ? q : -q);
-      Carve({cube.centre + offset, cube.side / 2.0, true}, kept);
-    }
-  }
-
- private:
-  const RigCalibration& rig_;
-  const HeadOptions& options_;
-  std::vector<SilhouetteMaps> maps_;
-};
-
-// Voxels of side min_cell over the volume, for connected components of the kept cubes.
-class VoxelGrid {
- public:
-  VoxelGrid(const Eigen::AlignedBox3d& box, double cell) : origin_(box.min()), cell_(cell) {
-    size_ = ((box.max() - box.min()) / cell).array().ceil().cast<int>().max(1);
-    labels_.assign(static_cast<size_t>(size_.prod()), 0);
-  }
-  bool Index(const Eigen::Vector3d& p, Eigen::Vector3i* ijk) const {
-    *ijk = ((p - origin_) / cell_).array().floor().cast<int>();
-    return (ijk->array() >= 0).all() && (ijk->array() < size_.array()).all();
-  }
-  size_t Flat(const Eigen::Vector3i& ijk) const {
-    return (static_cast<size_t>(ijk.z()) * size_.y() + ijk.y()) * size_.x() + ijk.x();
-  }
-  Eigen::Vector3d Centre(const Eigen::Vector3i& ijk) const {
-    return origin_ + (ijk.cast<double>().array() + 0.5).matrix() * cell_;
-  }
-  const Eigen::Vector3i& size() const { return size_; }
-  std::vector<int>& labels() { return labels_; }
-
- private:
-  Eigen::Vector3d origin_;
-  double cell_;
-  Eigen::Vector3i size_;
-  std::vector<int> labels_;  // 0 empty, -1 occupied, >0 component id
-};
-
-double Median(std::vector<double> v) {
+// The upper of the two middle values for an even count (core's Median, core/statistics.h, takes
+// their mean: tried in s19, it changed 3 of tuning stops 1100-1129, so the head keeps this one).
+double UpperMedian(std::vector<double> v) {
   if (v.empty()) return 0.0;
   std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
   return v[v.size() / 2];
@@ -172,16 +48,18 @@ absl::Status HeadOptions::Validate() const {
     return absl::InvalidArgumentError("head options: depth_margin_m must be >= 0");
   if (!std::isfinite(peel_depth_px) || peel_depth_px < 0)
     return absl::InvalidArgumentError("head options: peel_depth_px must be >= 0");
+  if (!std::isfinite(leaf_radius_fraction) || leaf_radius_fraction < 0 ||
+      leaf_radius_fraction > 1) {
+    return absl::InvalidArgumentError("head options: leaf_radius_fraction must be in [0, 1]");
+  }
   if (min_views < 1) return absl::InvalidArgumentError("head options: min_views must be >= 1");
   return absl::OkStatus();
 }
 
-absl::StatusOr<HeadAndTrunk> ReconstructHeadAndTrunk(const std::vector<View2D>& views,
-                                                     const RigCalibration& rig,
-                                                     const WorkingVolume& volume,
-                                                     const HeadOptions& options,
-                                                     const Deadline& deadline,
-                                                     const std::vector<Eigen::Vector3d>& depth_hints) {
+absl::StatusOr<HeadAndTrunk> ReconstructHeadAndTrunk(
+    const std::vector<View2D>& views, const RigCalibration& rig, const WorkingVolume& volume,
+    const HeadOptions& options, const Deadline& deadline,
+    const std::vector<Eigen::Vector3d>& depth_hints) {
   if (absl::Status s = options.Validate(); !s.ok()) return s;
   if (views.size() != rig.cameras.size()) {
     return absl::InvalidArgumentError(absl::StrCat("head: ", views.size(), " views for ",
@@ -207,7 +85,8 @@ absl::StatusOr<HeadAndTrunk> ReconstructHeadAndTrunk(const std::vector<View2D>& 
     for (int j = 0; j < roots.y(); ++j)
       for (int i = 0; i < roots.x(); ++i) {
         const Eigen::Vector3d centre =
-            volume.box.min() + (Eigen::Vector3d(i, j, k).array() + 0.5).matrix() * options.coarse_cell_m;
+            volume.box.min() +
+            (Eigen::Vector3d(i, j, k).array() + 0.5).matrix() * options.coarse_cell_m;
         carver.Carve({centre, options.coarse_cell_m}, &kept);
       }
   }
@@ -217,56 +96,10 @@ absl::StatusOr<HeadAndTrunk> ReconstructHeadAndTrunk(const std::vector<View2D>& 
   // Rasterise the kept cubes and take the largest 26-connected component: this vine's head and
   // trunk (neighbours' heads lie outside the working volume).
   VoxelGrid grid(volume.box, options.min_cell_m);
-  std::vector<int>& labels = grid.labels();
-  std::vector<std::vector<size_t>> voxels_of_cube(kept.size());
-  for (size_t c = 0; c < kept.size(); ++c) {
-    const int n = std::max(1, static_cast<int>(std::lround(kept[c].side / options.min_cell_m)));
-    for (int a = 0; a < n; ++a)
-      for (int b = 0; b < n; ++b)
-        for (int d = 0; d < n; ++d) {
-          const Eigen::Vector3d p =
-              kept[c].centre +
-              (Eigen::Vector3d(a, b, d).array() + 0.5 - n / 2.0).matrix() * options.min_cell_m;
-          Eigen::Vector3i ijk;
-          if (!grid.Index(p, &ijk)) continue;
-          labels[grid.Flat(ijk)] = -1;
-          voxels_of_cube[c].push_back(grid.Flat(ijk));
-        }
-  }
+  std::vector<std::vector<size_t>> voxels_of_cube;
+  const int best_label = LabelLargestComponent(kept, options.min_cell_m, &grid, &voxels_of_cube);
+  const std::vector<int>& labels = grid.labels();
   const Eigen::Vector3i size = grid.size();
-  int best_label = 0;
-  size_t best_count = 0;
-  int next_label = 0;
-  std::vector<Eigen::Vector3i> stack;
-  for (int z = 0; z < size.z(); ++z)
-    for (int y = 0; y < size.y(); ++y)
-      for (int x = 0; x < size.x(); ++x) {
-        const Eigen::Vector3i seed(x, y, z);
-        if (labels[grid.Flat(seed)] != -1) continue;
-        ++next_label;
-        size_t count = 0;
-        stack.assign(1, seed);
-        labels[grid.Flat(seed)] = next_label;
-        while (!stack.empty()) {
-          const Eigen::Vector3i at = stack.back();
-          stack.pop_back();
-          ++count;
-          for (int dz = -1; dz <= 1; ++dz)
-            for (int dy = -1; dy <= 1; ++dy)
-              for (int dx = -1; dx <= 1; ++dx) {
-                const Eigen::Vector3i n = at + Eigen::Vector3i(dx, dy, dz);
-                if ((n.array() < 0).any() || (n.array() >= size.array()).any()) continue;
-                int& label = labels[grid.Flat(n)];
-                if (label != -1) continue;
-                label = next_label;
-                stack.push_back(n);
-              }
-        }
-        if (count > best_count) {
-          best_count = count;
-          best_label = next_label;
-        }
-      }
 
   // Voxels seen as wood: near the thick silhouette in every view that sees them. The others are
   // kept only because a post hides them in some view; beside a post that is a column as wide as
@@ -286,7 +119,8 @@ absl::StatusOr<HeadAndTrunk> ReconstructHeadAndTrunk(const std::vector<View2D>& 
   // Slabs of the component: x extent per slab, and the depth of the slab's widest row. Seen
   // from a rig on one side, the hull of a trunk is a diamond long in depth whose widest point is
   // at the trunk's true depth (perspective makes the back half longer, so the centroid is not).
-  const int voxels_per_slab = std::max(1, static_cast<int>(std::lround(options.slab_m / options.min_cell_m)));
+  const int voxels_per_slab =
+      std::max(1, static_cast<int>(std::lround(options.slab_m / options.min_cell_m)));
   const int slabs = (size.z() + voxels_per_slab - 1) / voxels_per_slab;
   std::vector<double> min_x(slabs, 1e9), max_x(slabs, -1e9);
   std::vector<double> centre_x(slabs, 0.0), centre_y(slabs, 0.0);  // of the widest rows
@@ -331,7 +165,7 @@ absl::StatusOr<HeadAndTrunk> ReconstructHeadAndTrunk(const std::vector<View2D>& 
   std::vector<double> lower_widths;
   for (size_t i = 0; i < occupied.size() / 2; ++i)
     lower_widths.push_back(max_x[occupied[i]] - min_x[occupied[i]] + options.min_cell_m);
-  const double trunk_width = lower_widths.empty() ? 0.0 : Median(lower_widths);
+  const double trunk_width = lower_widths.empty() ? 0.0 : UpperMedian(lower_widths);
 
   // Head bottom: the lowest wide slab above the lower half of the trunk (heads carry lobes
   // that hang down beside the trunk top; scanning from below keeps them in the head). Where no
@@ -373,8 +207,8 @@ absl::StatusOr<HeadAndTrunk> ReconstructHeadAndTrunk(const std::vector<View2D>& 
       lower_min_x.push_back(min_x[occupied[i]]);
       lower_max_x.push_back(max_x[occupied[i]]);
     }
-    const double trunk_left = Median(lower_min_x);
-    const double trunk_right = Median(lower_max_x);
+    const double trunk_left = UpperMedian(lower_min_x);
+    const double trunk_right = UpperMedian(lower_max_x);
     trunk_mid_x = 0.5 * (trunk_left + trunk_right);
     const double side_widening = 0.5 * (options.head_width_factor - 1.0) * trunk_width;
     const auto at = std::find(occupied.begin(), occupied.end(), bottom_slab);
@@ -396,8 +230,8 @@ absl::StatusOr<HeadAndTrunk> ReconstructHeadAndTrunk(const std::vector<View2D>& 
 
   // Trunk: slab centres below the head. Near the bottom of the images only the far part of the
   // views' cones remains, which drags the widest row backwards: keep slabs near a reference depth
-  // (below), then extend the trunk straight down to the ground (where trunks grow from), along the line
-  // fitted to the kept centres.
+  // (below), then extend the trunk straight down to the ground (where trunks grow from), along
+  // the line fitted to the kept centres.
   Polyline3 trunk;
   std::vector<double> trunk_y;
   for (int s : occupied) {
@@ -408,15 +242,17 @@ absl::StatusOr<HeadAndTrunk> ReconstructHeadAndTrunk(const std::vector<View2D>& 
   // Reference depth: triangulated wood inside the trunk's silhouette columns if there is enough,
   // else the upper half of the trunk, which every view sees whole.
   double reference_y =
-      Median(std::vector<double>(trunk_y.begin() + trunk_y.size() / 2, trunk_y.end()));
+      UpperMedian(std::vector<double>(trunk_y.begin() + trunk_y.size() / 2, trunk_y.end()));
   if (!trunk.points.empty()) {
     std::vector<double> hinted;
     for (const Eigen::Vector3d& p : depth_hints) {
       if (p.z() < trunk.points.front().z() || p.z() > head_bottom_z) continue;
-      const int s = std::clamp(static_cast<int>((p.z() - volume.box.min().z()) / options.slab_m), 0, slabs - 1);
-      if (count[s] > 0 && p.x() >= min_x[s] - 0.01 && p.x() <= max_x[s] + 0.01) hinted.push_back(p.y());
+      const int s = std::clamp(
+          static_cast<int>((p.z() - volume.box.min().z()) / options.slab_m), 0, slabs - 1);
+      if (count[s] > 0 && p.x() >= min_x[s] - 0.01 && p.x() <= max_x[s] + 0.01)
+        hinted.push_back(p.y());
     }
-    if (hinted.size() >= 5) reference_y = Median(hinted);
+    if (hinted.size() >= 5) reference_y = UpperMedian(hinted);
   }
   std::erase_if(trunk.points,
                 [&](const Eigen::Vector3d& p) { return std::abs(p.y() - reference_y) > 0.025; });
@@ -424,7 +260,8 @@ absl::StatusOr<HeadAndTrunk> ReconstructHeadAndTrunk(const std::vector<View2D>& 
   if (trunk.points.size() >= 3) {
     std::vector<Eigen::Vector3d> smooth = trunk.points;
     for (size_t i = 1; i + 1 < smooth.size(); ++i)
-      smooth[i].head<2>() = (trunk.points[i - 1] + trunk.points[i] + trunk.points[i + 1]).head<2>() / 3.0;
+      smooth[i].head<2>() =
+          (trunk.points[i - 1] + trunk.points[i] + trunk.points[i + 1]).head<2>() / 3.0;
     trunk.points = smooth;
     // Least-squares line x(z), y(z) through the kept centres, for the extension to the ground.
     Eigen::Vector3d mean = Eigen::Vector3d::Zero();
@@ -490,12 +327,14 @@ absl::StatusOr<HeadAndTrunk> ReconstructHeadAndTrunk(const std::vector<View2D>& 
       hinted.push_back(p.y());
     }
   }
-  if (hinted.size() >= 5) head_y = Median(hinted);
+  if (hinted.size() >= 5 && !(options.head_centre_on_trunk && result.trunk)) {
+    head_y = UpperMedian(hinted);
+  }
   const double half_depth =
       0.5 * options.head_depth_factor * std::max(head_max_x - head_min_x, top_z - head_bottom_z) +
       options.depth_margin_m;
   for (size_t c = 0; c < kept.size(); ++c) {
-    if (!in_head[c]) continue;
+    if (!in_head[c] || !kept[c].tight) continue;
     if (std::abs(kept[c].centre.y() - head_y) > half_depth + 0.5 * kept[c].side) continue;
     result.head.spheres.push_back({kept[c].centre, 0.5 * std::sqrt(3.0) * kept[c].side});
   }

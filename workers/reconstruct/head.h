@@ -53,6 +53,16 @@ struct HeadOptions {
   double peel_link_m = 0.03;            // consecutive hints closer than this are one cane
   // The head's depth: max(width, height) x this factor + 2 x depth_margin_m.
   double head_depth_factor = 1.0;
+  // The head's spheres leave out the smallest cubes whose sphere of this fraction of their
+  // bounding radius, about their centre, touches no view's silhouette (s19, docs/reconstruction.md
+  // step 5). 1 keeps every leaf whose bounding sphere touches the silhouettes, so the head reaches
+  // up to two bounding radii beyond the visual hull; 0 only leaves whose centre projects onto
+  // every silhouette (grown by silhouette_margin_px), up to one radius. The hull that gives the
+  // trunk, the head's bottom, extent and depth is carved as at 1. In [0, 1].
+  double leaf_radius_fraction = 1.0;
+  // Centre the head's depth on the trunk's top (the head sits on the trunk) rather than on the
+  // median depth of the depth hints within its extent (s19; off: as before).
+  bool head_centre_on_trunk = false;
 
   absl::Status Validate() const;
 };
@@ -69,11 +79,9 @@ struct HeadAndTrunk {
 // depth is poorly constrained). INVALID_ARGUMENT for a count mismatch, invalid options or
 // a view whose thick_mask size disagrees with its calibration; DEADLINE_EXCEEDED. No thick
 // foreground anywhere gives an empty result (not an error).
-absl::StatusOr<HeadAndTrunk> ReconstructHeadAndTrunk(const std::vector<View2D>& views,
-                                                     const RigCalibration& rig,
-                                                     const WorkingVolume& volume,
-                                                     const HeadOptions& options,
-                                                     const Deadline& deadline,
-                                                     const std::vector<Eigen::Vector3d>& depth_hints = {});
+absl::StatusOr<HeadAndTrunk> ReconstructHeadAndTrunk(
+    const std::vector<View2D>& views, const RigCalibration& rig, const WorkingVolume& volume,
+    const HeadOptions& options, const Deadline& deadline,
+    const std::vector<Eigen::Vector3d>& depth_hints = {});
 
 }  // namespace vb::reconstruct

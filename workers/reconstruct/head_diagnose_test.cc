@@ -2,8 +2,8 @@
 // A diagnosis tool, not a test: how much larger than the true head the reconstructed head
 // (head.h) is, and where the excess lies, on rendered stops as the bench renders them, with the
 // head carved as ReconstructFromViews carves it (assembled and grown canes as depth hints). Per
-// stop and in sum, for the head as configured, for each option of s18 alone and for a variant
-// (options from the environment):
+// stop and in sum, for the head as configured, for each option of s18 and s19 alone (and some
+// combinations) and for a variant (options from the environment):
 //  - volume ratio (model / true head) and enclosed fraction, as the bench's metrics;
 //  - the error of each face of the model head's bounding box against the true head's;
 //  - the excess volume (model head outside the true head) split by where it lies, first class
@@ -12,13 +12,18 @@
 //    extent ("in depth"), within its bounding box ("in box": the silhouettes' inflation and
 //    ambiguity);
 //  - the true canes' length (not the trunk) inside the model head but outside the true head,
-//    and the model head's volume within 10 mm of a true cane outside the true head.
+//    and the model head's volume within 10 mm of a true cane outside the true head;
+//  - the base slide (s19), a proxy for the cut oracle "the truth with the model's head spheres
+//    and the truth's scheme" (tests/cut_loss_diagnose_test.cc) that needs no decide stage: for
+//    each true cane whose base lies within 1 cm of the true head's surface, how far beyond its
+//    exit from the true head it first leaves the model head (capped at decide's 5 cm slide).
+//    A cut at the base slid more than 30 mm is lost: the fraction of bases slid > 30 mm.
 // Run with
 //   VB_INPUT=images VB_SEED=1300 VB_STOPS=20 vb_reconstruct_test
 //     --gtest_also_run_disabled_tests --gtest_filter='HeadHull.DISABLED_Report'
 // Variant knobs (HeadOptions): VB_HEAD_MIN_CELL, VB_HEAD_MARGIN_PX, VB_HEAD_DEPTH_MARGIN,
 // VB_HEAD_OVERLAP, VB_HEAD_DEPTH_FACTOR, VB_HEAD_PEEL (bool), VB_HEAD_PEEL_DEPTH_PX,
-// VB_HEAD_PEEL_RADIUS.
+// VB_HEAD_PEEL_RADIUS, VB_HEAD_LEAF_FRACTION, VB_HEAD_CENTRE_ON_TRUNK (bool).
 // Tuning seeds only (1100-1999; docs/reconstruction.md "Seeds").
 #include <algorithm>
 #include <cstdio>
@@ -63,7 +68,26 @@ struct Tally {
   double face_error[6] = {};  // lo x y z, hi x y z: model - truth, summed (mean later)
   double excess[kPlaces] = {};
   double cane_inside_m = 0, cane_near_volume = 0, true_cane_m = 0;
+  int bases = 0, bases_slid_far = 0;  // head canes; those slid > 30 mm
+  double base_slide_m = 0;            // summed
 };
+
+// How far along `cane` from where it leaves `truth` it first leaves `model`, capped at 5 cm
+// (decide's max_head_slide_m); negative if its base lies more than 1 cm from truth's surface.
+double BaseSlide(const Polyline3& cane, const std::vector<Sphere>& truth,
+                 const std::vector<Sphere>& model) {
+  const double cap = 0.05, step = 0.0025;
+  double to_surface = 1e9;
+  for (const Sphere& s : truth)
+    to_surface = std::min(to_surface, (cane.PointAt(0.0) - s.center).norm() - s.radius);
+  if (to_surface > 0.01) return -1.0;
+  const double length = cane.Length();
+  double exit = 0.0;
+  while (exit < length && InSpheres(cane.PointAt(exit), truth)) exit += step;
+  double s = exit;
+  while (s < length && s - exit < cap && InSpheres(cane.PointAt(s), model)) s += step;
+  return std::min(s - exit, cap);
+}
 
 void AddStop(uint64_t seed, const VineModel& truth, const HeadModel& head, bool verbose,
              Tally* t) {
@@ -134,7 +158,15 @@ void AddStop(uint64_t seed, const VineModel& truth, const HeadModel& head, bool 
         }
       }
   double inside_m = 0, cane_m = 0;
+  int bases = 0, slid_far = 0;
+  double slide_m = 0;
   for (const Polyline3* c : canes) {
+    const double slide = BaseSlide(*c, truth.head.spheres, head.spheres);
+    if (slide >= 0) {
+      ++bases;
+      slide_m += slide;
+      if (slide > 0.03) ++slid_far;
+    }
     const double length = c->Length();
     cane_m += length;
     for (double s = 0.0025; s < length; s += 0.005) {
@@ -157,15 +189,18 @@ void AddStop(uint64_t seed, const VineModel& truth, const HeadModel& head, bool 
   t->cane_inside_m += inside_m;
   t->cane_near_volume += near_volume;
   t->true_cane_m += cane_m;
+  t->bases += bases;
+  t->bases_slid_far += slid_far;
+  t->base_slide_m += slide_m;
   if (verbose) {
     std::printf("  seed %llu: ratio %.2f enclosed %.4f; lo %+.3f %+.3f %+.3f hi %+.3f %+.3f %+.3f"
                 "; excess (cm3) below,trunk %.0f below %.0f beside %.0f depth %.0f box %.0f; "
-                "cane inside %.3f m\n",
+                "cane inside %.3f m; bases slid > 30 mm %d of %d\n",
                 static_cast<unsigned long long>(seed), m.head_volume_ratio,
                 m.head_enclosed_fraction, mlo.x() - tlo.x(), mlo.y() - tlo.y(),
                 mlo.z() - tlo.z(), mhi.x() - thi.x(), mhi.y() - thi.y(), mhi.z() - thi.z(),
                 excess[0] * 1e6, excess[1] * 1e6, excess[2] * 1e6, excess[3] * 1e6,
-                excess[4] * 1e6, inside_m);
+                excess[4] * 1e6, inside_m, slid_far, bases);
   }
 }
 
@@ -187,6 +222,9 @@ void PrintTally(const char* title, const Tally& t) {
               "stop (%.4f of true cane length); model head within 10 mm of true canes outside "
               "the true head: %.0f cm3 per stop\n", t.cane_inside_m / n,
               t.cane_inside_m / std::max(t.true_cane_m, 1e-9), t.cane_near_volume * 1e6 / n);
+  std::printf("  base slide: %d head canes, slid > 30 mm %.3f, mean slide %.1f mm\n", t.bases,
+              static_cast<double>(t.bases_slid_far) / std::max(1, t.bases),
+              1000 * t.base_slide_m / std::max(1, t.bases));
 }
 
 TEST(HeadHull, DISABLED_Report) {
@@ -202,6 +240,8 @@ TEST(HeadHull, DISABLED_Report) {
   OverrideFromEnv("VB_HEAD_PEEL", &variant.peel_canes);
   OverrideFromEnv("VB_HEAD_PEEL_DEPTH_PX", &variant.peel_depth_px);
   OverrideFromEnv("VB_HEAD_PEEL_RADIUS", &variant.peel_cane_radius_m);
+  OverrideFromEnv("VB_HEAD_LEAF_FRACTION", &variant.leaf_radius_fraction);
+  OverrideFromEnv("VB_HEAD_CENTRE_ON_TRUNK", &variant.head_centre_on_trunk);
   ASSERT_TRUE(variant.Validate().ok()) << variant.Validate();
   // The fixed variants, each option of s18 alone, then the environment's.
   std::vector<std::pair<std::string, HeadOptions>> variants = {{"as configured", options.head}};
@@ -217,6 +257,21 @@ TEST(HeadHull, DISABLED_Report) {
   v = options.head;
   v.head_overlap_m = 0.02;
   variants.push_back({"head_overlap_m 0.02", v});
+  // s19: tighter leaves, the head centred on the trunk, and their combinations with depth 0.6.
+  for (double fraction : {0.5, 0.0}) {
+    v = options.head;
+    v.leaf_radius_fraction = fraction;
+    variants.push_back({"leaf_radius_fraction " + std::to_string(fraction).substr(0, 3), v});
+  }
+  v = options.head;
+  v.head_centre_on_trunk = true;
+  variants.push_back({"head_centre_on_trunk", v});
+  v.head_depth_factor = 0.6;
+  variants.push_back({"head_centre_on_trunk, depth 0.6", v});
+  v = options.head;
+  v.leaf_radius_fraction = 0.5;
+  v.head_depth_factor = 0.6;
+  variants.push_back({"leaf 0.5, depth 0.6", v});
   variants.push_back({"environment's variant", variant});
   std::vector<Tally> tallies(variants.size());
   for (int k = 0; k < count; ++k) {

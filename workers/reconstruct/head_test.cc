@@ -9,6 +9,7 @@
 #include "gtest/gtest.h"
 #include "sim/rig.h"
 #include "sim/vine_generator.h"
+#include "workers/reconstruct/reconstruct.h"
 #include "workers/reconstruct/synthetic_views.h"
 
 namespace vb::reconstruct {
@@ -56,8 +57,10 @@ TEST(ReconstructHeadAndTrunk, EnclosesTheTrueHeadAndFindsTheTrunk) {
     for (const Eigen::Vector3d& p : result->trunk->points) {
       double best = 1e9;
       for (size_t i = 0; i + 1 < truth_trunk.points.size(); ++i)
-        best = std::min(best, PointSegmentDistance(p, truth_trunk.points[i], truth_trunk.points[i + 1]));
-      EXPECT_LT(best, p.z() < 0.01 ? 0.05 : 0.03) << "seed " << seed << " trunk point " << p.transpose();
+        best = std::min(best, PointSegmentDistance(p, truth_trunk.points[i],
+                                                   truth_trunk.points[i + 1]));
+      EXPECT_LT(best, p.z() < 0.01 ? 0.05 : 0.03)
+          << "seed " << seed << " trunk point " << p.transpose();
     }
   }
 }
@@ -251,6 +254,99 @@ TEST(ReconstructHeadAndTrunk, DepthFactorBoundsTheHeadsDepth) {
   EXPECT_GE(HeadMetrics(shallow->head, vine.head).head_enclosed_fraction, 0.99);
 }
 
+// The x extent of the spheres beyond [lo, hi] (the larger side), and the y centre of their box.
+double XOvershoot(const HeadModel& head, double lo, double hi) {
+  double out = 0.0;
+  for (const Sphere& s : head.spheres) {
+    out = std::max(out, lo - (s.center.x() - s.radius));
+    out = std::max(out, s.center.x() + s.radius - hi);
+  }
+  return out;
+}
+double YCentre(const HeadModel& head) {
+  double lo = 1e9, hi = -1e9;
+  for (const Sphere& s : head.spheres) {
+    lo = std::min(lo, s.center.y() - s.radius);
+    hi = std::max(hi, s.center.y() + s.radius);
+  }
+  return 0.5 * (lo + hi);
+}
+
+// Tight leaves (leaf_radius_fraction 0): a smallest cube is kept only if its centre projects
+// onto every silhouette, so the head reaches at most one bounding radius (0.87 cm) plus the
+// silhouette margin beyond the true head across the views, where the bounding-sphere test
+// (fraction 1) reaches further; the head stays enclosed and is smaller.
+TEST(ReconstructHeadAndTrunk, TightLeavesShrinkTheHullAndKeepTheHead) {
+  const RigCalibration rig = sim::MakeRig().value();
+  VineModel vine;
+  vine.canes.push_back(VerticalTrunk(0.0, 0.8, 0.86, 0.02, 0.02));
+  for (double x : {-0.06, -0.03, 0.0, 0.03, 0.06})
+    vine.head.spheres.push_back({{x, 0.8, 0.89}, 0.03});
+  const std::vector<View2D> views = SyntheticViews(vine, rig);
+  HeadOptions options;
+  const auto loose =
+      ReconstructHeadAndTrunk(views, rig, WorkingVolume(), options, Deadline::Infinite());
+  options.leaf_radius_fraction = 0.0;
+  const auto tight =
+      ReconstructHeadAndTrunk(views, rig, WorkingVolume(), options, Deadline::Infinite());
+  ASSERT_TRUE(loose.ok() && tight.ok());
+  const ReconstructionMetrics m_loose = HeadMetrics(loose->head, vine.head);
+  const ReconstructionMetrics m_tight = HeadMetrics(tight->head, vine.head);
+  EXPECT_GE(m_tight.head_enclosed_fraction, 0.99);
+  EXPECT_LT(m_tight.head_volume_ratio, 0.9 * m_loose.head_volume_ratio)
+      << "loose " << m_loose.head_volume_ratio << " tight " << m_tight.head_volume_ratio;
+  // Across the views (x), the true head spans [-0.09, 0.09]; a leaf's bounding radius is
+  // 0.0087 m and 3 px of margin at 0.8 m is under 2 mm, plus half a cell of grid placement.
+  const double tight_out = XOvershoot(tight->head, -0.09, 0.09);
+  const double loose_out = XOvershoot(loose->head, -0.09, 0.09);
+  EXPECT_LT(tight_out, 0.0087 + 0.002 + 0.005) << "tight " << tight_out;
+  EXPECT_LT(tight_out, loose_out - 0.003) << "tight " << tight_out << " loose " << loose_out;
+}
+
+// Depth hints that lie behind the head (canes crossing behind it, say) pull the head's depth
+// centre off the trunk; head_centre_on_trunk keeps it on the trunk's top, where it sits.
+TEST(ReconstructHeadAndTrunk, CentreOnTrunkIgnoresHintsOffTheHead) {
+  const RigCalibration rig = sim::MakeRig().value();
+  VineModel vine;
+  vine.canes.push_back(VerticalTrunk(0.0, 0.8, 0.86, 0.02, 0.02));
+  for (double x : {-0.06, -0.03, 0.0, 0.03, 0.06})
+    vine.head.spheres.push_back({{x, 0.8, 0.89}, 0.03});
+  const std::vector<View2D> views = SyntheticViews(vine, rig);
+  std::vector<Eigen::Vector3d> hints;
+  for (double x = -0.05; x <= 0.05; x += 0.01) hints.push_back({x, 0.86, 0.9});
+  HeadOptions options;
+  options.head_depth_factor = 0.6;
+  const auto on_hints =
+      ReconstructHeadAndTrunk(views, rig, WorkingVolume(), options, Deadline::Infinite(), hints);
+  options.head_centre_on_trunk = true;
+  const auto on_trunk =
+      ReconstructHeadAndTrunk(views, rig, WorkingVolume(), options, Deadline::Infinite(), hints);
+  ASSERT_TRUE(on_hints.ok() && on_trunk.ok());
+  ASSERT_TRUE(on_trunk->trunk.has_value());
+  EXPECT_GT(YCentre(on_hints->head), 0.8 + 0.03) << "the hints should have moved the head";
+  EXPECT_NEAR(YCentre(on_trunk->head), 0.8, 0.015);
+  EXPECT_GE(HeadMetrics(on_trunk->head, vine.head).head_enclosed_fraction, 0.99);
+}
+
+// With tight leaves the pipeline gives connection the head grown back by what the tight test
+// takes off, and the model keeps the tight spheres: every model head sphere is a kept cube's
+// bounding sphere (radius sqrt(3)/2 x a side of min_cell_m x 2^k), none grown.
+TEST(ReconstructFromViews, TightLeavesKeepTheModelsHeadUngrown) {
+  const RigCalibration rig = sim::MakeRig().value();
+  const sim::Scene scene = sim::GenerateScene(1003, 1).value();
+  const std::vector<View2D> views = SyntheticViews(scene.vine, rig);
+  ReconstructOptions options;
+  options.head.leaf_radius_fraction = 0.5;
+  const auto result = ReconstructFromViews(views, rig, options, Deadline::Infinite());
+  ASSERT_TRUE(result.ok()) << result.status();
+  ASSERT_FALSE(result->model.head.spheres.empty());
+  for (const Sphere& s : result->model.head.spheres) {
+    const double cells = s.radius / (0.5 * std::sqrt(3.0) * options.head.min_cell_m);
+    const double k = std::log2(cells);
+    EXPECT_NEAR(k, std::round(k), 1e-6) << "radius " << s.radius;
+  }
+}
+
 TEST(HeadOptions, RejectsBadPeelAndDepthFields) {
   HeadOptions o;
   o.peel_depth_px = -1;
@@ -265,6 +361,14 @@ TEST(HeadOptions, RejectsBadPeelAndDepthFields) {
   o = HeadOptions();
   o.head_depth_factor = 0;
   EXPECT_NE(o.Validate().message().find("head_depth_factor"), std::string::npos);
+  for (double bad : {-0.1, 1.1, std::nan("")}) {
+    o = HeadOptions();
+    o.leaf_radius_fraction = bad;
+    EXPECT_NE(o.Validate().message().find("leaf_radius_fraction"), std::string::npos) << bad;
+  }
+  o = HeadOptions();
+  o.leaf_radius_fraction = 0.0;
+  EXPECT_TRUE(o.Validate().ok());
   EXPECT_TRUE(HeadOptions().Validate().ok());
 }
 

@@ -200,8 +200,18 @@ absl::StatusOr<ReconstructResult> ReconstructFromViews(const std::vector<View2D>
   const JoinImageFn join_images = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
     return MeasureJoinImages(a, b, views, rig);
   };
-  VB_ASSIGN_OR_RETURN(result.model, ConnectCanes(canes, head.trunk, head.head, options.connect,
+  // Tight leaves (HeadOptions::leaf_radius_fraction < 1) shrink the head's spheres; connection
+  // is given them grown back by what the tight test takes off (about the loose head its joins
+  // were trained on), and the model keeps the tight ones (docs/reconstruction.md step 5, s19).
+  HeadModel connect_head = head.head;
+  const double grow_m = (1.0 - options.head.leaf_radius_fraction) * 0.5 * std::sqrt(3.0) *
+                        options.head.min_cell_m;
+  if (grow_m > 0.0) {
+    for (Sphere& sphere : connect_head.spheres) sphere.radius += grow_m;
+  }
+  VB_ASSIGN_OR_RETURN(result.model, ConnectCanes(canes, head.trunk, connect_head, options.connect,
                                                  &result.connect, gap_support, join_images));
+  if (grow_m > 0.0) result.model.head = head.head;
   result.timings.connect_s = SecondsSince(t);
 
   if (options.grow.after_connection) {  // step 4d on the tree: tips only (bases are pinned)

@@ -1,0 +1,167 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "workers/reconstruct/head_carve.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "opencv2/imgproc.hpp"
+#include "workers/reconstruct/head_peel.h"
+
+namespace vb::reconstruct::head_internal {
+
+// Distances from every pixel to the silhouette (0 inside) and to the background (0 outside).
+struct SilhouetteMaps {
+  int width = 0;
+  int height = 0;
+  cv::Mat to_silhouette;   // CV_32F
+  cv::Mat to_background;   // CV_32F
+  cv::Mat to_thick;        // CV_32F: distance to thick foreground alone (posts excluded)
+};
+
+namespace {
+
+// `silhouette`: the view's thick mask, or that mask with the canes peeled off (head_peel.h).
+SilhouetteMaps MakeMaps(const View2D& view, const std::vector<uint8_t>& silhouette) {
+  SilhouetteMaps maps;
+  maps.width = view.width;
+  maps.height = view.height;
+  cv::Mat mask(view.height, view.width, CV_8U, const_cast<uint8_t*>(silhouette.data()));
+  // A post in front hides whatever is behind it: its pixels may not carve (they count as
+  // silhouette for the outside test), but neither do they prove a cube whole.
+  cv::Mat classes(view.height, view.width, CV_8U, const_cast<uint8_t*>(view.classes.data.data()));
+  cv::Mat inside = mask != 0;
+  cv::Mat outside = (mask == 0) & (classes != static_cast<int>(PixelClass::kPost));
+  cv::distanceTransform(outside, maps.to_silhouette, cv::DIST_L2, 3);
+  cv::distanceTransform(inside, maps.to_background, cv::DIST_L2, 3);
+  cv::Mat not_thick = mask == 0;
+  cv::distanceTransform(not_thick, maps.to_thick, cv::DIST_L2, 3);
+  return maps;
+}
+
+}  // namespace
+
+Carver::Carver(const std::vector<View2D>& views, const RigCalibration& rig,
+               const HeadOptions& options, const std::vector<Eigen::Vector3d>& canes)
+    : rig_(rig), options_(options) {
+  for (size_t v = 0; v < views.size(); ++v) {
+    maps_.push_back(MakeMaps(views[v], options.peel_canes ? PeelCanesOffSilhouette(
+                                                                views[v], rig.cameras[v],
+                                                                canes, options)
+                                                          : views[v].thick_mask));
+  }
+}
+
+Carver::~Carver() = default;
+
+CubeVerdict Carver::Judge(const Cube& cube, bool* seen_as_wood,
+                          double radius_fraction) const {
+  const double radius = 0.5 * std::sqrt(3.0) * cube.side;
+  int seen = 0;
+  bool all_inside = true;
+  bool touches_wood = false;  // behind posts in every view is not evidence of a head
+  *seen_as_wood = true;
+  for (size_t v = 0; v < maps_.size(); ++v) {
+    const CameraCalibration& camera = rig_.cameras[v];
+    const auto uv = camera.Project(cube.centre);
+    if (!uv || !camera.InImage(*uv)) continue;
+    const double depth = (camera.camera_from_platform() * cube.centre).z();
+    if (depth <= radius) continue;
+    ++seen;
+    // 10% slack for the lens distortion's change of scale across the image.
+    const double r_px = 1.1 * camera.camera_matrix(0, 0) * radius / depth;
+    const int x = std::clamp(static_cast<int>(std::lround(uv->x())), 0, maps_[v].width - 1);
+    const int y = std::clamp(static_cast<int>(std::lround(uv->y())), 0, maps_[v].height - 1);
+    // Only the outside test takes radius_fraction: a smaller sphere never proves a cube whole.
+    if (maps_[v].to_silhouette.at<float>(y, x) >
+        radius_fraction * r_px + options_.silhouette_margin_px) {
+      return CubeVerdict::kOutside;
+    }
+    if (maps_[v].to_background.at<float>(y, x) < r_px) all_inside = false;
+    if (maps_[v].to_thick.at<float>(y, x) <= r_px + options_.silhouette_margin_px)
+      touches_wood = true;
+    else
+      *seen_as_wood = false;
+  }
+  if (seen < options_.min_views) return CubeVerdict::kOutside;
+  if (!touches_wood) return CubeVerdict::kHidden;
+  return all_inside ? CubeVerdict::kInside : CubeVerdict::kBoundary;
+}
+
+void Carver::Carve(const Cube& cube, std::vector<Cube>* kept) const {
+  bool seen_as_wood = true;
+  const CubeVerdict verdict = Judge(cube, &seen_as_wood);
+  // A post's shadow is no evidence of a head (it runs the height of the images).
+  if (verdict == CubeVerdict::kOutside || verdict == CubeVerdict::kHidden) return;
+  const bool leaf = cube.side <= options_.min_cell_m * 1.0001;
+  if (verdict == CubeVerdict::kInside || leaf) {
+    bool tight = true;
+    if (verdict == CubeVerdict::kBoundary && options_.leaf_radius_fraction < 1.0) {
+      bool unused = true;
+      tight = Judge(cube, &unused, options_.leaf_radius_fraction) != CubeVerdict::kOutside;
+    }
+    kept->push_back({cube.centre, cube.side, seen_as_wood, tight});
+    return;
+  }
+  const double q = cube.side / 4.0;
+  for (int i = 0; i < 8; ++i) {
+    const Eigen::Vector3d offset((i & 1) ? q : -q, (i & 2) ? q : -q, (i & 4) ? q : -q);
+    Carve({cube.centre + offset, cube.side / 2.0, true}, kept);
+  }
+}
+
+int LabelLargestComponent(const std::vector<Cube>& kept, double min_cell_m, VoxelGrid* grid,
+                          std::vector<std::vector<size_t>>* voxels_of_cube) {
+  std::vector<int>& labels = grid->labels();
+  voxels_of_cube->assign(kept.size(), {});
+  for (size_t c = 0; c < kept.size(); ++c) {
+    const int n = std::max(1, static_cast<int>(std::lround(kept[c].side / min_cell_m)));
+    for (int a = 0; a < n; ++a)
+      for (int b = 0; b < n; ++b)
+        for (int d = 0; d < n; ++d) {
+          const Eigen::Vector3d p =
+              kept[c].centre +
+              (Eigen::Vector3d(a, b, d).array() + 0.5 - n / 2.0).matrix() * min_cell_m;
+          Eigen::Vector3i ijk;
+          if (!grid->Index(p, &ijk)) continue;
+          labels[grid->Flat(ijk)] = -1;
+          (*voxels_of_cube)[c].push_back(grid->Flat(ijk));
+        }
+  }
+  const Eigen::Vector3i size = grid->size();
+  int best_label = 0;
+  size_t best_count = 0;
+  int next_label = 0;
+  std::vector<Eigen::Vector3i> stack;
+  for (int z = 0; z < size.z(); ++z)
+    for (int y = 0; y < size.y(); ++y)
+      for (int x = 0; x < size.x(); ++x) {
+        const Eigen::Vector3i seed(x, y, z);
+        if (labels[grid->Flat(seed)] != -1) continue;
+        ++next_label;
+        size_t count = 0;
+        stack.assign(1, seed);
+        labels[grid->Flat(seed)] = next_label;
+        while (!stack.empty()) {
+          const Eigen::Vector3i at = stack.back();
+          stack.pop_back();
+          ++count;
+          for (int dz = -1; dz <= 1; ++dz)
+            for (int dy = -1; dy <= 1; ++dy)
+              for (int dx = -1; dx <= 1; ++dx) {
+                const Eigen::Vector3i n = at + Eigen::Vector3i(dx, dy, dz);
+                if ((n.array() < 0).any() || (n.array() >= size.array()).any()) continue;
+                int& label = labels[grid->Flat(n)];
+                if (label != -1) continue;
+                label = next_label;
+                stack.push_back(n);
+              }
+        }
+        if (count > best_count) {
+          best_count = count;
+          best_label = next_label;
+        }
+      }
+  return best_label;
+}
+
+}  // namespace vb::reconstruct::head_internal

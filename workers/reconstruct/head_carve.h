@@ -1,0 +1,96 @@
+// SPDX-License-Identifier: Apache-2.0
+// The carving half of the head and trunk reconstruction (head.h; docs/reconstruction.md step 5):
+// the octree of cubes judged against each view's silhouette, and the voxel grid whose largest
+// 26-connected component is this vine's head and trunk. Internal to head.cc and its tests.
+//
+// A cube whose bounding sphere projects entirely outside the (dilated) silhouette of some view is
+// carved; one inside every view is kept whole; the rest are split down to min_cell_m and then
+// kept (and a kept smallest cube on the boundary is marked `tight` if a sphere of
+// leaf_radius_fraction of its bounding radius also touches every silhouette). A post in front
+// hides what is behind it: its pixels do not carve, but neither do they prove a cube whole, and
+// a cube near thick wood in no view at all (behind posts in every view) is not kept. Carver is
+// immutable after construction and thread-safe to share.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "core/calibration.h"
+#include "workers/reconstruct/head.h"
+#include "workers/reconstruct/view2d.h"
+
+namespace vb::reconstruct::head_internal {
+
+// kHidden: not carved by any view, but near no thick wood in any view either: it is behind
+// posts in every view that sees it.
+enum class CubeVerdict { kOutside, kInside, kBoundary, kHidden };
+
+struct Cube {
+  Eigen::Vector3d centre;
+  double side;
+  bool seen_as_wood = true;  // near thick wood in every view that sees it (not kept by a post)
+  bool tight = true;         // not a leaf that the tight test (leaf_radius_fraction) carves
+};
+
+struct SilhouetteMaps;  // distance maps of one view (head_carve.cc)
+
+class Carver {
+ public:
+  // rig.cameras[i] belongs to views[i] (sizes checked by the caller). `canes`: 3D cane points
+  // peeled off the silhouettes when options.peel_canes (head_peel.h). Keeps references to `rig`
+  // and `options`, which must outlive it.
+  Carver(const std::vector<View2D>& views, const RigCalibration& rig, const HeadOptions& options,
+         const std::vector<Eigen::Vector3d>& canes);
+  ~Carver();
+  Carver(const Carver&) = delete;
+  Carver& operator=(const Carver&) = delete;
+
+  // The cube's verdict; *seen_as_wood is false if some view that sees it finds no thick wood
+  // near it (it is kept only because a post hides it there). `radius_fraction` (in [0, 1])
+  // scales the sphere of the outside test only (HeadOptions::leaf_radius_fraction).
+  CubeVerdict Judge(const Cube& cube, bool* seen_as_wood, double radius_fraction = 1.0) const;
+  // Appends to *kept the leaves of `cube`'s octree that survive carving.
+  void Carve(const Cube& cube, std::vector<Cube>* kept) const;
+
+ private:
+  const RigCalibration& rig_;
+  const HeadOptions& options_;
+  std::vector<SilhouetteMaps> maps_;
+};
+
+// Voxels of side `cell` over a box, for connected components of the kept cubes.
+class VoxelGrid {
+ public:
+  VoxelGrid(const Eigen::AlignedBox3d& box, double cell) : origin_(box.min()), cell_(cell) {
+    size_ = ((box.max() - box.min()) / cell).array().ceil().cast<int>().max(1);
+    labels_.assign(static_cast<size_t>(size_.prod()), 0);
+  }
+  bool Index(const Eigen::Vector3d& p, Eigen::Vector3i* ijk) const {
+    *ijk = ((p - origin_) / cell_).array().floor().cast<int>();
+    return (ijk->array() >= 0).all() && (ijk->array() < size_.array()).all();
+  }
+  size_t Flat(const Eigen::Vector3i& ijk) const {
+    return (static_cast<size_t>(ijk.z()) * size_.y() + ijk.y()) * size_.x() + ijk.x();
+  }
+  Eigen::Vector3d Centre(const Eigen::Vector3i& ijk) const {
+    return origin_ + (ijk.cast<double>().array() + 0.5).matrix() * cell_;
+  }
+  const Eigen::Vector3i& size() const { return size_; }
+  std::vector<int>& labels() { return labels_; }
+  const std::vector<int>& labels() const { return labels_; }
+
+ private:
+  Eigen::Vector3d origin_;
+  double cell_;
+  Eigen::Vector3i size_;
+  std::vector<int> labels_;  // 0 empty, -1 occupied, >0 component id
+};
+
+// Rasterises `kept` into `grid` (whose cell is min_cell_m; labels all 0 on entry) and labels its
+// 26-connected components 1, 2, ...; returns the label of the largest (0 if none). On return
+// (*voxels_of_cube)[c] lists the flat indices of cube c's voxels inside the grid.
+int LabelLargestComponent(const std::vector<Cube>& kept, double min_cell_m, VoxelGrid* grid,
+                          std::vector<std::vector<size_t>>* voxels_of_cube);
+
+}  // namespace vb::reconstruct::head_internal
