@@ -1,11 +1,13 @@
 // SPDX-License-Identifier: Apache-2.0
 // Flags shared by `vinebot reconstruct` and `vinebot bench reconstruct` that set the match
-// selection of correspondence (step 3; workers/reconstruct/correspondence.h).
+// selection of correspondence (step 3; workers/reconstruct/correspondence.h) and the cane bases at
+// the head (workers/reconstruct/head_bases.h).
 #pragma once
 
 #include "absl/status/status.h"
 #include "app/flags.h"
 #include "workers/reconstruct/correspondence.h"
+#include "workers/reconstruct/head_bases.h"
 
 namespace vb::app {
 
@@ -18,5 +20,15 @@ namespace vb::app {
 // INVALID_ARGUMENT naming the flag: a value that does not parse, --alpha or --context-alpha not
 // finite or <= 0, --context-alpha below --alpha with --select-context on.
 absl::Status ReadSelectionFlags(Flags& flags, reconstruct::CorrespondenceOptions* options);
+
+// Reads into *options (defaults: its values as given):
+//   --head-bases true|false: extend the cane ends pointing at the head to it (enabled);
+//   --head-bases-reach M: ends this near the head's spheres are looked at (reach_m);
+//   --head-bases-thick-views N: the head is reached where N views show thick wood
+//     (min_thick_views);
+//   --head-bases-inside M: ... or M inside the head's spheres (max_inside_m).
+// INVALID_ARGUMENT naming the flag: a value that does not parse, --head-bases-reach not finite
+// or <= 0, --head-bases-thick-views < 1, --head-bases-inside not finite or < 0.
+absl::Status ReadHeadBasesFlags(Flags& flags, reconstruct::HeadBasesOptions* options);
 
 }  // namespace vb::app

@@ -33,7 +33,8 @@ const std::vector<Command>& Commands() {
       {"bundle info", "--bundle DIR", vb::app::RunBundleInfo},
       {"reconstruct",
        "--bundle DIR --out model.json [--deadline-s T] [--alpha A] [--select-context]"
-       " [--context-alpha A]",
+       " [--context-alpha A] [--head-bases] [--head-bases-reach M] [--head-bases-thick-views N]"
+       " [--head-bases-inside M]",
        vb::app::RunReconstruct},
       {"evaluate",
        "--model model.json --truth ground_truth.json [--policy policy.json] "
@@ -52,7 +53,8 @@ const std::vector<Command>& Commands() {
        "--vines N --seed-base S [--calibration-error-px X] [--policy policy.json]"
        " [--input images|labels|truth] [--rig-refine off|canes|trellis] [--alpha A]"
        " [--select-context] [--context-alpha A] [--head-peel] [--head-min-cell M]"
-       " [--head-depth-factor F]",
+       " [--head-depth-factor F] [--head-bases] [--head-bases-reach M]"
+       " [--head-bases-thick-views N] [--head-bases-inside M]",
        vb::app::RunBenchReconstruct},
       {"plan",
        "--model model.json --cuts cut_plan.json --out trajectory.json [--tool mill_end|secateur] "

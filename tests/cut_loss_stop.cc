@@ -2,6 +2,7 @@
 #include "tests/cut_loss_stop.h"
 
 #include <algorithm>
+#include <cstdlib>
 #include <filesystem>
 #include <map>
 #include <set>
@@ -44,6 +45,8 @@ absl::StatusOr<Stop> MakeStop(uint64_t seed, const std::string& input, const std
     rig.cameras.push_back(capture->bundle.CalibrationOf(c));
   rig.fiducials = capture->bundle.calibration.fiducials;
   reconstruct::ReconstructOptions options;
+  // VB_HEAD_BASES=1: the cane bases at the head on (head_bases.h; give it its own VB_CACHE).
+  if (const char* v = std::getenv("VB_HEAD_BASES")) options.head_bases.enabled = std::atoi(v) != 0;
   absl::StatusOr<reconstruct::ReconstructResult> result;
   if (input == "images") {
     std::vector<Image> images;

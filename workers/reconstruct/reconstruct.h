@@ -9,6 +9,7 @@
 //   4. assemble 3D pieces into canes (cane_assembly.h) 8. wires and posts (trellis3d.h)
 //   4d. the assembled canes' ends grown through junctions on two-view evidence (grow.h; on by
 //       default), before 5
+//   5b. the cane ends pointing at the head extended to it (head_bases.h; off by default)
 //   7b. cane tips continued in one view (extend.h; on by default; "4c" in
 //      docs/reconstruction.md, which numbers by its sections), after 7
 //   9. the stretches of the canes given to step 6 that the model leaves out, as its obstacles
@@ -34,6 +35,7 @@
 #include "workers/reconstruct/fiducials.h"
 #include "workers/reconstruct/grow.h"
 #include "workers/reconstruct/head.h"
+#include "workers/reconstruct/head_bases.h"
 #include "workers/reconstruct/left_out_wood.h"
 #include "workers/reconstruct/piece3d.h"
 #include "workers/reconstruct/rig_refine.h"
@@ -50,6 +52,7 @@ struct ReconstructOptions {
   AssemblyOptions assembly;
   GrowOptions grow;                      // step 4d: assembled cane ends grown in >= 2 views (grow.h)
   HeadOptions head;
+  HeadBasesOptions head_bases;           // after 5: cane ends extended to the head (head_bases.h)
   ConnectOptions connect;
   FitOptions fit;
   ExtendOptions extend;                  // step 4c: cane tips continued in one view (extend.h)
@@ -80,6 +83,7 @@ struct ReconstructResult {
   int pieces = 0;                // 3D pieces from correspondence
   int assembled_canes = 0;       // canes after assembly
   GrowSummary grow;              // step 4d
+  HeadBasesSummary head_bases;   // after step 5 (head_bases.h)
   ConnectSummary connect;
   FitSummary fit;
   ExtendSummary extend;
