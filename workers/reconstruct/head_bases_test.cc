@@ -124,6 +124,22 @@ TEST(ExtendBasesToHead, ExtendsTheLastPointWhenItIsTheBase) {
   EXPECT_NEAR((canes[0].points.front() - cane.points.back()).norm(), 0.0, 1e-12);
 }
 
+TEST(ExtendBasesToHead, RunsMaxInsideIntoTheHeadWhenTheThickTestIsOff) {
+  const RigCalibration rig = sim::MakeRig().value();
+  const Polyline3 cane = CaneFromHead({0.8, 0.0, 0.6});
+  const std::vector<View2D> views = ViewsOf(Vine({cane}), rig);
+  std::vector<Polyline3> canes = {From(cane, 0.06)};
+  HeadBasesOptions options = On();
+  options.min_thick_views = 0;
+  options.max_inside_m = 0.015;
+  HeadBasesSummary summary;
+  ASSERT_TRUE(ExtendBasesToHead(views, rig, LooseHead(), options, &canes, &summary).ok());
+  EXPECT_EQ(summary.reached_inside, 1);
+  EXPECT_EQ(summary.reached_thick, 0);
+  // The cane enters the 7 cm sphere 2 cm from its base and runs 1.5 cm (to the step) inside it.
+  EXPECT_NEAR((canes[0].points.front() - kHeadCentre).norm(), 0.055, 0.004);
+}
+
 TEST(ExtendBasesToHead, DropsAnExtensionTheViewsDoNotShowAsWood) {
   const RigCalibration rig = sim::MakeRig().value();
   const Polyline3 cane = CaneFromHead({0.8, 0.0, 0.6});
