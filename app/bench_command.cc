@@ -115,13 +115,15 @@ absl::Status RunBenchReconstruct(Flags& flags) {
     return absl::InvalidArgumentError("--rig-refine must be off, canes or trellis");
   if (input != "images" && input != "labels" && input != "truth")
     return absl::InvalidArgumentError("--input must be images, labels or truth");
-  // --alpha, --select-context, --context-alpha: the match selection (app/reconstruct_flags.h).
+  // --alpha, --select-context, --context-alpha: the match selection; --head-bases and its
+  // --head-bases-* flags: the cane bases at the head (app/reconstruct_flags.h).
   reconstruct::ReconstructOptions options;
   VB_RETURN_IF_ERROR(ReadSelectionFlags(flags, &options.correspondence));
   VB_RETURN_IF_ERROR(ReadSweepFlags(flags, &options.sweep));  // --sweep (step 4e)
   // --head-peel, --head-min-cell, --head-depth-factor, --head-leaf-fraction,
   // --head-centre-on-trunk: the head's options (app/reconstruct_flags.h).
   VB_RETURN_IF_ERROR(ReadHeadFlags(flags, &options.head));
+  VB_RETURN_IF_ERROR(ReadHeadBasesFlags(flags, &options.head_bases));
   VB_RETURN_IF_ERROR(flags.Finish());
   if (!(truth_break_px >= 0.0 && truth_break_px <= 100.0))
     return absl::InvalidArgumentError("--truth-break-px must be in [0, 100]");

@@ -106,4 +106,30 @@ absl::Status ReadHeadFlags(Flags& flags, reconstruct::HeadOptions* options) {
   return absl::OkStatus();
 }
 
+absl::Status ReadHeadBasesFlags(Flags& flags, reconstruct::HeadBasesOptions* options) {
+  VB_ASSIGN_OR_RETURN(const bool enabled, flags.Bool("head-bases", options->enabled));
+  VB_ASSIGN_OR_RETURN(const double reach, flags.Double("head-bases-reach", options->reach_m));
+  VB_ASSIGN_OR_RETURN(const int64_t thick_views,
+                      flags.Int("head-bases-thick-views", options->min_thick_views));
+  VB_ASSIGN_OR_RETURN(const double inside,
+                      flags.Double("head-bases-inside", options->max_inside_m));
+  if (!(reach > 0.0) || !std::isfinite(reach)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("--head-bases-reach must be finite and > 0, got ", reach));
+  }
+  if (thick_views < 1 || thick_views > 1000) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("--head-bases-thick-views must be in [1, 1000], got ", thick_views));
+  }
+  if (!(inside >= 0.0) || !std::isfinite(inside)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("--head-bases-inside must be finite and >= 0, got ", inside));
+  }
+  options->enabled = enabled;
+  options->reach_m = reach;
+  options->min_thick_views = static_cast<int>(thick_views);
+  options->max_inside_m = inside;
+  return absl::OkStatus();
+}
+
 }  // namespace vb::app

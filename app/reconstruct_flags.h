@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // Flags shared by `vinebot reconstruct` and `vinebot bench reconstruct` that set the match
 // selection of correspondence (step 3; workers/reconstruct/correspondence.h), the depth sweep
-// (step 4e; workers/reconstruct/depth_sweep.h) and the head's options (step 5;
-// workers/reconstruct/head.h).
+// (step 4e; workers/reconstruct/depth_sweep.h), the head's options (step 5;
+// workers/reconstruct/head.h) and the cane bases at the head (workers/reconstruct/head_bases.h).
 #pragma once
 
 #include "absl/status/status.h"
@@ -10,6 +10,7 @@
 #include "workers/reconstruct/correspondence.h"
 #include "workers/reconstruct/depth_sweep.h"
 #include "workers/reconstruct/head.h"
+#include "workers/reconstruct/head_bases.h"
 
 namespace vb::app {
 
@@ -40,5 +41,15 @@ absl::Status ReadSweepFlags(Flags& flags, reconstruct::DepthSweepOptions* option
 // INVALID_ARGUMENT naming the flag: a value that does not parse, --head-min-cell not in
 // (0, coarse_cell_m], --head-depth-factor not finite or <= 0, --head-leaf-fraction not in [0, 1].
 absl::Status ReadHeadFlags(Flags& flags, reconstruct::HeadOptions* options);
+
+// Reads into *options (defaults: its values as given):
+//   --head-bases true|false: extend the cane ends pointing at the head to it (enabled);
+//   --head-bases-reach M: ends this near the head's spheres are looked at (reach_m);
+//   --head-bases-thick-views N: the head is reached where N views show thick wood
+//     (min_thick_views);
+//   --head-bases-inside M: ... or M inside the head's spheres (max_inside_m).
+// INVALID_ARGUMENT naming the flag: a value that does not parse, --head-bases-reach not finite
+// or <= 0, --head-bases-thick-views < 1, --head-bases-inside not finite or < 0.
+absl::Status ReadHeadBasesFlags(Flags& flags, reconstruct::HeadBasesOptions* options);
 
 }  // namespace vb::app

@@ -153,5 +153,46 @@ TEST(ReconstructFlags, RejectsBadHeadValuesNamingTheFlag) {
   }
 }
 
+TEST(ReconstructFlags, HeadBasesFlagsKeepTheDefaultsOrSetTheOptions) {
+  auto absent = ParseAll({});
+  ASSERT_TRUE(absent.ok());
+  reconstruct::HeadBasesOptions options;
+  ASSERT_TRUE(ReadHeadBasesFlags(*absent, &options).ok());
+  const reconstruct::HeadBasesOptions defaults;
+  EXPECT_EQ(options.enabled, defaults.enabled);
+  EXPECT_EQ(options.reach_m, defaults.reach_m);
+  EXPECT_EQ(options.min_thick_views, defaults.min_thick_views);
+  EXPECT_EQ(options.max_inside_m, defaults.max_inside_m);
+
+  auto flags = ParseAll({"--head-bases", "--head-bases-reach", "0.2",
+                         "--head-bases-thick-views=3", "--head-bases-inside", "0.01"});
+  ASSERT_TRUE(flags.ok());
+  ASSERT_TRUE(ReadHeadBasesFlags(*flags, &options).ok());
+  EXPECT_TRUE(options.enabled);
+  EXPECT_DOUBLE_EQ(options.reach_m, 0.2);
+  EXPECT_EQ(options.min_thick_views, 3);
+  EXPECT_DOUBLE_EQ(options.max_inside_m, 0.01);
+  EXPECT_TRUE(flags->Finish().ok());
+  EXPECT_TRUE(options.Validate().ok());
+}
+
+TEST(ReconstructFlags, RejectsBadHeadBasesValuesNamingTheFlag) {
+  const std::vector<std::pair<std::vector<const char*>, std::string>> cases = {
+      {{"--head-bases-reach", "0"}, "--head-bases-reach"},
+      {{"--head-bases-reach", "nan"}, "--head-bases-reach"},
+      {{"--head-bases-thick-views", "0"}, "--head-bases-thick-views"},
+      {{"--head-bases-inside", "-0.01"}, "--head-bases-inside"},
+      {{"--head-bases", "maybe"}, "--head-bases"},
+  };
+  for (const auto& [args, name] : cases) {
+    auto flags = ParseAll(args);
+    ASSERT_TRUE(flags.ok());
+    reconstruct::HeadBasesOptions options;
+    const absl::Status status = ReadHeadBasesFlags(*flags, &options);
+    EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument) << args[0] << " " << args[1];
+    EXPECT_NE(status.message().find(name), std::string::npos) << status.message();
+  }
+}
+
 }  // namespace
 }  // namespace vb::app

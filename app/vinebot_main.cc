@@ -34,7 +34,9 @@ const std::vector<Command>& Commands() {
       {"reconstruct",
        "--bundle DIR --out model.json [--deadline-s T] [--alpha A] [--select-context]"
        " [--context-alpha A] [--sweep] [--head-peel] [--head-min-cell M]"
-       " [--head-depth-factor F] [--head-leaf-fraction F] [--head-centre-on-trunk]",
+       " [--head-depth-factor F] [--head-leaf-fraction F] [--head-centre-on-trunk]"
+       " [--head-bases] [--head-bases-reach M] [--head-bases-thick-views N]"
+       " [--head-bases-inside M]",
        vb::app::RunReconstruct},
       {"evaluate",
        "--model model.json --truth ground_truth.json [--policy policy.json] "
@@ -54,7 +56,8 @@ const std::vector<Command>& Commands() {
        " [--input images|labels|truth] [--rig-refine off|canes|trellis] [--alpha A]"
        " [--select-context] [--context-alpha A] [--head-peel] [--head-min-cell M]"
        " [--head-depth-factor F] [--head-leaf-fraction F] [--head-centre-on-trunk] [--sweep]"
-       " [--grow-refit M] [--grow-max-length M]",
+       " [--grow-refit M] [--grow-max-length M] [--head-bases] [--head-bases-reach M]"
+       " [--head-bases-thick-views N] [--head-bases-inside M]",
        vb::app::RunBenchReconstruct},
       {"plan",
        "--model model.json --cuts cut_plan.json --out trajectory.json [--tool mill_end|secateur] "

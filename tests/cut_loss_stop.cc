@@ -57,6 +57,8 @@ absl::StatusOr<Stop> MakeStop(uint64_t seed, const std::string& input, const std
     options.head.head_centre_on_trunk = std::atoi(v) != 0;
   if (const char* v = std::getenv("VB_HEAD_PEEL")) options.head.peel_canes = std::atoi(v) != 0;
   if (auto s = options.head.Validate(); !s.ok()) return s;
+  // VB_HEAD_BASES=1: the cane bases at the head on (head_bases.h; give it its own VB_CACHE).
+  if (const char* v = std::getenv("VB_HEAD_BASES")) options.head_bases.enabled = std::atoi(v) != 0;
   absl::StatusOr<reconstruct::ReconstructResult> result;
   if (input == "images") {
     std::vector<Image> images;

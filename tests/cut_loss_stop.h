@@ -25,7 +25,8 @@ struct Stop {
 // and reconstructed from `input`: "images" (the pipeline), "labels" (the renderer's labels
 // replace segmentation) or "truth" (SyntheticViews of the ground truth). With a non-empty `cache`
 // directory the truth and the model are written there (model_SEED_INPUT.json, truth_SEED.json)
-// and read back instead when both exist. Errors: the renderer's, the reconstruction's, file I/O.
+// and read back instead when both exist. The environment's VB_HEAD_BASES (1: on) sets
+// ReconstructOptions::head_bases.enabled. Errors: the renderer's, the reconstruction's, file I/O.
 absl::StatusOr<Stop> MakeStop(uint64_t seed, const std::string& input, const std::string& cache);
 
 // Nearest cane of `m` to `p`: its index (-1 if `m` has no canes); its distance and the arc length

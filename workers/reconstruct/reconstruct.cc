@@ -120,6 +120,7 @@ absl::Status ReconstructOptions::Validate() const {
   VB_RETURN_IF_ERROR(sweep.Validate());
   VB_RETURN_IF_ERROR(grow.Validate());
   VB_RETURN_IF_ERROR(head.Validate());
+  VB_RETURN_IF_ERROR(head_bases.Validate());
   VB_RETURN_IF_ERROR(connect.Validate());
   VB_RETURN_IF_ERROR(fit.Validate());
   VB_RETURN_IF_ERROR(extend.Validate());
@@ -189,6 +190,8 @@ absl::StatusOr<ReconstructResult> ReconstructFromViews(const std::vector<View2D>
   VB_ASSIGN_OR_RETURN(const HeadAndTrunk head,
                       ReconstructHeadAndTrunk(views, rig, options.volume, options.head, deadline,
                                               depth_hints));
+  VB_RETURN_IF_ERROR(
+      ExtendBasesToHead(views, rig, head.head, options.head_bases, &canes, &result.head_bases));
   result.timings.head_s = SecondsSince(t);
 
   t = std::chrono::steady_clock::now();

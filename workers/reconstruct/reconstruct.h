@@ -11,6 +11,7 @@
 //       (depth_sweep.h; off by default), before 4d
 //   4d. the assembled canes' ends grown through junctions on two-view evidence (grow.h; on by
 //       default), before 5
+//   5b. the cane ends pointing at the head extended to it (head_bases.h; off by default)
 //   7b. cane tips continued in one view (extend.h; on by default; "4c" in
 //      docs/reconstruction.md, which numbers by its sections), after 7
 //   9. the stretches of the canes given to step 6 that the model leaves out, as its obstacles
@@ -37,6 +38,7 @@
 #include "workers/reconstruct/fiducials.h"
 #include "workers/reconstruct/grow.h"
 #include "workers/reconstruct/head.h"
+#include "workers/reconstruct/head_bases.h"
 #include "workers/reconstruct/left_out_wood.h"
 #include "workers/reconstruct/piece3d.h"
 #include "workers/reconstruct/rig_refine.h"
@@ -54,6 +56,7 @@ struct ReconstructOptions {
   DepthSweepOptions sweep;               // step 4e: unexplained skeleton paths (depth_sweep.h)
   GrowOptions grow;                      // step 4d: assembled cane ends grown in >= 2 views (grow.h)
   HeadOptions head;
+  HeadBasesOptions head_bases;           // after 5: cane ends extended to the head (head_bases.h)
   ConnectOptions connect;
   FitOptions fit;
   ExtendOptions extend;                  // step 4c: cane tips continued in one view (extend.h)
@@ -86,6 +89,7 @@ struct ReconstructResult {
   int assembled_canes = 0;       // canes after assembly
   GrowSummary grow;              // step 4d
   DepthSweepSummary sweep;       // step 4e
+  HeadBasesSummary head_bases;   // after step 5 (head_bases.h)
   ConnectSummary connect;
   FitSummary fit;
   ExtendSummary extend;

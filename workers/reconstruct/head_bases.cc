@@ -1,0 +1,264 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "workers/reconstruct/head_bases.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <optional>
+
+#include "absl/strings/str_cat.h"
+#include "core/status_macros.h"
+#include "workers/reconstruct/image_probes.h"
+
+namespace vb::reconstruct {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// Signed distance from p to the surface of the union of spheres (negative inside) and the
+// nearest surface point.
+double HeadDistance(const HeadModel& head, const Eigen::Vector3d& p, Eigen::Vector3d* at) {
+  double best = std::numeric_limits<double>::infinity();
+  for (const Sphere& s : head.spheres) {
+    const Eigen::Vector3d r = p - s.center;
+    const double d = r.norm() - s.radius;
+    if (d < best) {
+      best = d;
+      const Eigen::Vector3d dir = r.norm() > 1e-12 ? Eigen::Vector3d(r.normalized())
+                                                   : Eigen::Vector3d::UnitZ();
+      *at = s.center + s.radius * dir;
+    }
+  }
+  return best;
+}
+
+Eigen::Vector3d HeadCentre(const HeadModel& head) {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  double weight = 0.0;
+  for (const Sphere& s : head.spheres) {
+    const double w = s.radius * s.radius * s.radius;
+    sum += w * s.center;
+    weight += w;
+  }
+  return weight > 0.0 ? Eigen::Vector3d(sum / weight) : sum;
+}
+
+bool Thick(const View2D& view, const Eigen::Vector2d& uv) {
+  const int x = static_cast<int>(std::lround(uv.x())), y = static_cast<int>(std::lround(uv.y()));
+  if (x < 0 || y < 0 || x >= view.width || y >= view.height) return false;
+  return view.thick_mask[static_cast<size_t>(y) * view.width + x] != 0;
+}
+
+// The end `last` (true: points.back()) of `line` and its outward unit tangent: the chord from the
+// point span_m of arc length inward to the end.
+std::pair<Eigen::Vector3d, Eigen::Vector3d> EndAndTangent(const Polyline3& line, bool last,
+                                                          double span_m) {
+  const double length = line.Length();
+  const double span = std::min(span_m, length);
+  const Eigen::Vector3d end = last ? line.points.back() : line.points.front();
+  const Eigen::Vector3d inner = line.PointAt(last ? length - span : span);
+  Eigen::Vector3d t = end - inner;
+  if (t.norm() < 1e-9) t = Eigen::Vector3d::UnitX();
+  return {end, t.normalized()};
+}
+
+// One end stepped toward the head (see the header); the points added, in order from the end,
+// or none when the extension is dropped; `stop` says why it ended.
+std::vector<Eigen::Vector3d> ExtendEnd(const std::vector<View2D>& views, const RigCalibration& rig,
+                                       const HeadModel& head, const HeadBasesOptions& options,
+                                       const Eigen::Vector3d& end, const Eigen::Vector3d& tangent,
+                                       HeadBaseStop* stop) {
+  // Two axes across the step.
+  Eigen::Vector3d u = tangent.unitOrthogonal();
+  Eigen::Vector3d w = tangent.cross(u).normalized();
+  const double cos_turn = std::cos(options.max_turn_deg * kPi / 180.0);
+  const double cap = options.truncate_px * options.truncate_px;
+  const int n = std::max(1, static_cast<int>(std::lround(options.max_offset_m / 0.0005)));
+  const double grid = options.max_offset_m / n;
+  std::vector<Eigen::Vector3d> added;
+  Eigen::Vector3d at = end, dir = tangent;
+  double inside_m = 0.0;
+  for (double length = options.step_m; length <= options.max_length_m + 1e-9;
+       length += options.step_m) {
+    const Eigen::Vector3d predicted = at + options.step_m * dir;
+    // Views whose image holds the prediction, and which of them show it in their thick region.
+    std::vector<std::optional<Eigen::Vector2d>> px(views.size());
+    int in_image = 0;
+    std::vector<int> correcting;
+    for (size_t v = 0; v < views.size(); ++v) {
+      px[v] = ProjectInside(rig.cameras[v], predicted, 0);
+      if (!px[v]) continue;
+      ++in_image;
+      if (!Thick(views[v], *px[v]) && HasCentrelineDistance(views[v]))
+        correcting.push_back(static_cast<int>(v));
+    }
+    if (in_image < 2) {
+      *stop = HeadBaseStop::kOutsideImages;
+      return {};
+    }
+    // The correction across the step toward the skeleton of the views without thick wood there.
+    Eigen::Vector3d p = predicted;
+    if (!correcting.empty()) {
+      double best = std::numeric_limits<double>::infinity();
+      for (int i = -n; i <= n; ++i) {
+        for (int j = -n; j <= n; ++j) {
+          const Eigen::Vector3d q = predicted + (i * grid) * u + (j * grid) * w;
+          double cost = 1e-6 * (i * i + j * j);  // ties go to the prediction
+          for (int v : correcting) {
+            const auto uv = ProjectInside(rig.cameras[v], q, 0);
+            const double d = uv ? CentrelineDistanceBilinear(views[v], *uv) : options.truncate_px;
+            cost += std::min(d * d, cap);
+          }
+          if (cost < best) best = cost, p = q;
+        }
+      }
+    }
+    // Every view that holds the point must show wood at it; count those showing thick wood.
+    int thick = 0;
+    for (size_t v = 0; v < views.size(); ++v) {
+      const auto uv = ProjectInside(rig.cameras[v], p, 0);
+      if (!uv) continue;
+      if (!WoodInDisc(views[v], *uv, options.wood_px)) {
+        *stop = HeadBaseStop::kNoWood;
+        return {};
+      }
+      thick += Thick(views[v], *uv) ? 1 : 0;
+    }
+    // The course so far, from the end, must keep near the end's tangent.
+    const Eigen::Vector3d chord = p - end;
+    const Eigen::Vector3d step = p - at;
+    if (step.norm() < 1e-12 || chord.normalized().dot(tangent) < cos_turn) {
+      *stop = HeadBaseStop::kTurned;
+      return {};
+    }
+    added.push_back(p);
+    dir = step.normalized();
+    at = p;
+    if (options.min_thick_views > 0 && thick >= options.min_thick_views) {
+      *stop = HeadBaseStop::kReachedThick;
+      return added;
+    }
+    // The length run inside the spheres since the course entered them. (The signed distance to
+    // a union of small spheres is no depth: inside, it is at most one sphere's radius.)
+    Eigen::Vector3d surface;
+    if (HeadDistance(head, p, &surface) < 0.0) {
+      inside_m += step.norm();
+      if (inside_m >= options.max_inside_m - 1e-9) {
+        *stop = HeadBaseStop::kReachedInside;
+        return added;
+      }
+    }
+  }
+  *stop = HeadBaseStop::kTooLong;
+  return {};
+}
+
+}  // namespace
+
+absl::Status HeadBasesOptions::Validate() const {
+  for (const auto& [value, field] : {std::pair{reach_m, "reach_m"},
+                                     {step_m, "step_m"},
+                                     {tangent_span_m, "tangent_span_m"},
+                                     {truncate_px, "truncate_px"},
+                                     {max_length_m, "max_length_m"}}) {
+    if (absl::Status s = CheckPositive(value, "head_bases", field); !s.ok()) return s;
+  }
+  for (const auto& [value, field] : {std::pair{max_offset_m, "max_offset_m"},
+                                     {wood_px, "wood_px"},
+                                     {max_inside_m, "max_inside_m"},
+                                     {min_cane_length_m, "min_cane_length_m"}}) {
+    if (absl::Status s = CheckNonNegative(value, "head_bases", field); !s.ok()) return s;
+  }
+  if (!std::isfinite(min_cos) || min_cos < -1.0 || min_cos > 1.0) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("head_bases.min_cos must be in [-1, 1], is ", min_cos));
+  }
+  if (!std::isfinite(max_turn_deg) || max_turn_deg <= 0.0 || max_turn_deg >= 90.0) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("head_bases.max_turn_deg must be in (0, 90), is ", max_turn_deg));
+  }
+  if (min_thick_views < 0) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("head_bases.min_thick_views must be >= 0, is ", min_thick_views));
+  }
+  if (max_offset_m > 0.02) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("head_bases.max_offset_m must be <= 0.02, is ", max_offset_m));
+  }
+  return absl::OkStatus();
+}
+
+absl::Status ExtendBasesToHead(const std::vector<View2D>& views, const RigCalibration& rig,
+                               const HeadModel& head, const HeadBasesOptions& options,
+                               std::vector<Polyline3>* canes, HeadBasesSummary* summary) {
+  VB_RETURN_IF_ERROR(options.Validate());
+  if (views.size() != rig.cameras.size()) {
+    return absl::InvalidArgumentError(absl::StrCat("views: ", views.size(), " views for ",
+                                                   rig.cameras.size(), " cameras"));
+  }
+  for (size_t v = 0; v < views.size(); ++v) {
+    const size_t pixels = static_cast<size_t>(views[v].width) * views[v].height;
+    if (views[v].thick_mask.size() != pixels) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("views[", v, "]: thick_mask has ", views[v].thick_mask.size(),
+                       " pixels for a ", views[v].width, "x", views[v].height, " image"));
+    }
+  }
+  HeadBasesSummary local;
+  if (summary == nullptr) summary = &local;
+  *summary = HeadBasesSummary();
+  if (!options.enabled || canes == nullptr || head.spheres.empty()) return absl::OkStatus();
+  const Eigen::Vector3d centre = HeadCentre(head);
+  for (Polyline3& line : *canes) {
+    if (line.points.size() < 2 || line.Length() < options.min_cane_length_m) continue;
+    // Only the end nearer the head is its base; the other is left to growth and extension.
+    Eigen::Vector3d at_front, at_back;
+    const double d_front = HeadDistance(head, line.points.front(), &at_front);
+    const double d_back = HeadDistance(head, line.points.back(), &at_back);
+    const bool last = d_back < d_front;
+    const double d = last ? d_back : d_front;
+    if (d > options.reach_m) continue;
+    const auto [end, tangent] = EndAndTangent(line, last, options.tangent_span_m);
+    const Eigen::Vector3d target = d > 0.0 ? (last ? at_back : at_front) : centre;
+    const Eigen::Vector3d to_head = target - end;
+    if (to_head.norm() < 1e-9 || tangent.dot(to_head.normalized()) < options.min_cos) continue;
+    // An end already in the thick region of enough views has reached the head.
+    int thick = 0;
+    for (size_t v = 0; v < views.size(); ++v) {
+      const auto uv = ProjectInside(rig.cameras[v], end, 0);
+      thick += uv && Thick(views[v], *uv) ? 1 : 0;
+    }
+    if (options.min_thick_views > 0 && thick >= options.min_thick_views) continue;
+    ++summary->ends_tried;
+    HeadBaseStop stop = HeadBaseStop::kNotTried;
+    const std::vector<Eigen::Vector3d> added =
+        ExtendEnd(views, rig, head, options, end, tangent, &stop);
+    switch (stop) {
+      case HeadBaseStop::kReachedThick: ++summary->reached_thick; break;
+      case HeadBaseStop::kReachedInside: ++summary->reached_inside; break;
+      case HeadBaseStop::kNoWood: ++summary->no_wood; break;
+      case HeadBaseStop::kTurned: ++summary->turned; break;
+      case HeadBaseStop::kTooLong: ++summary->too_long; break;
+      case HeadBaseStop::kOutsideImages: ++summary->outside_images; break;
+      case HeadBaseStop::kNotTried: break;
+    }
+    if (added.empty()) continue;
+    ++summary->ends_extended;
+    const double radius = last ? line.radii.back() : line.radii.front();
+    Eigen::Vector3d previous = end;
+    for (const Eigen::Vector3d& p : added) {
+      summary->added_length_m += (p - previous).norm();
+      previous = p;
+      if (last) {
+        line.points.push_back(p);
+        line.radii.push_back(radius);
+      } else {
+        line.points.insert(line.points.begin(), p);
+        line.radii.insert(line.radii.begin(), radius);
+      }
+    }
+  }
+  return absl::OkStatus();
+}
+
+}  // namespace vb::reconstruct

@@ -1,0 +1,228 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "workers/reconstruct/head_bases.h"
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "core/geometry.h"
+#include "core/vine_model.h"
+#include "gmock/gmock.h"
+#include "gtest/gtest.h"
+#include "sim/rig.h"
+#include "workers/reconstruct/synthetic_views.h"
+
+namespace vb::reconstruct {
+namespace {
+
+using ::testing::HasSubstr;
+
+const Eigen::Vector3d kHeadCentre(0.0, 0.8, 0.9);
+constexpr double kHeadRadius = 0.05;
+
+// A cane leaving the head's surface along `direction` (x-z plane, across the views' line of
+// sight), bending up a little, 0.4 m long, every 1 cm, from its base.
+Polyline3 CaneFromHead(const Eigen::Vector3d& direction) {
+  const Eigen::Vector3d d = direction.normalized();
+  const Eigen::Vector3d base = kHeadCentre + kHeadRadius * d;
+  Polyline3 line;
+  for (int i = 0; i <= 40; ++i) {
+    const double s = 0.01 * i;
+    line.points.push_back(base + s * d + Eigen::Vector3d(0.0, 0.0, 0.15 * s * s));
+    line.radii.push_back(0.004);
+  }
+  return line;
+}
+
+// The true vine: a trunk up to the head, one head sphere, `canes` from it.
+VineModel Vine(const std::vector<Polyline3>& canes) {
+  VineModel model;
+  Cane trunk;
+  trunk.id = CaneId(1);
+  trunk.kind = CaneKind::kTrunk;
+  trunk.polyline.points = {{0.0, 0.8, 0.3}, {0.0, 0.8, 0.86}};
+  trunk.polyline.radii = {0.02, 0.02};
+  model.canes.push_back(trunk);
+  for (size_t i = 0; i < canes.size(); ++i) {
+    Cane cane;
+    cane.id = CaneId(static_cast<int>(i) + 2);
+    cane.parent_id = CaneId(1);
+    cane.polyline = canes[i];
+    model.canes.push_back(cane);
+  }
+  model.head.spheres.push_back({kHeadCentre, kHeadRadius});
+  return model;
+}
+
+// Views drawn from the vine: the head and trunk thick (head discs, the 4 cm trunk), canes not.
+std::vector<View2D> ViewsOf(const VineModel& vine, const RigCalibration& rig) {
+  return SyntheticViews(vine, rig, SyntheticViewOptions{}, 20.0);
+}
+
+// The reconstructed head is looser than the true one (a visual hull): 7 cm instead of 5.
+HeadModel LooseHead() {
+  HeadModel head;
+  head.spheres.push_back({kHeadCentre, 0.07});
+  return head;
+}
+
+// The cane from `from_m` (arc length) on: what assembly gives when its base is not matched.
+Polyline3 From(const Polyline3& line, double from_m) {
+  Polyline3 out;
+  for (size_t i = 0; i < line.points.size(); ++i) {
+    if (0.01 * static_cast<double>(i) < from_m - 1e-9) continue;
+    out.points.push_back(line.points[i]);
+    out.radii.push_back(line.radii[i]);
+  }
+  return out;
+}
+
+double DistanceToLine(const Eigen::Vector3d& p, const Polyline3& line) {
+  double d = 0.0;
+  line.Project(p, &d);
+  return d;
+}
+
+HeadBasesOptions On() {
+  HeadBasesOptions options;
+  options.enabled = true;
+  return options;
+}
+
+TEST(ExtendBasesToHead, ExtendsACaneToWhereItLeavesTheHead) {
+  const RigCalibration rig = sim::MakeRig().value();
+  const Polyline3 cane = CaneFromHead({0.8, 0.0, 0.6});
+  const std::vector<View2D> views = ViewsOf(Vine({cane}), rig);
+  std::vector<Polyline3> canes = {From(cane, 0.06)};
+  HeadBasesSummary summary;
+  ASSERT_TRUE(ExtendBasesToHead(views, rig, LooseHead(), On(), &canes, &summary).ok());
+  EXPECT_EQ(summary.ends_tried, 1);
+  EXPECT_EQ(summary.ends_extended, 1);
+  EXPECT_EQ(summary.reached_thick, 1);
+  // The base now lies where the cane meets the head's silhouette: at its true base, within a
+  // step and a half; every added point lies on the true cane (within 5 mm: the extension is
+  // straight where the cane bends, and the views place its depth least well).
+  EXPECT_LT((canes[0].points.front() - cane.points.front()).norm(), 0.008);
+  EXPECT_GT(summary.added_length_m, 0.045);
+  for (size_t i = 0; i < canes[0].points.size(); ++i) {
+    EXPECT_LT(DistanceToLine(canes[0].points[i], cane), 0.005) << i;
+    EXPECT_DOUBLE_EQ(canes[0].radii[i], 0.004);
+  }
+}
+
+TEST(ExtendBasesToHead, ExtendsTheLastPointWhenItIsTheBase) {
+  const RigCalibration rig = sim::MakeRig().value();
+  const Polyline3 cane = CaneFromHead({-0.9, 0.0, 0.45});
+  const std::vector<View2D> views = ViewsOf(Vine({cane}), rig);
+  Polyline3 reversed = From(cane, 0.05);
+  std::reverse(reversed.points.begin(), reversed.points.end());
+  std::vector<Polyline3> canes = {reversed};
+  HeadBasesSummary summary;
+  ASSERT_TRUE(ExtendBasesToHead(views, rig, LooseHead(), On(), &canes, &summary).ok());
+  EXPECT_EQ(summary.ends_extended, 1);
+  EXPECT_LT((canes[0].points.back() - cane.points.front()).norm(), 0.008);
+  EXPECT_NEAR((canes[0].points.front() - cane.points.back()).norm(), 0.0, 1e-12);
+}
+
+TEST(ExtendBasesToHead, RunsMaxInsideIntoTheHeadWhenTheThickTestIsOff) {
+  const RigCalibration rig = sim::MakeRig().value();
+  const Polyline3 cane = CaneFromHead({0.8, 0.0, 0.6});
+  const std::vector<View2D> views = ViewsOf(Vine({cane}), rig);
+  std::vector<Polyline3> canes = {From(cane, 0.06)};
+  HeadBasesOptions options = On();
+  options.min_thick_views = 0;
+  options.max_inside_m = 0.015;
+  HeadBasesSummary summary;
+  ASSERT_TRUE(ExtendBasesToHead(views, rig, LooseHead(), options, &canes, &summary).ok());
+  EXPECT_EQ(summary.reached_inside, 1);
+  EXPECT_EQ(summary.reached_thick, 0);
+  // The cane enters the 7 cm sphere 2 cm from its base and runs 1.5 cm (to the step) inside it.
+  EXPECT_NEAR((canes[0].points.front() - kHeadCentre).norm(), 0.055, 0.004);
+}
+
+TEST(ExtendBasesToHead, DropsAnExtensionTheViewsDoNotShowAsWood) {
+  const RigCalibration rig = sim::MakeRig().value();
+  const Polyline3 cane = CaneFromHead({0.8, 0.0, 0.6});
+  // The views show the cane only from 4 cm out: between it and the head lies background.
+  const std::vector<View2D> views = ViewsOf(Vine({From(cane, 0.04)}), rig);
+  const Polyline3 input = From(cane, 0.07);
+  std::vector<Polyline3> canes = {input};
+  HeadBasesSummary summary;
+  ASSERT_TRUE(ExtendBasesToHead(views, rig, LooseHead(), On(), &canes, &summary).ok());
+  EXPECT_EQ(summary.ends_tried, 1);
+  EXPECT_EQ(summary.ends_extended, 0);
+  EXPECT_EQ(summary.no_wood, 1);
+  EXPECT_EQ(canes[0].points, input.points);
+}
+
+TEST(ExtendBasesToHead, LeavesEndsThatDoNotPointAtTheHead) {
+  const RigCalibration rig = sim::MakeRig().value();
+  // Upright beside the head, its lower end 8 cm from the head's surface, pointing down past it.
+  Polyline3 upright;
+  for (int i = 0; i <= 30; ++i) {
+    upright.points.emplace_back(0.12, 0.8, 0.95 + 0.01 * i);
+    upright.radii.push_back(0.004);
+  }
+  const Polyline3 cane = CaneFromHead({0.8, 0.0, 0.6});
+  const std::vector<View2D> views = ViewsOf(Vine({cane, upright}), rig);
+  std::vector<Polyline3> canes = {upright};
+  HeadBasesSummary summary;
+  ASSERT_TRUE(ExtendBasesToHead(views, rig, LooseHead(), On(), &canes, &summary).ok());
+  EXPECT_EQ(summary.ends_tried, 0);
+  EXPECT_EQ(canes[0].points, upright.points);
+}
+
+TEST(ExtendBasesToHead, DoesNothingWhenOff) {
+  const RigCalibration rig = sim::MakeRig().value();
+  const Polyline3 cane = CaneFromHead({0.8, 0.0, 0.6});
+  const std::vector<View2D> views = ViewsOf(Vine({cane}), rig);
+  const Polyline3 input = From(cane, 0.06);
+  std::vector<Polyline3> canes = {input};
+  HeadBasesSummary summary;
+  ASSERT_TRUE(
+      ExtendBasesToHead(views, rig, LooseHead(), HeadBasesOptions{}, &canes, &summary).ok());
+  EXPECT_EQ(summary.ends_tried, 0);
+  EXPECT_EQ(canes[0].points, input.points);
+}
+
+TEST(ExtendBasesToHead, RejectsInvalidOptions) {
+  const RigCalibration rig = sim::MakeRig().value();
+  std::vector<Polyline3> canes;
+  const std::vector<View2D> views = ViewsOf(Vine({}), rig);
+  auto check = [&](HeadBasesOptions options, const std::string& field) {
+    const absl::Status s = ExtendBasesToHead(views, rig, LooseHead(), options, &canes);
+    EXPECT_EQ(s.code(), absl::StatusCode::kInvalidArgument) << field;
+    EXPECT_THAT(std::string(s.message()), HasSubstr("head_bases." + field));
+  };
+  HeadBasesOptions o = On();
+  o.min_cos = 1.5;
+  check(o, "min_cos");
+  o = On();
+  o.min_thick_views = -1;
+  check(o, "min_thick_views");
+  o = On();
+  o.max_turn_deg = 90.0;
+  check(o, "max_turn_deg");
+  o = On();
+  o.step_m = 0.0;
+  check(o, "step_m");
+  o = On();
+  o.max_inside_m = std::nan("");
+  check(o, "max_inside_m");
+  o = On();
+  o.max_offset_m = 0.05;
+  check(o, "max_offset_m");
+}
+
+TEST(ExtendBasesToHead, RejectsViewsThatDoNotMatchTheRig) {
+  const RigCalibration rig = sim::MakeRig().value();
+  std::vector<View2D> views = ViewsOf(Vine({}), rig);
+  views.pop_back();
+  std::vector<Polyline3> canes;
+  const absl::Status s = ExtendBasesToHead(views, rig, LooseHead(), On(), &canes);
+  EXPECT_EQ(s.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(std::string(s.message()), HasSubstr("views"));
+}
+
+}  // namespace
+}  // namespace vb::reconstruct
