@@ -149,6 +149,9 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   options.grow.refit_span_m = grow_refit;
   options.grow.max_length_m = grow_max_length;
   options.grow.alongside_max_m = std::min(options.grow.alongside_max_m, grow_max_length);
+  // One clear error naming the field before any stop is rendered (--grow-refit and
+  // --grow-max-length are checked here, by GrowOptions::Validate).
+  VB_RETURN_IF_ERROR(options.Validate());
   const reconstruct::SegmenterModel& segmenter = reconstruct::BuiltinSegmenterModel();
 
   std::vector<ReconstructionMetrics> metrics;

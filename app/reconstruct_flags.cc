@@ -117,9 +117,9 @@ absl::Status ReadHeadBasesFlags(Flags& flags, reconstruct::HeadBasesOptions* opt
     return absl::InvalidArgumentError(
         absl::StrCat("--head-bases-reach must be finite and > 0, got ", reach));
   }
-  if (thick_views < 1 || thick_views > 1000) {
+  if (thick_views < 0 || thick_views > 1000) {
     return absl::InvalidArgumentError(
-        absl::StrCat("--head-bases-thick-views must be in [1, 1000], got ", thick_views));
+        absl::StrCat("--head-bases-thick-views must be in [0, 1000], got ", thick_views));
   }
   if (!(inside >= 0.0) || !std::isfinite(inside)) {
     return absl::InvalidArgumentError(

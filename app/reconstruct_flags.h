@@ -46,10 +46,10 @@ absl::Status ReadHeadFlags(Flags& flags, reconstruct::HeadOptions* options);
 //   --head-bases true|false: extend the cane ends pointing at the head to it (enabled);
 //   --head-bases-reach M: ends this near the head's spheres are looked at (reach_m);
 //   --head-bases-thick-views N: the head is reached where N views show thick wood
-//     (min_thick_views);
+//     (min_thick_views; 0: never);
 //   --head-bases-inside M: ... or M inside the head's spheres (max_inside_m).
 // INVALID_ARGUMENT naming the flag: a value that does not parse, --head-bases-reach not finite
-// or <= 0, --head-bases-thick-views < 1, --head-bases-inside not finite or < 0.
+// or <= 0, --head-bases-thick-views < 0, --head-bases-inside not finite or < 0.
 absl::Status ReadHeadBasesFlags(Flags& flags, reconstruct::HeadBasesOptions* options);
 
 }  // namespace vb::app

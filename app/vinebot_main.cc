@@ -36,7 +36,7 @@ const std::vector<Command>& Commands() {
        " [--context-alpha A] [--sweep] [--head-peel] [--head-min-cell M]"
        " [--head-depth-factor F] [--head-leaf-fraction F] [--head-centre-on-trunk]"
        " [--head-bases] [--head-bases-reach M] [--head-bases-thick-views N]"
-       " [--head-bases-inside M]",
+       " [--head-bases-inside M] [--sweep-*: app/reconstruct_flags.h]",
        vb::app::RunReconstruct},
       {"evaluate",
        "--model model.json --truth ground_truth.json [--policy policy.json] "
@@ -57,7 +57,7 @@ const std::vector<Command>& Commands() {
        " [--select-context] [--context-alpha A] [--head-peel] [--head-min-cell M]"
        " [--head-depth-factor F] [--head-leaf-fraction F] [--head-centre-on-trunk] [--sweep]"
        " [--grow-refit M] [--grow-max-length M] [--head-bases] [--head-bases-reach M]"
-       " [--head-bases-thick-views N] [--head-bases-inside M]",
+       " [--head-bases-thick-views N] [--head-bases-inside M] [--sweep-*: app/reconstruct_flags.h]",
        vb::app::RunBenchReconstruct},
       {"plan",
        "--model model.json --cuts cut_plan.json --out trajectory.json [--tool mill_end|secateur] "

@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "absl/strings/str_cat.h"
+#include "core/geometry.h"
 #include "core/status_macros.h"
 #include "workers/reconstruct/depth_sweep_internal.h"
 #include "workers/reconstruct/image_probes.h"
@@ -154,12 +155,8 @@ double DistanceToCanesBelow(const Eigen::Vector3d& p, const std::vector<Polyline
   for (size_t c = 0; c < canes.size(); ++c) {
     if (boxes[c].exteriorDistance(p) >= best) continue;
     const std::vector<Eigen::Vector3d>& q = canes[c].points;
-    for (size_t i = 0; i + 1 < q.size(); ++i) {
-      const Eigen::Vector3d ab = q[i + 1] - q[i];
-      const double len2 = ab.squaredNorm();
-      const double u = len2 > 0 ? std::clamp((p - q[i]).dot(ab) / len2, 0.0, 1.0) : 0.0;
-      best = std::min(best, (q[i] + u * ab - p).norm());
-    }
+    for (size_t i = 0; i + 1 < q.size(); ++i)
+      best = std::min(best, PointSegmentDistance(p, q[i], q[i + 1]));
     if (q.size() == 1) best = std::min(best, (q[0] - p).norm());
   }
   return best;

@@ -44,7 +44,8 @@ absl::StatusOr<RenderedMatch> RenderAndMatch(uint64_t seed, bool images, bool fi
 // The assembled canes as the head reports set them up (HeadHull.DISABLED_Report,
 // HeadExit.DISABLED_Report), with `options`' fields of each stage and no deadline: AssembleCanes
 // on `pieces`, the canes mostly outside options.volume dropped, then GrowCaneEnds on `views`
-// through `rig` when options.grow grows before connection (as ReconstructFromViews does).
+// through `rig` when options.grow grows before connection (as ReconstructFromViews does; the
+// depth sweep of step 4e, off by default, is not run here even when options.sweep enables it).
 struct GrownCanes {
   std::vector<Polyline3> canes;
   std::vector<Eigen::Vector3d> hints;  // every point of `canes`, in order: the head's hints

@@ -20,8 +20,9 @@ struct GapSupportOptions {
 
 // The fraction in [0, 1] of samples along a-b (ends included) that project onto wood in every
 // view in which they fall inside the image, and fall inside at least `min_views` images. A wire
-// or post pixel counts as wood: it hides what is behind it. rig.cameras[i] took views[i]; views
-// without a class image (width 0) are skipped. Returns 0 for a non-finite line.
+// or post pixel counts as wood: it hides what is behind it. rig.cameras[i] took views[i]; a view
+// without a class image (width 0) contradicts nothing (image_probes.h's WoodNear). Returns 0 for
+// a non-finite line.
 double GapSupport(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                   const std::vector<View2D>& views, const RigCalibration& rig,
                   const GapSupportOptions& options = {});

@@ -203,8 +203,9 @@ class Grower {
 
  private:
   // The stretch of `curve` + p to refit (refit_span_m): the points from `movable_begin` on
-  // within refit_span_m of p, anchored by refit_anchor_m of curve before them (at least two
-  // points). Returns where in `curve` the stretch begins; `stretch` receives it refitted, p last.
+  // within refit_span_m of p, anchored by the two points of curve before them (the bending cost
+  // at the stretch's first point reads those two; grow_refit.cc). Returns where in `curve` the
+  // stretch begins; `stretch` receives it refitted, p last.
   size_t RefitStretch(const std::vector<Eigen::Vector3d>& curve, size_t movable_begin,
                       const Eigen::Vector3d& p, std::vector<Eigen::Vector3d>* stretch) const {
     size_t first_free = curve.size();  // p's index in curve + p
@@ -215,12 +216,7 @@ class Grower {
       if (s > options_.refit_span_m + 1e-12) break;
       next = curve[--first_free];
     }
-    size_t from = first_free;
-    s = 0;
-    while (from > 0 && (first_free - from < 2 || s < options_.refit_anchor_m - 1e-12)) {
-      if (from < first_free) s += (curve[from] - curve[from - 1]).norm();
-      --from;
-    }
+    const size_t from = first_free >= 2 ? first_free - 2 : 0;
     stretch->assign(curve.begin() + from, curve.end());
     stretch->push_back(p);
     evidence_.Refit(stretch, first_free - from);
@@ -350,14 +346,13 @@ absl::Status GrowOptions::Validate() const {
                                                    ")"));
   }
   if (refit_span_m > 0) {
-    for (const auto& [value, field] : {std::pair{refit_anchor_m, "refit_anchor_m"},
-                                       {refit_search_px, "refit_search_px"}}) {
-      if (absl::Status s = CheckPositive(value, "grow", field); !s.ok()) return s;
+    if (absl::Status s = CheckPositive(refit_search_px, "grow", "refit_search_px"); !s.ok()) {
+      return s;
     }
-    if (refit_span_m > max_length_m || refit_anchor_m > max_length_m) {
-      return absl::InvalidArgumentError(absl::StrCat(
-          "grow.refit_span_m (", refit_span_m, ") and refit_anchor_m (", refit_anchor_m,
-          ") must not exceed max_length_m (", max_length_m, ")"));
+    if (refit_span_m > max_length_m) {
+      return absl::InvalidArgumentError(absl::StrCat("grow.refit_span_m (", refit_span_m,
+                                                     ") must not exceed max_length_m (",
+                                                     max_length_m, ")"));
     }
     if (refit_search_px > 50) {
       return absl::InvalidArgumentError(

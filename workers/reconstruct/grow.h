@@ -116,12 +116,12 @@ struct GrowOptions {
   // 1200-1299 at precision -0.0023 / -0.0022, docs/reconstruction.md step 4d, "Depth that does
   // not drift"): after each corrected step, the last `refit_span_m` of grown points (the new
   // one included) are refitted jointly against every view's skeleton (nearest along the normal to
-  // the projected cane, within refit_search_px) with a bending cost, anchored by the
-  // `refit_anchor_m` of curve before them; the step is then checked at its refitted position.
+  // the projected cane, within refit_search_px) with a bending cost, anchored by the two points
+  // of curve before them; the step is then checked at its refitted position (the earlier grown
+  // points it moves are not checked again).
   // Where only two views hold the point and the step runs near their epipolar plane the views
   // leave the depth free, and the bending cost holds the curve's course there. 0: off.
   double refit_span_m = 0.0;
-  double refit_anchor_m = 0.02;        // fixed curve before the refitted stretch
   // The end's own last points within this of it may move in the refit too (replaced only if the
   // growth is kept): the end growth starts from is often off in depth itself. 0: they stay.
   double refit_end_m = 0.0;

@@ -273,7 +273,6 @@ GrowOptions OptionsFromEnv() {
   OverrideFromEnv("VB_GROW_BAND_MARGIN", &o.band_margin_px);
   OverrideFromEnv("VB_GROW_BAND_PRIOR", &o.band_prior_px_per_mm);
   OverrideFromEnv("VB_GROW_REFIT", &o.refit_span_m);
-  OverrideFromEnv("VB_GROW_REFIT_ANCHOR", &o.refit_anchor_m);
   OverrideFromEnv("VB_GROW_REFIT_END", &o.refit_end_m);
   OverrideFromEnv("VB_GROW_REFIT_PX", &o.refit_search_px);
   OverrideFromEnv("VB_GROW_REFIT_SMOOTH", &o.refit_smooth_px_per_mm);

@@ -189,7 +189,6 @@ TEST(GrowRefit, RejectsBadOptionsNamingTheField) {
            {"refit_span_m", [](GrowOptions* o) { o->refit_span_m = -0.01; }},
            {"refit_span_m", [](GrowOptions* o) { o->refit_span_m = 1.0; }},
            {"refit_end_m", [](GrowOptions* o) { o->refit_end_m = NAN; }},
-           {"refit_anchor_m", [](GrowOptions* o) { o->refit_anchor_m = 0.0; }},
            {"refit_search_px", [](GrowOptions* o) { o->refit_search_px = 80.0; }},
            {"refit_smooth_px_per_mm", [](GrowOptions* o) { o->refit_smooth_px_per_mm = -1; }}}) {
     GrowOptions options = Refit();

@@ -8,29 +8,13 @@
 
 #include "absl/strings/str_cat.h"
 #include "core/status_macros.h"
+#include "workers/reconstruct/connect_internal.h"
 #include "workers/reconstruct/image_probes.h"
 
 namespace vb::reconstruct {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-
-// Signed distance from p to the surface of the union of spheres (negative inside) and the
-// nearest surface point.
-double HeadDistance(const HeadModel& head, const Eigen::Vector3d& p, Eigen::Vector3d* at) {
-  double best = std::numeric_limits<double>::infinity();
-  for (const Sphere& s : head.spheres) {
-    const Eigen::Vector3d r = p - s.center;
-    const double d = r.norm() - s.radius;
-    if (d < best) {
-      best = d;
-      const Eigen::Vector3d dir = r.norm() > 1e-12 ? Eigen::Vector3d(r.normalized())
-                                                   : Eigen::Vector3d::UnitZ();
-      *at = s.center + s.radius * dir;
-    }
-  }
-  return best;
-}
 
 Eigen::Vector3d HeadCentre(const HeadModel& head) {
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
@@ -141,7 +125,7 @@ std::vector<Eigen::Vector3d> ExtendEnd(const std::vector<View2D>& views, const R
     // The length run inside the spheres since the course entered them. (The signed distance to
     // a union of small spheres is no depth: inside, it is at most one sphere's radius.)
     Eigen::Vector3d surface;
-    if (HeadDistance(head, p, &surface) < 0.0) {
+    if (connect_internal::DistanceToHead(p, head, &surface) < 0.0) {
       inside_m += step.norm();
       if (inside_m >= options.max_inside_m - 1e-9) {
         *stop = HeadBaseStop::kReachedInside;
@@ -213,8 +197,8 @@ absl::Status ExtendBasesToHead(const std::vector<View2D>& views, const RigCalibr
     if (line.points.size() < 2 || line.Length() < options.min_cane_length_m) continue;
     // Only the end nearer the head is its base; the other is left to growth and extension.
     Eigen::Vector3d at_front, at_back;
-    const double d_front = HeadDistance(head, line.points.front(), &at_front);
-    const double d_back = HeadDistance(head, line.points.back(), &at_back);
+    const double d_front = connect_internal::DistanceToHead(line.points.front(), head, &at_front);
+    const double d_back = connect_internal::DistanceToHead(line.points.back(), head, &at_back);
     const bool last = d_back < d_front;
     const double d = last ? d_back : d_front;
     if (d > options.reach_m) continue;

@@ -190,6 +190,8 @@ absl::StatusOr<ReconstructResult> ReconstructFromViews(const std::vector<View2D>
   VB_ASSIGN_OR_RETURN(const HeadAndTrunk head,
                       ReconstructHeadAndTrunk(views, rig, options.volume, options.head, deadline,
                                               depth_hints));
+  // The bases run to the model's head (the tight spheres when leaf_radius_fraction < 1; connect
+  // below is given them grown back): measured so, docs/reconstruction.md step 5 (s19).
   VB_RETURN_IF_ERROR(
       ExtendBasesToHead(views, rig, head.head, options.head_bases, &canes, &result.head_bases));
   result.timings.head_s = SecondsSince(t);
