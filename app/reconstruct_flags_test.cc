@@ -120,13 +120,13 @@ TEST(ReconstructFlags, HeadFlagsSetTheHeadOptionsAndDefaultsStay) {
   EXPECT_EQ(options.leaf_radius_fraction, defaults.leaf_radius_fraction);
   EXPECT_EQ(options.head_centre_on_trunk, defaults.head_centre_on_trunk);
   auto flags = ParseAll({"--head-peel", "--head-min-cell", "0.005", "--head-depth-factor=0.6",
-                         "--head-leaf-fraction", "0.5", "--head-centre-on-trunk"});
+                         "--head-leaf-fraction", "0.25", "--head-centre-on-trunk"});
   ASSERT_TRUE(flags.ok());
   ASSERT_TRUE(ReadHeadFlags(*flags, &options).ok());
   EXPECT_TRUE(options.peel_canes);
   EXPECT_DOUBLE_EQ(options.min_cell_m, 0.005);
   EXPECT_DOUBLE_EQ(options.head_depth_factor, 0.6);
-  EXPECT_DOUBLE_EQ(options.leaf_radius_fraction, 0.5);
+  EXPECT_DOUBLE_EQ(options.leaf_radius_fraction, 0.25);
   EXPECT_TRUE(options.head_centre_on_trunk);
   EXPECT_TRUE(flags->Finish().ok());  // every flag was read
   EXPECT_TRUE(options.Validate().ok());
@@ -164,11 +164,11 @@ TEST(ReconstructFlags, HeadBasesFlagsKeepTheDefaultsOrSetTheOptions) {
   EXPECT_EQ(options.min_thick_views, defaults.min_thick_views);
   EXPECT_EQ(options.max_inside_m, defaults.max_inside_m);
 
-  auto flags = ParseAll({"--head-bases", "--head-bases-reach", "0.2",
+  auto flags = ParseAll({"--head-bases=false", "--head-bases-reach", "0.2",
                          "--head-bases-thick-views=3", "--head-bases-inside", "0.01"});
   ASSERT_TRUE(flags.ok());
   ASSERT_TRUE(ReadHeadBasesFlags(*flags, &options).ok());
-  EXPECT_TRUE(options.enabled);
+  EXPECT_FALSE(options.enabled);  // on by default
   EXPECT_DOUBLE_EQ(options.reach_m, 0.2);
   EXPECT_EQ(options.min_thick_views, 3);
   EXPECT_DOUBLE_EQ(options.max_inside_m, 0.01);
@@ -180,7 +180,7 @@ TEST(ReconstructFlags, RejectsBadHeadBasesValuesNamingTheFlag) {
   const std::vector<std::pair<std::vector<const char*>, std::string>> cases = {
       {{"--head-bases-reach", "0"}, "--head-bases-reach"},
       {{"--head-bases-reach", "nan"}, "--head-bases-reach"},
-      {{"--head-bases-thick-views", "0"}, "--head-bases-thick-views"},
+      {{"--head-bases-thick-views", "-1"}, "--head-bases-thick-views"},
       {{"--head-bases-inside", "-0.01"}, "--head-bases-inside"},
       {{"--head-bases", "maybe"}, "--head-bases"},
   };

@@ -58,8 +58,9 @@ struct HeadOptions {
   // step 5). 1 keeps every leaf whose bounding sphere touches the silhouettes, so the head reaches
   // up to two bounding radii beyond the visual hull; 0 only leaves whose centre projects onto
   // every silhouette (grown by silhouette_margin_px), up to one radius. The hull that gives the
-  // trunk, the head's bottom, extent and depth is carved as at 1. In [0, 1].
-  double leaf_radius_fraction = 1.0;
+  // trunk, the head's bottom, extent and depth is carved as at 1. In [0, 1]. 0.5 since s19, with
+  // the cane bases at the head (head_bases.h; docs/reconstruction.md step 5, "Both on by default").
+  double leaf_radius_fraction = 0.5;
   // Centre the head's depth on the trunk's top (the head sits on the trunk) rather than on the
   // median depth of the depth hints within its extent (s19; off: as before).
   bool head_centre_on_trunk = false;

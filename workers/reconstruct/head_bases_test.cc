@@ -179,8 +179,9 @@ TEST(ExtendBasesToHead, DoesNothingWhenOff) {
   const Polyline3 input = From(cane, 0.06);
   std::vector<Polyline3> canes = {input};
   HeadBasesSummary summary;
-  ASSERT_TRUE(
-      ExtendBasesToHead(views, rig, LooseHead(), HeadBasesOptions{}, &canes, &summary).ok());
+  HeadBasesOptions off;
+  off.enabled = false;
+  ASSERT_TRUE(ExtendBasesToHead(views, rig, LooseHead(), off, &canes, &summary).ok());
   EXPECT_EQ(summary.ends_tried, 0);
   EXPECT_EQ(canes[0].points, input.points);
 }
