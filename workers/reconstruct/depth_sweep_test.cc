@@ -9,21 +9,15 @@
 #include "core/vine_model.h"
 #include "gtest/gtest.h"
 #include "sim/rig.h"
+#include "workers/reconstruct/cane_test_util.h"
 #include "workers/reconstruct/synthetic_views.h"
 
 namespace vb::reconstruct {
 namespace {
 
-// A smooth cane near the vine plane (y ~ 0.8 m), in front of all three cameras, from x0 to x1
-// along the row, rising and bending out of the plane, every 1 cm.
+// testing_util::CurvedCane bent out of the plane more (0.1 u^2) than the grow tests bend it.
 Polyline3 CurvedCane(double x0, double x1, double z0, double slope) {
-  Polyline3 line;
-  for (double x = x0; x <= x1 + 1e-9; x += 0.01) {
-    const double u = x - x0;
-    line.points.emplace_back(x, 0.8 + 0.1 * u * u, z0 + slope * u - 0.1 * u * u);
-    line.radii.push_back(0.004);
-  }
-  return line;
+  return testing_util::CurvedCane(x0, x1, z0, slope, /*bend_out=*/0.1);
 }
 
 // Views drawn from `lines` alone (no trunk, no head: nothing thick).

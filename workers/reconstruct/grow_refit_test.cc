@@ -12,6 +12,7 @@
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
 #include "sim/rig.h"
+#include "workers/reconstruct/cane_test_util.h"
 #include "workers/reconstruct/grow.h"
 #include "workers/reconstruct/grow_internal.h"
 #include "workers/reconstruct/synthetic_views.h"
@@ -19,16 +20,7 @@
 namespace vb::reconstruct {
 namespace {
 
-// A smooth cane near the vine plane (y ~ 0.8 m), as in grow_test.cc, every 1 cm.
-Polyline3 CurvedCane(double x0, double x1, double z0, double slope) {
-  Polyline3 line;
-  for (double x = x0; x <= x1 + 1e-9; x += 0.01) {
-    const double u = x - x0;
-    line.points.emplace_back(x, 0.8 + 0.04 * u * u, z0 + slope * u - 0.1 * u * u);
-    line.radii.push_back(0.004);
-  }
-  return line;
-}
+using testing_util::CurvedCane;
 
 std::vector<View2D> ViewsOf(const Polyline3& line, const RigCalibration& rig) {
   VineModel model;
