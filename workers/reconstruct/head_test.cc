@@ -36,6 +36,15 @@ Cane VerticalTrunk(double x, double y, double top_z, double step_m, double radiu
   return trunk;
 }
 
+// A trunk 0.86 m tall at (0, 0.8) with a head of five 3 cm spheres in a row along x on its top.
+VineModel RowOfSpheresOnATrunk() {
+  VineModel vine;
+  vine.canes.push_back(VerticalTrunk(0.0, 0.8, 0.86, 0.02, 0.02));
+  for (double x : {-0.06, -0.03, 0.0, 0.03, 0.06})
+    vine.head.spheres.push_back({{x, 0.8, 0.89}, 0.03});
+  return vine;
+}
+
 // Enclosure of the true head by the carved spheres, on simulated vines drawn without rendering
 // (so any miss is the carving's, not the segmentation's). Seeds from the development range.
 TEST(ReconstructHeadAndTrunk, EnclosesTheTrueHeadAndFindsTheTrunk) {
@@ -230,10 +239,7 @@ TEST(ReconstructHeadAndTrunk, PeelingEnteringCanesTightensTheHullAndKeepsTheHead
 // head, and the head stays enclosed at 0.6 (the true head here is as deep as its spheres).
 TEST(ReconstructHeadAndTrunk, DepthFactorBoundsTheHeadsDepth) {
   const RigCalibration rig = sim::MakeRig().value();
-  VineModel vine;
-  vine.canes.push_back(VerticalTrunk(0.0, 0.8, 0.86, 0.02, 0.02));
-  for (double x : {-0.06, -0.03, 0.0, 0.03, 0.06})
-    vine.head.spheres.push_back({{x, 0.8, 0.89}, 0.03});
+  const VineModel vine = RowOfSpheresOnATrunk();
   const std::vector<View2D> views = SyntheticViews(vine, rig);
   HeadOptions options;
   const auto deep =
@@ -278,12 +284,10 @@ double YCentre(const HeadModel& head) {
 // (fraction 1) reaches further; the head stays enclosed and is smaller.
 TEST(ReconstructHeadAndTrunk, TightLeavesShrinkTheHullAndKeepTheHead) {
   const RigCalibration rig = sim::MakeRig().value();
-  VineModel vine;
-  vine.canes.push_back(VerticalTrunk(0.0, 0.8, 0.86, 0.02, 0.02));
-  for (double x : {-0.06, -0.03, 0.0, 0.03, 0.06})
-    vine.head.spheres.push_back({{x, 0.8, 0.89}, 0.03});
+  const VineModel vine = RowOfSpheresOnATrunk();
   const std::vector<View2D> views = SyntheticViews(vine, rig);
   HeadOptions options;
+  options.leaf_radius_fraction = 1.0;  // every leaf whose bounding sphere touches (the old head)
   const auto loose =
       ReconstructHeadAndTrunk(views, rig, WorkingVolume(), options, Deadline::Infinite());
   options.leaf_radius_fraction = 0.0;
@@ -307,10 +311,7 @@ TEST(ReconstructHeadAndTrunk, TightLeavesShrinkTheHullAndKeepTheHead) {
 // centre off the trunk; head_centre_on_trunk keeps it on the trunk's top, where it sits.
 TEST(ReconstructHeadAndTrunk, CentreOnTrunkIgnoresHintsOffTheHead) {
   const RigCalibration rig = sim::MakeRig().value();
-  VineModel vine;
-  vine.canes.push_back(VerticalTrunk(0.0, 0.8, 0.86, 0.02, 0.02));
-  for (double x : {-0.06, -0.03, 0.0, 0.03, 0.06})
-    vine.head.spheres.push_back({{x, 0.8, 0.89}, 0.03});
+  const VineModel vine = RowOfSpheresOnATrunk();
   const std::vector<View2D> views = SyntheticViews(vine, rig);
   std::vector<Eigen::Vector3d> hints;
   for (double x = -0.05; x <= 0.05; x += 0.01) hints.push_back({x, 0.86, 0.9});
