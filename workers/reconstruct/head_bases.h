@@ -51,6 +51,9 @@ struct HeadBasesOptions {
   double max_turn_deg = 45.0;      // largest turn of the extension from the end's tangent
   double max_length_m = 0.12;      // longest extension of one end
   double min_cane_length_m = 0.03; // shorter canes are not extended
+  // The course's curvature as a fraction of the end's (0: straight along the tangent, s19; 1:
+  // the circle through the end's last two tangent spans, continued).
+  double curve_gain = 0.0;
 
   // INVALID_ARGUMENT naming the field for non-finite or out-of-range values.
   absl::Status Validate() const;
@@ -59,6 +62,25 @@ struct HeadBasesOptions {
 // Why an end's extension ended (HeadBasesSummary's counts).
 enum class HeadBaseStop { kNotTried, kReachedThick, kReachedInside, kNoWood, kTurned, kTooLong,
                           kOutsideImages };
+
+// One end tried (for diagnosis: HeadBases.DISABLED_Report): where it started and what was added.
+struct HeadBaseExtension {
+  Eigen::Vector3d end = Eigen::Vector3d::Zero();      // the end before extension
+  Eigen::Vector3d tangent = Eigen::Vector3d::UnitX(); // its outward unit tangent
+  double end_distance_m = 0.0;  // signed distance from the end to the head's spheres
+  double bend_deg = 0.0;        // angle between the chords of the end's last two tangent spans
+  HeadBaseStop stop = HeadBaseStop::kNotTried;
+  // The points the course reached (kept only when `stop` is kReachedThick or kReachedInside),
+  // and per point: the arc length run inside the head's spheres, the views showing it thick and
+  // the distance to the nearest other cane (as the canes were before this stage).
+  std::vector<Eigen::Vector3d> points;
+  std::vector<double> inside_m;
+  std::vector<int> thick_views;
+  std::vector<double> other_cane_m;
+  std::vector<int> correcting_views;   // views that held the point outside their thick region
+  std::vector<double> skeleton_px;     // their mean skeleton distance at it, each capped at 10 px
+  std::vector<int> on_skeleton_views;  // ... of them, those with the skeleton within 2 px
+};
 
 struct HeadBasesSummary {
   int ends_tried = 0;        // ends near the head pointing at it
@@ -70,6 +92,7 @@ struct HeadBasesSummary {
   int too_long = 0;          // dropped: max_length_m without reaching the head
   int outside_images = 0;    // dropped: fewer than two views' images held a point
   double added_length_m = 0.0;
+  std::vector<HeadBaseExtension> extensions;  // every end tried, in the order tried
 };
 
 // Extends, in place, the ends of `canes` (unoriented polylines, as AssembleCanes and
