@@ -77,6 +77,15 @@ double DistanceToOthers(const Eigen::Vector3d& p, const std::vector<Polyline3>& 
   return best;
 }
 
+// Whether the course `record` holds lies, on average, farther than options.max_skeleton_px from
+// the skeletons of the views that see it outside their thick region.
+bool OffSkeleton(const HeadBasesOptions& options, const HeadBaseExtension& record) {
+  if (options.max_skeleton_px <= 0.0 || record.skeleton_px.empty()) return false;
+  double sum = 0.0;
+  for (double px : record.skeleton_px) sum += px;
+  return sum / static_cast<double>(record.skeleton_px.size()) > options.max_skeleton_px;
+}
+
 // One end stepped toward the head (see the header); the points added, in order from the end,
 // or none when the extension is dropped; `stop` says why it ended. `record` gets every point
 // the course reached. `others` are the canes as they were before the stage, `self` this one.
@@ -178,15 +187,17 @@ std::vector<Eigen::Vector3d> ExtendEnd(const std::vector<View2D>& views, const R
     record->thick_views.push_back(thick);
     record->other_cane_m.push_back(DistanceToOthers(p, others, self));
     if (options.min_thick_views > 0 && thick >= options.min_thick_views) {
-      *stop = HeadBaseStop::kReachedThick;
-      return added;
+      *stop = OffSkeleton(options, *record) ? HeadBaseStop::kOffSkeleton
+                                            : HeadBaseStop::kReachedThick;
+      return *stop == HeadBaseStop::kOffSkeleton ? std::vector<Eigen::Vector3d>() : added;
     }
     // The length run inside the spheres since the course entered them. (The signed distance to
     // a union of small spheres is no depth: inside, it is at most one sphere's radius.)
     if (inside) {
       if (inside_m >= options.max_inside_m - 1e-9) {
-        *stop = HeadBaseStop::kReachedInside;
-        return added;
+        *stop = OffSkeleton(options, *record) ? HeadBaseStop::kOffSkeleton
+                                              : HeadBaseStop::kReachedInside;
+        return *stop == HeadBaseStop::kOffSkeleton ? std::vector<Eigen::Vector3d>() : added;
       }
     }
   }
@@ -207,6 +218,7 @@ absl::Status HeadBasesOptions::Validate() const {
   for (const auto& [value, field] : {std::pair{max_offset_m, "max_offset_m"},
                                      {wood_px, "wood_px"},
                                      {max_inside_m, "max_inside_m"},
+                                     {max_skeleton_px, "max_skeleton_px"},
                                      {min_cane_length_m, "min_cane_length_m"}}) {
     if (absl::Status s = CheckNonNegative(value, "head_bases", field); !s.ok()) return s;
   }
@@ -297,6 +309,7 @@ absl::Status ExtendBasesToHead(const std::vector<View2D>& views, const RigCalibr
       case HeadBaseStop::kTurned: ++summary->turned; break;
       case HeadBaseStop::kTooLong: ++summary->too_long; break;
       case HeadBaseStop::kOutsideImages: ++summary->outside_images; break;
+      case HeadBaseStop::kOffSkeleton: ++summary->off_skeleton; break;
       case HeadBaseStop::kNotTried: break;
     }
     if (added.empty()) continue;

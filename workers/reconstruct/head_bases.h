@@ -19,7 +19,12 @@
 // length) inside the head's spheres. It is dropped
 // whole (the end stays as it was) when a view shows no wood, the corrected course turns more than
 // `max_turn_deg` from the end's tangent, or `max_length_m` is exceeded first: wood is never added
-// where a view contradicts it. New points take the end's radius.
+// where a view contradicts it. A kept extension is dropped too when its points lie, on average,
+// more than `max_skeleton_px` from the skeletons of the views that see them outside their thick
+// region (0: no such test). With `curve_gain` > 0 the prediction turns, step by step, as the
+// circle through the end's last two tangent spans does (times curve_gain), instead of running
+// straight (s20: docs/reconstruction.md step 5, "Cane bases at the head: where to stop").
+// New points take the end's radius.
 // Thread-safe (pure function of its inputs).
 #pragma once
 
@@ -54,6 +59,10 @@ struct HeadBasesOptions {
   // The course's curvature as a fraction of the end's (0: straight along the tangent, s19; 1:
   // the circle through the end's last two tangent spans, continued).
   double curve_gain = 0.0;
+  // An extension kept by the stops above is dropped when its points' mean skeleton distance (each
+  // the mean over the views holding it outside their thick region, capped at 10 px) exceeds this
+  // (px; 0: no such test).
+  double max_skeleton_px = 0.0;
 
   // INVALID_ARGUMENT naming the field for non-finite or out-of-range values.
   absl::Status Validate() const;
@@ -61,7 +70,7 @@ struct HeadBasesOptions {
 
 // Why an end's extension ended (HeadBasesSummary's counts).
 enum class HeadBaseStop { kNotTried, kReachedThick, kReachedInside, kNoWood, kTurned, kTooLong,
-                          kOutsideImages };
+                          kOutsideImages, kOffSkeleton };
 
 // One end tried (for diagnosis: HeadBases.DISABLED_Report): where it started and what was added.
 struct HeadBaseExtension {
@@ -91,6 +100,7 @@ struct HeadBasesSummary {
   int turned = 0;            // dropped: turned more than max_turn_deg
   int too_long = 0;          // dropped: max_length_m without reaching the head
   int outside_images = 0;    // dropped: fewer than two views' images held a point
+  int off_skeleton = 0;      // dropped: mean skeleton distance above max_skeleton_px
   double added_length_m = 0.0;
   std::vector<HeadBaseExtension> extensions;  // every end tried, in the order tried
 };

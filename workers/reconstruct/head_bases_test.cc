@@ -208,6 +208,39 @@ TEST(ExtendBasesToHead, ConvergingCanesStopAtTheirOwnBases) {
     EXPECT_LT(DistanceToLine(p, b), DistanceToLine(p, a));
 }
 
+TEST(ExtendBasesToHead, DropsACourseOffTheViewsSkeletonsWithMaxSkeletonPx) {
+  const RigCalibration rig = sim::MakeRig().value();
+  const Eigen::Vector3d d = Eigen::Vector3d(0.8, 0.0, 0.6).normalized();
+  const Polyline3 cane = CircularCaneFromHead(d, 100.0, 0.3);  // straight
+  const std::vector<View2D> views = ViewsOf(Vine({cane}), rig);
+  HeadBasesOptions options = On();
+  options.max_offset_m = 0.0;  // no correction: the course stays where the end puts it
+  options.max_skeleton_px = 1.0;
+  // On the cane: its points lie on the views' skeletons, and it is kept.
+  std::vector<Polyline3> on = {From(cane, 0.06)};
+  HeadBasesSummary summary;
+  ASSERT_TRUE(ExtendBasesToHead(views, rig, LooseHead(), options, &on, &summary).ok());
+  EXPECT_EQ(summary.ends_extended, 1);
+  EXPECT_EQ(summary.off_skeleton, 0);
+  ASSERT_EQ(summary.extensions.size(), 1u);
+  for (double px : summary.extensions[0].skeleton_px) EXPECT_LT(px, 1.0);
+  // 3 mm beside it, across the views' line of sight (still on the cane's silhouette): dropped.
+  Polyline3 beside = From(cane, 0.06);
+  for (Eigen::Vector3d& p : beside.points) p += 0.003 * Eigen::Vector3d(-d.z(), 0.0, d.x());
+  std::vector<Polyline3> off = {beside};
+  ASSERT_TRUE(ExtendBasesToHead(views, rig, LooseHead(), options, &off, &summary).ok());
+  EXPECT_EQ(summary.ends_tried, 1);
+  EXPECT_EQ(summary.ends_extended, 0);
+  EXPECT_EQ(summary.off_skeleton, 1);
+  EXPECT_EQ(off[0].points, beside.points);
+  // Without the test it is kept.
+  options.max_skeleton_px = 0.0;
+  off = {beside};
+  ASSERT_TRUE(ExtendBasesToHead(views, rig, LooseHead(), options, &off, &summary).ok());
+  EXPECT_EQ(summary.ends_extended, 1);
+  EXPECT_EQ(summary.off_skeleton, 0);
+}
+
 TEST(ExtendBasesToHead, RunsMaxInsideIntoTheHeadWhenTheThickTestIsOff) {
   const RigCalibration rig = sim::MakeRig().value();
   const Polyline3 cane = CaneFromHead({0.8, 0.0, 0.6});
@@ -303,6 +336,9 @@ TEST(ExtendBasesToHead, RejectsInvalidOptions) {
   o = On();
   o.curve_gain = std::nan("");
   check(o, "curve_gain");
+  o = On();
+  o.max_skeleton_px = -1.0;
+  check(o, "max_skeleton_px");
 }
 
 TEST(ExtendBasesToHead, RejectsViewsThatDoNotMatchTheRig) {
