@@ -48,8 +48,7 @@ std::pair<Eigen::Vector3d, Eigen::Vector3d> EndAndTangent(const Polyline3& line,
 }
 
 // The angle between the chord over the end's last `span_m` and the chord over the span before
-// it
-// and the axis it turns about (b x a), 0 and any axis for a cane shorter than two spans.
+// it, and the axis it turns about (b x a); 0 and any axis for a cane shorter than two spans.
 double BendDeg(const Polyline3& line, bool last, double span_m, Eigen::Vector3d* axis) {
   *axis = Eigen::Vector3d::UnitZ();
   const double length = line.Length();

@@ -60,8 +60,8 @@ struct HeadBasesOptions {
   // the circle through the end's last two tangent spans, continued).
   double curve_gain = 0.0;
   // An extension kept by the stops above is dropped when its points' mean skeleton distance (each
-  // the mean over the views holding it outside their thick region, capped at 10 px) exceeds this
-  // (px; 0: no such test).
+  // the mean over the views holding it outside their thick region, capped at 10 px; 0 where none
+  // does) exceeds this (px; 0: no such test).
   double max_skeleton_px = 0.0;
 
   // INVALID_ARGUMENT naming the field for non-finite or out-of-range values.
@@ -79,15 +79,17 @@ struct HeadBaseExtension {
   double end_distance_m = 0.0;  // signed distance from the end to the head's spheres
   double bend_deg = 0.0;        // angle between the chords of the end's last two tangent spans
   HeadBaseStop stop = HeadBaseStop::kNotTried;
-  // The points the course reached (kept only when `stop` is kReachedThick or kReachedInside),
-  // and per point: the arc length run inside the head's spheres, the views showing it thick and
-  // the distance to the nearest other cane (as the canes were before this stage).
+  // Every point the course reached (added to the cane only when `stop` is kReachedThick or
+  // kReachedInside), and per point: the arc length run inside the head's spheres, the views
+  // showing it thick and the distance to the nearest other cane (as the canes were before this
+  // stage).
   std::vector<Eigen::Vector3d> points;
   std::vector<double> inside_m;
   std::vector<int> thick_views;
   std::vector<double> other_cane_m;
   std::vector<int> correcting_views;   // views that held the point outside their thick region
   std::vector<double> skeleton_px;     // their mean skeleton distance at it, each capped at 10 px
+                                       // (0 where no view does)
   std::vector<int> on_skeleton_views;  // ... of them, those with the skeleton within 2 px
 };
 

@@ -188,7 +188,7 @@ TEST(ExtendBasesToHead, FollowsACurvedCaneWithTheEndsCurvature) {
 
 TEST(ExtendBasesToHead, ConvergingCanesStopAtTheirOwnBases) {
   const RigCalibration rig = sim::MakeRig().value();
-  // Two canes leaving the head 2.4 cm apart (28 degrees), their courses converging toward its
+  // Two canes leaving the head 1.4 cm apart (16 degrees), their courses converging toward its
   // centre.
   const Polyline3 a = CaneFromHead({0.8, 0.0, 0.6});
   const Polyline3 b = CaneFromHead({0.6, 0.0, 0.8});
