@@ -113,6 +113,17 @@ absl::Status ReadHeadBasesFlags(Flags& flags, reconstruct::HeadBasesOptions* opt
                       flags.Int("head-bases-thick-views", options->min_thick_views));
   VB_ASSIGN_OR_RETURN(const double inside,
                       flags.Double("head-bases-inside", options->max_inside_m));
+  VB_ASSIGN_OR_RETURN(const double curve, flags.Double("head-bases-curve", options->curve_gain));
+  VB_ASSIGN_OR_RETURN(const double skeleton,
+                      flags.Double("head-bases-skeleton", options->max_skeleton_px));
+  if (!(skeleton >= 0.0) || !std::isfinite(skeleton)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("--head-bases-skeleton must be finite and >= 0, got ", skeleton));
+  }
+  if (!(curve >= 0.0 && curve <= 2.0)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("--head-bases-curve must be in [0, 2], got ", curve));
+  }
   if (!(reach > 0.0) || !std::isfinite(reach)) {
     return absl::InvalidArgumentError(
         absl::StrCat("--head-bases-reach must be finite and > 0, got ", reach));
@@ -129,6 +140,8 @@ absl::Status ReadHeadBasesFlags(Flags& flags, reconstruct::HeadBasesOptions* opt
   options->reach_m = reach;
   options->min_thick_views = static_cast<int>(thick_views);
   options->max_inside_m = inside;
+  options->curve_gain = curve;
+  options->max_skeleton_px = skeleton;
   return absl::OkStatus();
 }
 

@@ -47,9 +47,13 @@ absl::Status ReadHeadFlags(Flags& flags, reconstruct::HeadOptions* options);
 //   --head-bases-reach M: ends this near the head's spheres are looked at (reach_m);
 //   --head-bases-thick-views N: the head is reached where N views show thick wood
 //     (min_thick_views; 0: never);
-//   --head-bases-inside M: ... or M inside the head's spheres (max_inside_m).
+//   --head-bases-inside M: ... or M inside the head's spheres (max_inside_m);
+//   --head-bases-curve G: the course's curvature as a fraction G of the end's (curve_gain);
+//   --head-bases-skeleton PX: drop extensions lying on average farther than PX from the views'
+//     skeletons (max_skeleton_px; 0: never).
 // INVALID_ARGUMENT naming the flag: a value that does not parse, --head-bases-reach not finite
-// or <= 0, --head-bases-thick-views < 0, --head-bases-inside not finite or < 0.
+// or <= 0, --head-bases-thick-views < 0, --head-bases-inside not finite or < 0,
+// --head-bases-curve outside [0, 2], --head-bases-skeleton not finite or < 0.
 absl::Status ReadHeadBasesFlags(Flags& flags, reconstruct::HeadBasesOptions* options);
 
 }  // namespace vb::app

@@ -163,15 +163,20 @@ TEST(ReconstructFlags, HeadBasesFlagsKeepTheDefaultsOrSetTheOptions) {
   EXPECT_EQ(options.reach_m, defaults.reach_m);
   EXPECT_EQ(options.min_thick_views, defaults.min_thick_views);
   EXPECT_EQ(options.max_inside_m, defaults.max_inside_m);
+  EXPECT_EQ(options.curve_gain, defaults.curve_gain);
+  EXPECT_EQ(options.max_skeleton_px, defaults.max_skeleton_px);
 
   auto flags = ParseAll({"--head-bases=false", "--head-bases-reach", "0.2",
-                         "--head-bases-thick-views=3", "--head-bases-inside", "0.01"});
+                         "--head-bases-thick-views=3", "--head-bases-inside", "0.01",
+                         "--head-bases-curve", "0.75", "--head-bases-skeleton=1.5"});
   ASSERT_TRUE(flags.ok());
   ASSERT_TRUE(ReadHeadBasesFlags(*flags, &options).ok());
   EXPECT_FALSE(options.enabled);  // on by default
   EXPECT_DOUBLE_EQ(options.reach_m, 0.2);
   EXPECT_EQ(options.min_thick_views, 3);
   EXPECT_DOUBLE_EQ(options.max_inside_m, 0.01);
+  EXPECT_DOUBLE_EQ(options.curve_gain, 0.75);
+  EXPECT_DOUBLE_EQ(options.max_skeleton_px, 1.5);
   EXPECT_TRUE(flags->Finish().ok());
   EXPECT_TRUE(options.Validate().ok());
 }
@@ -182,6 +187,9 @@ TEST(ReconstructFlags, RejectsBadHeadBasesValuesNamingTheFlag) {
       {{"--head-bases-reach", "nan"}, "--head-bases-reach"},
       {{"--head-bases-thick-views", "-1"}, "--head-bases-thick-views"},
       {{"--head-bases-inside", "-0.01"}, "--head-bases-inside"},
+      {{"--head-bases-curve", "-0.5"}, "--head-bases-curve"},
+      {{"--head-bases-curve", "nan"}, "--head-bases-curve"},
+      {{"--head-bases-skeleton", "-1"}, "--head-bases-skeleton"},
       {{"--head-bases", "maybe"}, "--head-bases"},
   };
   for (const auto& [args, name] : cases) {

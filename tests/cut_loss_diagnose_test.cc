@@ -31,7 +31,9 @@
 // VB_MODEL_DIAMETER_WEIGHT (the keep diameter weight of the model's decision only; spurs get a
 // third), VB_CACHE (a directory: reconstructed models and truths are stored there by seed and input and
 // read back on the next run), VB_VERBOSE (one line per missed truth cut), VB_HEAD_BASES (1: the
-// cane bases at the head on, workers/reconstruct/head_bases.h; with a cache of its own).
+// cane bases at the head on, workers/reconstruct/head_bases.h; with a cache of its own),
+// VB_HEAD_BASES_CURVE (their curve_gain), VB_HEAD_BASES_SKELETON (their max_skeleton_px; each
+// variant with a cache of its own).
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>

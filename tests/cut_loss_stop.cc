@@ -59,6 +59,12 @@ absl::StatusOr<Stop> MakeStop(uint64_t seed, const std::string& input, const std
   if (auto s = options.head.Validate(); !s.ok()) return s;
   // VB_HEAD_BASES=1: the cane bases at the head on (head_bases.h; give it its own VB_CACHE).
   if (const char* v = std::getenv("VB_HEAD_BASES")) options.head_bases.enabled = std::atoi(v) != 0;
+  // VB_HEAD_BASES_CURVE=G: their course's curvature as a fraction of the end's (curve_gain).
+  if (const char* v = std::getenv("VB_HEAD_BASES_CURVE"))
+    options.head_bases.curve_gain = std::atof(v);
+  // VB_HEAD_BASES_SKELETON=PX: their max_skeleton_px.
+  if (const char* v = std::getenv("VB_HEAD_BASES_SKELETON"))
+    options.head_bases.max_skeleton_px = std::atof(v);
   absl::StatusOr<reconstruct::ReconstructResult> result;
   if (input == "images") {
     std::vector<Image> images;

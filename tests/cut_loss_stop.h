@@ -26,7 +26,9 @@ struct Stop {
 // replace segmentation) or "truth" (SyntheticViews of the ground truth). With a non-empty `cache`
 // directory the truth and the model are written there (model_SEED_INPUT.json, truth_SEED.json)
 // and read back instead when both exist. The environment's VB_HEAD_BASES (1: on) sets
-// ReconstructOptions::head_bases.enabled. Errors: the renderer's, the reconstruction's, file I/O.
+// ReconstructOptions::head_bases.enabled, VB_HEAD_BASES_CURVE its curve_gain,
+// VB_HEAD_BASES_SKELETON its max_skeleton_px. Errors: the renderer's, the reconstruction's,
+// file I/O.
 absl::StatusOr<Stop> MakeStop(uint64_t seed, const std::string& input, const std::string& cache);
 
 // Nearest cane of `m` to `p`: its index (-1 if `m` has no canes); its distance and the arc length

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <optional>
+#include <utility>
 
 #include "absl/strings/str_cat.h"
 #include "core/status_macros.h"
@@ -46,12 +47,53 @@ std::pair<Eigen::Vector3d, Eigen::Vector3d> EndAndTangent(const Polyline3& line,
   return {end, t.normalized()};
 }
 
+// The angle between the chord over the end's last `span_m` and the chord over the span before
+// it, and the axis it turns about (b x a); 0 and any axis for a cane shorter than two spans.
+double BendDeg(const Polyline3& line, bool last, double span_m, Eigen::Vector3d* axis) {
+  *axis = Eigen::Vector3d::UnitZ();
+  const double length = line.Length();
+  if (length < 2.0 * span_m) return 0.0;
+  const auto at = [&](double s) { return line.PointAt(last ? length - s : s); };
+  const Eigen::Vector3d a = at(0.0) - at(span_m), b = at(span_m) - at(2.0 * span_m);
+  if (a.norm() < 1e-9 || b.norm() < 1e-9) return 0.0;
+  const Eigen::Vector3d n = b.cross(a);
+  if (n.norm() < 1e-12) return 0.0;
+  *axis = n.normalized();
+  const double c = std::clamp(a.normalized().dot(b.normalized()), -1.0, 1.0);
+  return std::acos(c) * 180.0 / kPi;
+}
+
+// The distance from p to the nearest of `lines` other than lines[skip].
+double DistanceToOthers(const Eigen::Vector3d& p, const std::vector<Polyline3>& lines,
+                        size_t skip) {
+  double best = std::numeric_limits<double>::infinity();
+  for (size_t i = 0; i < lines.size(); ++i) {
+    if (i == skip) continue;
+    const std::vector<Eigen::Vector3d>& q = lines[i].points;
+    for (size_t k = 0; k + 1 < q.size(); ++k)
+      best = std::min(best, PointSegmentDistance(p, q[k], q[k + 1]));
+  }
+  return best;
+}
+
+// Whether the course `record` holds lies, on average, farther than options.max_skeleton_px from
+// the skeletons of the views that see it outside their thick region.
+bool OffSkeleton(const HeadBasesOptions& options, const HeadBaseExtension& record) {
+  if (options.max_skeleton_px <= 0.0 || record.skeleton_px.empty()) return false;
+  double sum = 0.0;
+  for (double px : record.skeleton_px) sum += px;
+  return sum / static_cast<double>(record.skeleton_px.size()) > options.max_skeleton_px;
+}
+
 // One end stepped toward the head (see the header); the points added, in order from the end,
-// or none when the extension is dropped; `stop` says why it ended.
+// or none when the extension is dropped; `stop` says why it ended. `record` gets every point
+// the course reached. `others` are the canes as they were before the stage, `self` this one.
 std::vector<Eigen::Vector3d> ExtendEnd(const std::vector<View2D>& views, const RigCalibration& rig,
                                        const HeadModel& head, const HeadBasesOptions& options,
                                        const Eigen::Vector3d& end, const Eigen::Vector3d& tangent,
-                                       HeadBaseStop* stop) {
+                                       const Eigen::Vector3d& bend_axis, double bend_rate,
+                                       const std::vector<Polyline3>& others, size_t self,
+                                       HeadBaseStop* stop, HeadBaseExtension* record) {
   // Two axes across the step.
   Eigen::Vector3d u = tangent.unitOrthogonal();
   Eigen::Vector3d w = tangent.cross(u).normalized();
@@ -60,10 +102,17 @@ std::vector<Eigen::Vector3d> ExtendEnd(const std::vector<View2D>& views, const R
   const int n = std::max(1, static_cast<int>(std::lround(options.max_offset_m / 0.0005)));
   const double grid = options.max_offset_m / n;
   std::vector<Eigen::Vector3d> added;
-  Eigen::Vector3d at = end, dir = tangent;
+  // The curved course turns about bend_axis at bend_rate (rad/m); the chord's direction lies
+  // half a span's turn behind the end's tangent.
+  const double turn_per_step = options.curve_gain * bend_rate * options.step_m;
+  Eigen::Vector3d at = end;
+  Eigen::Vector3d dir =
+      Eigen::AngleAxisd(0.5 * options.curve_gain * bend_rate * options.tangent_span_m,
+                        bend_axis) * tangent;
   double inside_m = 0.0;
   for (double length = options.step_m; length <= options.max_length_m + 1e-9;
        length += options.step_m) {
+    if (turn_per_step != 0.0) dir = Eigen::AngleAxisd(turn_per_step, bend_axis) * dir;
     const Eigen::Vector3d predicted = at + options.step_m * dir;
     // Views whose image holds the prediction, and which of them show it in their thick region.
     std::vector<std::optional<Eigen::Vector2d>> px(views.size());
@@ -115,21 +164,39 @@ std::vector<Eigen::Vector3d> ExtendEnd(const std::vector<View2D>& views, const R
       *stop = HeadBaseStop::kTurned;
       return {};
     }
+    double skeleton_px = 0.0;
+    int on_skeleton = 0;
+    for (int v : correcting) {
+      const auto uv = ProjectInside(rig.cameras[v], p, 0);
+      const double d = uv ? std::min(CentrelineDistanceBilinear(views[v], *uv), 10.0) : 10.0;
+      skeleton_px += d / static_cast<double>(correcting.size());
+      on_skeleton += d <= 2.0 ? 1 : 0;
+    }
+    record->correcting_views.push_back(static_cast<int>(correcting.size()));
+    record->skeleton_px.push_back(skeleton_px);
+    record->on_skeleton_views.push_back(on_skeleton);
     added.push_back(p);
     dir = step.normalized();
     at = p;
+    Eigen::Vector3d surface;
+    const bool inside = connect_internal::DistanceToHead(p, head, &surface) < 0.0;
+    if (inside) inside_m += step.norm();
+    record->points.push_back(p);
+    record->inside_m.push_back(inside_m);
+    record->thick_views.push_back(thick);
+    record->other_cane_m.push_back(DistanceToOthers(p, others, self));
     if (options.min_thick_views > 0 && thick >= options.min_thick_views) {
-      *stop = HeadBaseStop::kReachedThick;
-      return added;
+      *stop = OffSkeleton(options, *record) ? HeadBaseStop::kOffSkeleton
+                                            : HeadBaseStop::kReachedThick;
+      return *stop == HeadBaseStop::kOffSkeleton ? std::vector<Eigen::Vector3d>() : added;
     }
     // The length run inside the spheres since the course entered them. (The signed distance to
     // a union of small spheres is no depth: inside, it is at most one sphere's radius.)
-    Eigen::Vector3d surface;
-    if (connect_internal::DistanceToHead(p, head, &surface) < 0.0) {
-      inside_m += step.norm();
+    if (inside) {
       if (inside_m >= options.max_inside_m - 1e-9) {
-        *stop = HeadBaseStop::kReachedInside;
-        return added;
+        *stop = OffSkeleton(options, *record) ? HeadBaseStop::kOffSkeleton
+                                              : HeadBaseStop::kReachedInside;
+        return *stop == HeadBaseStop::kOffSkeleton ? std::vector<Eigen::Vector3d>() : added;
       }
     }
   }
@@ -150,6 +217,7 @@ absl::Status HeadBasesOptions::Validate() const {
   for (const auto& [value, field] : {std::pair{max_offset_m, "max_offset_m"},
                                      {wood_px, "wood_px"},
                                      {max_inside_m, "max_inside_m"},
+                                     {max_skeleton_px, "max_skeleton_px"},
                                      {min_cane_length_m, "min_cane_length_m"}}) {
     if (absl::Status s = CheckNonNegative(value, "head_bases", field); !s.ok()) return s;
   }
@@ -160,6 +228,10 @@ absl::Status HeadBasesOptions::Validate() const {
   if (!std::isfinite(max_turn_deg) || max_turn_deg <= 0.0 || max_turn_deg >= 90.0) {
     return absl::InvalidArgumentError(
         absl::StrCat("head_bases.max_turn_deg must be in (0, 90), is ", max_turn_deg));
+  }
+  if (!std::isfinite(curve_gain) || curve_gain < 0.0 || curve_gain > 2.0) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("head_bases.curve_gain must be in [0, 2], is ", curve_gain));
   }
   if (min_thick_views < 0) {
     return absl::InvalidArgumentError(
@@ -193,7 +265,9 @@ absl::Status ExtendBasesToHead(const std::vector<View2D>& views, const RigCalibr
   *summary = HeadBasesSummary();
   if (!options.enabled || canes == nullptr || head.spheres.empty()) return absl::OkStatus();
   const Eigen::Vector3d centre = HeadCentre(head);
-  for (Polyline3& line : *canes) {
+  const std::vector<Polyline3> before = *canes;
+  for (size_t c = 0; c < canes->size(); ++c) {
+    Polyline3& line = (*canes)[c];
     if (line.points.size() < 2 || line.Length() < options.min_cane_length_m) continue;
     // Only the end nearer the head is its base; the other is left to growth and extension.
     Eigen::Vector3d at_front, at_back;
@@ -214,9 +288,19 @@ absl::Status ExtendBasesToHead(const std::vector<View2D>& views, const RigCalibr
     }
     if (options.min_thick_views > 0 && thick >= options.min_thick_views) continue;
     ++summary->ends_tried;
+    HeadBaseExtension record;
+    record.end = end;
+    record.tangent = tangent;
+    record.end_distance_m = d;
+    Eigen::Vector3d bend_axis;
+    record.bend_deg = BendDeg(line, last, options.tangent_span_m, &bend_axis);
+    // The chords' directions are a span apart: the turn per metre of the circle through them.
+    const double bend_rate = record.bend_deg * kPi / 180.0 / options.tangent_span_m;
     HeadBaseStop stop = HeadBaseStop::kNotTried;
-    const std::vector<Eigen::Vector3d> added =
-        ExtendEnd(views, rig, head, options, end, tangent, &stop);
+    const std::vector<Eigen::Vector3d> added = ExtendEnd(
+        views, rig, head, options, end, tangent, bend_axis, bend_rate, before, c, &stop, &record);
+    record.stop = stop;
+    summary->extensions.push_back(std::move(record));
     switch (stop) {
       case HeadBaseStop::kReachedThick: ++summary->reached_thick; break;
       case HeadBaseStop::kReachedInside: ++summary->reached_inside; break;
@@ -224,6 +308,7 @@ absl::Status ExtendBasesToHead(const std::vector<View2D>& views, const RigCalibr
       case HeadBaseStop::kTurned: ++summary->turned; break;
       case HeadBaseStop::kTooLong: ++summary->too_long; break;
       case HeadBaseStop::kOutsideImages: ++summary->outside_images; break;
+      case HeadBaseStop::kOffSkeleton: ++summary->off_skeleton; break;
       case HeadBaseStop::kNotTried: break;
     }
     if (added.empty()) continue;

@@ -19,7 +19,12 @@
 // length) inside the head's spheres. It is dropped
 // whole (the end stays as it was) when a view shows no wood, the corrected course turns more than
 // `max_turn_deg` from the end's tangent, or `max_length_m` is exceeded first: wood is never added
-// where a view contradicts it. New points take the end's radius.
+// where a view contradicts it. A kept extension is dropped too when its points lie, on average,
+// more than `max_skeleton_px` from the skeletons of the views that see them outside their thick
+// region (0: no such test). With `curve_gain` > 0 the prediction turns, step by step, as the
+// circle through the end's last two tangent spans does (times curve_gain), instead of running
+// straight (s20: docs/reconstruction.md step 5, "Cane bases at the head: where to stop").
+// New points take the end's radius.
 // Thread-safe (pure function of its inputs).
 #pragma once
 
@@ -51,6 +56,13 @@ struct HeadBasesOptions {
   double max_turn_deg = 45.0;      // largest turn of the extension from the end's tangent
   double max_length_m = 0.12;      // longest extension of one end
   double min_cane_length_m = 0.03; // shorter canes are not extended
+  // The course's curvature as a fraction of the end's (0: straight along the tangent, s19; 1:
+  // the circle through the end's last two tangent spans, continued).
+  double curve_gain = 0.0;
+  // An extension kept by the stops above is dropped when its points' mean skeleton distance (each
+  // the mean over the views holding it outside their thick region, capped at 10 px; 0 where none
+  // does) exceeds this (px; 0: no such test).
+  double max_skeleton_px = 0.0;
 
   // INVALID_ARGUMENT naming the field for non-finite or out-of-range values.
   absl::Status Validate() const;
@@ -58,7 +70,28 @@ struct HeadBasesOptions {
 
 // Why an end's extension ended (HeadBasesSummary's counts).
 enum class HeadBaseStop { kNotTried, kReachedThick, kReachedInside, kNoWood, kTurned, kTooLong,
-                          kOutsideImages };
+                          kOutsideImages, kOffSkeleton };
+
+// One end tried (for diagnosis: HeadBases.DISABLED_Report): where it started and what was added.
+struct HeadBaseExtension {
+  Eigen::Vector3d end = Eigen::Vector3d::Zero();      // the end before extension
+  Eigen::Vector3d tangent = Eigen::Vector3d::UnitX(); // its outward unit tangent
+  double end_distance_m = 0.0;  // signed distance from the end to the head's spheres
+  double bend_deg = 0.0;        // angle between the chords of the end's last two tangent spans
+  HeadBaseStop stop = HeadBaseStop::kNotTried;
+  // Every point the course reached (added to the cane only when `stop` is kReachedThick or
+  // kReachedInside), and per point: the arc length run inside the head's spheres, the views
+  // showing it thick and the distance to the nearest other cane (as the canes were before this
+  // stage).
+  std::vector<Eigen::Vector3d> points;
+  std::vector<double> inside_m;
+  std::vector<int> thick_views;
+  std::vector<double> other_cane_m;
+  std::vector<int> correcting_views;   // views that held the point outside their thick region
+  std::vector<double> skeleton_px;     // their mean skeleton distance at it, each capped at 10 px
+                                       // (0 where no view does)
+  std::vector<int> on_skeleton_views;  // ... of them, those with the skeleton within 2 px
+};
 
 struct HeadBasesSummary {
   int ends_tried = 0;        // ends near the head pointing at it
@@ -69,7 +102,9 @@ struct HeadBasesSummary {
   int turned = 0;            // dropped: turned more than max_turn_deg
   int too_long = 0;          // dropped: max_length_m without reaching the head
   int outside_images = 0;    // dropped: fewer than two views' images held a point
+  int off_skeleton = 0;      // dropped: mean skeleton distance above max_skeleton_px
   double added_length_m = 0.0;
+  std::vector<HeadBaseExtension> extensions;  // every end tried, in the order tried
 };
 
 // Extends, in place, the ends of `canes` (unoriented polylines, as AssembleCanes and

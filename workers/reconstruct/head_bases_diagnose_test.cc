@@ -14,12 +14,14 @@
 // Run with
 //   VB_INPUT=images VB_SEED=1300 VB_STOPS=20 [VB_BASES=1 VB_BASES_REACH=0.12 VB_BASES_THICK=2
 //   VB_BASES_INSIDE=0.03 VB_BASES_COS=0.5 VB_BASES_LENGTH=0.12 VB_BASES_OFFSET=0.001
-//   VB_BASES_TURN=45 VB_BASES_WOOD=3] vb_reconstruct_test
+//   VB_BASES_TURN=45 VB_BASES_WOOD=3 VB_BASES_CURVE=0
+//   VB_BASES_SKELETON=0 VB_BASES_CSV=path] vb_reconstruct_test
 //     --gtest_also_run_disabled_tests --gtest_filter='HeadBases.DISABLED_Report'
 // Tuning seeds only (1100-1999; docs/reconstruction.md "Seeds").
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <vector>
 
@@ -58,6 +60,48 @@ struct StretchTally {
       inside_head = 0;
 };
 
+// Per point of every tried end's course: where it lies against the end's own true cane (the
+// true cane nearest the end; its polyline starts at its base): arc length and distance of its
+// projection, whether the projection is the base itself (the point lies past the base), the
+// distance to the nearest other true cane.
+void WriteExtensions(std::FILE* csv, uint64_t seed, const VineModel& truth,
+                     const HeadBasesSummary& bases) {
+  for (size_t e = 0; e < bases.extensions.size(); ++e) {
+    const HeadBaseExtension& x = bases.extensions[e];
+    int own = -1;
+    double own_d = std::numeric_limits<double>::infinity(), own_s = 0.0;
+    for (size_t g = 0; g < truth.canes.size(); ++g) {
+      double d = 0.0;
+      const double s = truth.canes[g].polyline.Project(x.end, &d);
+      if (d < own_d) own_d = d, own_s = s, own = int(g);
+    }
+    if (own < 0) continue;
+    const Polyline3& line = truth.canes[own].polyline;
+    const bool own_head = truth.canes[own].kind == CaneKind::kCane && TrueParent(truth, own) == 0;
+    Eigen::Vector3d previous = x.end;
+    for (size_t k = 0; k < x.points.size(); ++k) {
+      const Eigen::Vector3d& p = x.points[k];
+      double d = 0.0;
+      const double s = line.Project(p, &d);
+      double other = std::numeric_limits<double>::infinity();
+      for (size_t g = 0; g < truth.canes.size(); ++g) {
+        if (int(g) == own) continue;
+        double dg = 0.0;
+        truth.canes[g].polyline.Project(p, &dg);
+        other = std::min(other, dg);
+      }
+      std::fprintf(csv, "%llu,%zu,%d,%.4f,%.1f,%.4f,%.4f,%d,%zu,%.4f,%.4f,%d,%.4f,%.4f,%.4f,%d,"
+                        "%.4f,%.4f,%d,%.2f,%d\n",
+                   static_cast<unsigned long long>(seed), e, int(x.stop), x.end_distance_m,
+                   x.bend_deg, own_d, own_s, own_head ? 1 : 0, k,
+                   (p - previous).norm(), x.inside_m[k], x.thick_views[k], x.other_cane_m[k], s,
+                   d, s < 1e-4 ? 1 : 0, other, line.Length(), x.correcting_views[k],
+                   x.skeleton_px[k], x.on_skeleton_views[k]);
+      previous = p;
+    }
+  }
+}
+
 const char* kStopNames[] = {"end unsupported", "unsupported", "contradicted", "alongside",
                             "thick", "turned", "outside", "capped"};
 
@@ -73,6 +117,16 @@ TEST(HeadBases, DISABLED_Report) {
   OverrideFromEnv("VB_BASES_OFFSET", &options.head_bases.max_offset_m);
   OverrideFromEnv("VB_BASES_TURN", &options.head_bases.max_turn_deg);
   OverrideFromEnv("VB_BASES_WOOD", &options.head_bases.wood_px);
+  OverrideFromEnv("VB_BASES_CURVE", &options.head_bases.curve_gain);
+  OverrideFromEnv("VB_BASES_SKELETON", &options.head_bases.max_skeleton_px);
+  // VB_BASES_CSV=path: one row per point every tried end's course reached (WriteExtensions).
+  const char* csv_path = std::getenv("VB_BASES_CSV");
+  std::FILE* csv = csv_path != nullptr ? std::fopen(csv_path, "w") : nullptr;
+  if (csv != nullptr) {
+    std::fprintf(csv, "seed,ext,stop,end_dist,bend,end_own_d,end_own_s,own_head,k,seg,inside,"
+                      "thick,other_model,own_s,own_d,past_base,other_true_d,own_len,corr,"
+                      "skel_px,on_skel\n");
+  }
   int cover[kCoverBins] = {}, hull_exit[kCoverBins] = {}, thick_exit[kCoverBins] = {};
   StretchTally stretch[kStretchBins];
   int canes = 0, grow_stops[8] = {};
@@ -101,7 +155,9 @@ TEST(HeadBases, DISABLED_Report) {
     bases.turned += result->head_bases.turned;
     bases.too_long += result->head_bases.too_long;
     bases.outside_images += result->head_bases.outside_images;
+    bases.off_skeleton += result->head_bases.off_skeleton;
     bases.added_length_m += result->head_bases.added_length_m;
+    if (csv != nullptr) WriteExtensions(csv, seed, truth, result->head_bases);
     for (const GrowEnd& e : result->grow.ends) {
       if (SurfaceDistance(model.head, e.stop_point) < 0.15) ++grow_stops[int(e.stop)];
     }
@@ -165,9 +221,10 @@ TEST(HeadBases, DISABLED_Report) {
   std::printf("final recall %.4f precision %.4f connectivity %.4f\n", recall, precision,
               connectivity);
   std::printf("head bases: tried %d extended %d (thick %d inside %d) dropped: no wood %d turned "
-              "%d too long %d outside images %d; added %.2f m\n", bases.ends_tried,
-              bases.ends_extended, bases.reached_thick, bases.reached_inside, bases.no_wood,
-              bases.turned, bases.too_long, bases.outside_images, bases.added_length_m);
+              "%d too long %d outside images %d off skeleton %d; added %.2f m\n",
+              bases.ends_tried, bases.ends_extended, bases.reached_thick, bases.reached_inside,
+              bases.no_wood, bases.turned, bases.too_long, bases.outside_images,
+              bases.off_skeleton, bases.added_length_m);
   std::printf("%d true canes of the head; uncovered first stretch %.2f m (%.3f m per cane)\n",
               canes, missed_m, missed_m / std::max(1, canes));
   std::printf("  %-9s | first covered | last inside model head | last thick in >= 2 views\n",
@@ -188,6 +245,7 @@ TEST(HeadBases, DISABLED_Report) {
                 t.samples, t.images2 / n, t.foreground2 / n, t.skeleton2 / n, t.thick2 / n,
                 t.thick1 / n, t.inside_head / n);
   }
+  if (csv != nullptr) std::fclose(csv);
   std::printf("growth stops of ends within 15 cm of the model head:");
   for (int i = 0; i < 8; ++i) std::printf(" %s %d;", kStopNames[i], grow_stops[i]);
   std::printf("\n");

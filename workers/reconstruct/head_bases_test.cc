@@ -124,6 +124,123 @@ TEST(ExtendBasesToHead, ExtendsTheLastPointWhenItIsTheBase) {
   EXPECT_NEAR((canes[0].points.front() - cane.points.back()).norm(), 0.0, 1e-12);
 }
 
+// A cane leaving the head's surface along `direction` (x-z plane) on a circle of radius
+// `radius_m` bending up, `length_m` long, every 1 cm, from its base.
+Polyline3 CircularCaneFromHead(const Eigen::Vector3d& direction, double radius_m,
+                               double length_m) {
+  const Eigen::Vector3d d = direction.normalized();
+  const Eigen::Vector3d up(-d.z(), 0.0, d.x());  // d turned 90 degrees in the x-z plane
+  const Eigen::Vector3d base = kHeadCentre + kHeadRadius * d;
+  Polyline3 line;
+  for (int i = 0; 0.01 * i <= length_m + 1e-9; ++i) {
+    const double a = 0.01 * i / radius_m;
+    line.points.push_back(base + radius_m * std::sin(a) * d + radius_m * (1.0 - std::cos(a)) * up);
+    line.radii.push_back(0.004);
+  }
+  return line;
+}
+
+TEST(ExtendBasesToHead, RecordsTheEndsBendAndCourse) {
+  const RigCalibration rig = sim::MakeRig().value();
+  const Polyline3 cane = CircularCaneFromHead({0.8, 0.0, 0.6}, 0.15, 0.25);
+  const std::vector<View2D> views = ViewsOf(Vine({cane}), rig);
+  std::vector<Polyline3> canes = {From(cane, 0.08)};
+  HeadBasesSummary summary;
+  ASSERT_TRUE(ExtendBasesToHead(views, rig, LooseHead(), On(), &canes, &summary).ok());
+  ASSERT_EQ(summary.extensions.size(), 1u);
+  const HeadBaseExtension& x = summary.extensions[0];
+  // Two chords of 3 cm, a chord apart on a circle of 15 cm: 0.03 / 0.15 rad = 11.46 degrees.
+  EXPECT_NEAR(x.bend_deg, 0.2 * 180.0 / 3.14159265358979, 0.3);
+  EXPECT_LT((x.end - cane.points[8]).norm(), 1e-9);
+  EXPECT_EQ(x.inside_m.size(), x.points.size());
+  EXPECT_EQ(x.skeleton_px.size(), x.points.size());
+  // The end is 8 cm out on the cane, 1 cm outside the 7 cm loose head.
+  EXPECT_NEAR(x.end_distance_m, (cane.points[8] - kHeadCentre).norm() - 0.07, 1e-9);
+}
+
+TEST(ExtendBasesToHead, FollowsACurvedCaneWithTheEndsCurvature) {
+  const RigCalibration rig = sim::MakeRig().value();
+  const Polyline3 cane = CircularCaneFromHead({0.8, 0.0, 0.6}, 0.15, 0.25);
+  const std::vector<View2D> views = ViewsOf(Vine({cane}), rig);
+  // No correction toward the skeleton: the course is the prediction alone.
+  HeadBasesOptions options = On();
+  options.max_offset_m = 0.0;
+  options.curve_gain = 1.0;
+  std::vector<Polyline3> curved = {From(cane, 0.08)};
+  HeadBasesSummary summary;
+  ASSERT_TRUE(ExtendBasesToHead(views, rig, LooseHead(), options, &curved, &summary).ok());
+  ASSERT_EQ(summary.ends_extended, 1);
+  // The circle continued: the base within a step of the true one, every point on the cane.
+  EXPECT_LT((curved[0].points.front() - cane.points.front()).norm(), 0.006);
+  for (size_t i = 0; i < curved[0].points.size(); ++i)
+    EXPECT_LT(DistanceToLine(curved[0].points[i], cane), 0.002) << i;
+  // The straight course (s19) leaves the cane: it misses the base by more than a centimetre or
+  // leaves the wood and is dropped.
+  options.curve_gain = 0.0;
+  std::vector<Polyline3> straight = {From(cane, 0.08)};
+  ASSERT_TRUE(ExtendBasesToHead(views, rig, LooseHead(), options, &straight, &summary).ok());
+  if (summary.ends_extended == 1) {
+    EXPECT_GT((straight[0].points.front() - cane.points.front()).norm(), 0.01);
+  } else {
+    EXPECT_EQ(straight[0].points.size(), From(cane, 0.08).points.size());
+  }
+}
+
+TEST(ExtendBasesToHead, ConvergingCanesStopAtTheirOwnBases) {
+  const RigCalibration rig = sim::MakeRig().value();
+  // Two canes leaving the head 1.4 cm apart (16 degrees), their courses converging toward its
+  // centre.
+  const Polyline3 a = CaneFromHead({0.8, 0.0, 0.6});
+  const Polyline3 b = CaneFromHead({0.6, 0.0, 0.8});
+  const std::vector<View2D> views = ViewsOf(Vine({a, b}), rig);
+  std::vector<Polyline3> canes = {From(a, 0.05), From(b, 0.05)};
+  HeadBasesOptions options = On();
+  options.curve_gain = 1.0;
+  HeadBasesSummary summary;
+  ASSERT_TRUE(ExtendBasesToHead(views, rig, LooseHead(), options, &canes, &summary).ok());
+  EXPECT_EQ(summary.ends_extended, 2);
+  EXPECT_LT((canes[0].points.front() - a.points.front()).norm(), 0.008);
+  EXPECT_LT((canes[1].points.front() - b.points.front()).norm(), 0.008);
+  // Neither runs onto or past the other: each point is nearer its own cane than the other's.
+  for (const Eigen::Vector3d& p : canes[0].points)
+    EXPECT_LT(DistanceToLine(p, a), DistanceToLine(p, b));
+  for (const Eigen::Vector3d& p : canes[1].points)
+    EXPECT_LT(DistanceToLine(p, b), DistanceToLine(p, a));
+}
+
+TEST(ExtendBasesToHead, DropsACourseOffTheViewsSkeletonsWithMaxSkeletonPx) {
+  const RigCalibration rig = sim::MakeRig().value();
+  const Eigen::Vector3d d = Eigen::Vector3d(0.8, 0.0, 0.6).normalized();
+  const Polyline3 cane = CircularCaneFromHead(d, 100.0, 0.3);  // straight
+  const std::vector<View2D> views = ViewsOf(Vine({cane}), rig);
+  HeadBasesOptions options = On();
+  options.max_offset_m = 0.0;  // no correction: the course stays where the end puts it
+  options.max_skeleton_px = 1.0;
+  // On the cane: its points lie on the views' skeletons, and it is kept.
+  std::vector<Polyline3> on = {From(cane, 0.06)};
+  HeadBasesSummary summary;
+  ASSERT_TRUE(ExtendBasesToHead(views, rig, LooseHead(), options, &on, &summary).ok());
+  EXPECT_EQ(summary.ends_extended, 1);
+  EXPECT_EQ(summary.off_skeleton, 0);
+  ASSERT_EQ(summary.extensions.size(), 1u);
+  for (double px : summary.extensions[0].skeleton_px) EXPECT_LT(px, 1.0);
+  // 3 mm beside it, across the views' line of sight (still on the cane's silhouette): dropped.
+  Polyline3 beside = From(cane, 0.06);
+  for (Eigen::Vector3d& p : beside.points) p += 0.003 * Eigen::Vector3d(-d.z(), 0.0, d.x());
+  std::vector<Polyline3> off = {beside};
+  ASSERT_TRUE(ExtendBasesToHead(views, rig, LooseHead(), options, &off, &summary).ok());
+  EXPECT_EQ(summary.ends_tried, 1);
+  EXPECT_EQ(summary.ends_extended, 0);
+  EXPECT_EQ(summary.off_skeleton, 1);
+  EXPECT_EQ(off[0].points, beside.points);
+  // Without the test it is kept.
+  options.max_skeleton_px = 0.0;
+  off = {beside};
+  ASSERT_TRUE(ExtendBasesToHead(views, rig, LooseHead(), options, &off, &summary).ok());
+  EXPECT_EQ(summary.ends_extended, 1);
+  EXPECT_EQ(summary.off_skeleton, 0);
+}
+
 TEST(ExtendBasesToHead, RunsMaxInsideIntoTheHeadWhenTheThickTestIsOff) {
   const RigCalibration rig = sim::MakeRig().value();
   const Polyline3 cane = CaneFromHead({0.8, 0.0, 0.6});
@@ -213,6 +330,15 @@ TEST(ExtendBasesToHead, RejectsInvalidOptions) {
   o = On();
   o.max_offset_m = 0.05;
   check(o, "max_offset_m");
+  o = On();
+  o.curve_gain = -0.1;
+  check(o, "curve_gain");
+  o = On();
+  o.curve_gain = std::nan("");
+  check(o, "curve_gain");
+  o = On();
+  o.max_skeleton_px = -1.0;
+  check(o, "max_skeleton_px");
 }
 
 TEST(ExtendBasesToHead, RejectsViewsThatDoNotMatchTheRig) {
