@@ -71,8 +71,7 @@ Carver::Carver(const std::vector<View2D>& views, const RigCalibration& rig,
 
 Carver::~Carver() = default;
 
-CubeVerdict Carver::Judge(const Cube& cube, bool* seen_as_wood,
-                          double radius_fraction) const {
+CubeVerdict Carver::Judge(const Cube& cube, bool* seen_as_wood) const {
   const double radius = 0.5 * std::sqrt(3.0) * cube.side;
   int seen = 0;
   bool all_inside = true;
@@ -89,9 +88,7 @@ CubeVerdict Carver::Judge(const Cube& cube, bool* seen_as_wood,
     const double r_px = 1.1 * camera.camera_matrix(0, 0) * radius / depth;
     const int x = std::clamp(static_cast<int>(std::lround(uv->x())), 0, maps_[v].width - 1);
     const int y = std::clamp(static_cast<int>(std::lround(uv->y())), 0, maps_[v].height - 1);
-    // Only the outside test takes radius_fraction: a smaller sphere never proves a cube whole.
-    if (maps_[v].to_silhouette.at<float>(y, x) >
-        radius_fraction * r_px + options_.silhouette_margin_px) {
+    if (maps_[v].to_silhouette.at<float>(y, x) > r_px + options_.silhouette_margin_px) {
       return CubeVerdict::kOutside;
     }
     if (maps_[v].to_background.at<float>(y, x) < r_px) all_inside = false;

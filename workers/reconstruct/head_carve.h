@@ -48,9 +48,8 @@ class Carver {
   Carver& operator=(const Carver&) = delete;
 
   // The cube's verdict; *seen_as_wood is false if some view that sees it finds no thick wood
-  // near it (it is kept only because a post hides it there). `radius_fraction` (in [0, 1])
-  // scales the sphere of the outside test only (HeadOptions::leaf_radius_fraction).
-  CubeVerdict Judge(const Cube& cube, bool* seen_as_wood, double radius_fraction = 1.0) const;
+  // near it (it is kept only because a post hides it there).
+  CubeVerdict Judge(const Cube& cube, bool* seen_as_wood) const;
   // The tight test (HeadOptions::leaf_radius_fraction): true if some view that sees `cube` (as
   // Judge counts them) finds its sphere of radius_fraction x its bounding radius wholly outside
   // its silhouette, or, when leaf_wood_radius_px > 0, outside both the silhouette and the wood
