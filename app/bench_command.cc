@@ -121,7 +121,8 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   VB_RETURN_IF_ERROR(ReadSelectionFlags(flags, &options.correspondence));
   VB_RETURN_IF_ERROR(ReadSweepFlags(flags, &options.sweep));  // --sweep (step 4e)
   // --head-peel, --head-min-cell, --head-depth-factor, --head-leaf-fraction,
-  // --head-centre-on-trunk: the head's options (app/reconstruct_flags.h).
+  // --head-centre-on-trunk, --head-leaf-wood-px: the head's options
+  // (app/reconstruct_flags.h).
   VB_RETURN_IF_ERROR(ReadHeadFlags(flags, &options.head));
   VB_RETURN_IF_ERROR(ReadHeadBasesFlags(flags, &options.head_bases));
   VB_RETURN_IF_ERROR(flags.Finish());

@@ -86,6 +86,8 @@ absl::Status ReadHeadFlags(Flags& flags, reconstruct::HeadOptions* options) {
                       flags.Double("head-leaf-fraction", options->leaf_radius_fraction));
   VB_ASSIGN_OR_RETURN(const bool centre_on_trunk,
                       flags.Bool("head-centre-on-trunk", options->head_centre_on_trunk));
+  VB_ASSIGN_OR_RETURN(const double wood_px,
+                      flags.Double("head-leaf-wood-px", options->leaf_wood_radius_px));
   if (!(min_cell > 0.0) || !(min_cell <= options->coarse_cell_m)) {
     return absl::InvalidArgumentError(absl::StrCat("--head-min-cell must be in (0, ",
                                                    options->coarse_cell_m, "], got ", min_cell));
@@ -98,11 +100,16 @@ absl::Status ReadHeadFlags(Flags& flags, reconstruct::HeadOptions* options) {
     return absl::InvalidArgumentError(
         absl::StrCat("--head-leaf-fraction must be in [0, 1], got ", leaf_fraction));
   }
+  if (!(wood_px >= 0.0) || !std::isfinite(wood_px)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("--head-leaf-wood-px must be finite and >= 0, got ", wood_px));
+  }
   options->peel_canes = peel;
   options->min_cell_m = min_cell;
   options->head_depth_factor = depth_factor;
   options->leaf_radius_fraction = leaf_fraction;
   options->head_centre_on_trunk = centre_on_trunk;
+  options->leaf_wood_radius_px = wood_px;
   return absl::OkStatus();
 }
 

@@ -35,6 +35,7 @@ const std::vector<Command>& Commands() {
        "--bundle DIR --out model.json [--deadline-s T] [--alpha A] [--select-context]"
        " [--context-alpha A] [--sweep] [--head-peel] [--head-min-cell M]"
        " [--head-depth-factor F] [--head-leaf-fraction F] [--head-centre-on-trunk]"
+       " [--head-leaf-wood-px X]"
        " [--head-bases] [--head-bases-reach M] [--head-bases-thick-views N]"
        " [--head-bases-inside M] [--sweep-*: app/reconstruct_flags.h]",
        vb::app::RunReconstruct},
@@ -55,7 +56,8 @@ const std::vector<Command>& Commands() {
        "--vines N --seed-base S [--calibration-error-px X] [--policy policy.json]"
        " [--input images|labels|truth] [--rig-refine off|canes|trellis] [--alpha A]"
        " [--select-context] [--context-alpha A] [--head-peel] [--head-min-cell M]"
-       " [--head-depth-factor F] [--head-leaf-fraction F] [--head-centre-on-trunk] [--sweep]"
+       " [--head-depth-factor F] [--head-leaf-fraction F] [--head-centre-on-trunk]"
+       " [--head-leaf-wood-px X] [--sweep]"
        " [--grow-refit M] [--grow-max-length M] [--head-bases] [--head-bases-reach M]"
        " [--head-bases-thick-views N] [--head-bases-inside M] [--sweep-*: app/reconstruct_flags.h]",
        vb::app::RunBenchReconstruct},

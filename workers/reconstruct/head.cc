@@ -52,6 +52,8 @@ absl::Status HeadOptions::Validate() const {
       leaf_radius_fraction > 1) {
     return absl::InvalidArgumentError("head options: leaf_radius_fraction must be in [0, 1]");
   }
+  if (!std::isfinite(leaf_wood_radius_px) || leaf_wood_radius_px < 0)
+    return absl::InvalidArgumentError("head options: leaf_wood_radius_px must be >= 0");
   if (min_views < 1) return absl::InvalidArgumentError("head options: min_views must be >= 1");
   return absl::OkStatus();
 }

@@ -61,6 +61,13 @@ struct HeadOptions {
   // trunk, the head's bottom, extent and depth is carved as at 1. In [0, 1]. 0.5 since s19, with
   // the cane bases at the head (head_bases.h; docs/reconstruction.md step 5, "Both on by default").
   double leaf_radius_fraction = 0.5;
+  // The tight test above also counts as silhouette, view by view, the wood (foreground) that a
+  // disc of this radius fits in, when > 0 (s20, docs/reconstruction.md step 5, "Enclosing every
+  // head"). The thick mask is an opening by a wider disc (View2D::thick_mask), which loses narrow
+  // parts and corners of a head; the loose leaves' reach covered them, the tight test cut them.
+  // Canes thinner than 2 x this radius stay out, so the test stays tight along cane bases.
+  // 0: off (s19's test).
+  double leaf_wood_radius_px = 0.0;
   // Centre the head's depth on the trunk's top (the head sits on the trunk) rather than on the
   // median depth of the depth hints within its extent (s19; off: as before).
   bool head_centre_on_trunk = false;

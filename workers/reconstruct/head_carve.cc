@@ -16,12 +16,17 @@ struct SilhouetteMaps {
   cv::Mat to_silhouette;   // CV_32F
   cv::Mat to_background;   // CV_32F
   cv::Mat to_thick;        // CV_32F: distance to thick foreground alone (posts excluded)
+  // CV_32F, when HeadOptions::leaf_wood_radius_px > 0: distance to the silhouette or to wood
+  // that a disc of that radius fits in (the opening of the foreground by that disc).
+  cv::Mat to_wide_wood;
 };
 
 namespace {
 
 // `silhouette`: the view's thick mask, or that mask with the canes peeled off (head_peel.h).
-SilhouetteMaps MakeMaps(const View2D& view, const std::vector<uint8_t>& silhouette) {
+// `wood_radius_px` > 0 also makes to_wide_wood.
+SilhouetteMaps MakeMaps(const View2D& view, const std::vector<uint8_t>& silhouette,
+                        double wood_radius_px) {
   SilhouetteMaps maps;
   maps.width = view.width;
   maps.height = view.height;
@@ -35,6 +40,17 @@ SilhouetteMaps MakeMaps(const View2D& view, const std::vector<uint8_t>& silhouet
   cv::distanceTransform(inside, maps.to_background, cv::DIST_L2, 3);
   cv::Mat not_thick = mask == 0;
   cv::distanceTransform(not_thick, maps.to_thick, cv::DIST_L2, 3);
+  if (wood_radius_px > 0) {
+    // The opening of the wood (foreground or silhouette) by a disc of wood_radius_px: erosion
+    // is {distance to non-wood > radius}, dilation {distance to the eroded set <= radius}.
+    cv::Mat wood = (classes == static_cast<int>(PixelClass::kForeground)) | (mask != 0);
+    cv::Mat to_non_wood, to_core;
+    cv::distanceTransform(wood, to_non_wood, cv::DIST_L2, 3);
+    cv::Mat not_core = to_non_wood <= wood_radius_px;
+    cv::distanceTransform(not_core, to_core, cv::DIST_L2, 3);
+    cv::Mat not_wide = outside & (to_core > wood_radius_px);
+    cv::distanceTransform(not_wide, maps.to_wide_wood, cv::DIST_L2, 3);
+  }
   return maps;
 }
 
@@ -44,17 +60,18 @@ Carver::Carver(const std::vector<View2D>& views, const RigCalibration& rig,
                const HeadOptions& options, const std::vector<Eigen::Vector3d>& canes)
     : rig_(rig), options_(options) {
   for (size_t v = 0; v < views.size(); ++v) {
-    maps_.push_back(MakeMaps(views[v], options.peel_canes ? PeelCanesOffSilhouette(
-                                                                views[v], rig.cameras[v],
-                                                                canes, options)
-                                                          : views[v].thick_mask));
+    maps_.push_back(MakeMaps(views[v],
+                             options.peel_canes ? PeelCanesOffSilhouette(views[v], rig.cameras[v],
+                                                                         canes, options)
+                                                : views[v].thick_mask,
+                             options.leaf_radius_fraction < 1.0 ? options.leaf_wood_radius_px
+                                                                : 0.0));
   }
 }
 
 Carver::~Carver() = default;
 
-CubeVerdict Carver::Judge(const Cube& cube, bool* seen_as_wood,
-                          double radius_fraction) const {
+CubeVerdict Carver::Judge(const Cube& cube, bool* seen_as_wood) const {
   const double radius = 0.5 * std::sqrt(3.0) * cube.side;
   int seen = 0;
   bool all_inside = true;
@@ -71,9 +88,7 @@ CubeVerdict Carver::Judge(const Cube& cube, bool* seen_as_wood,
     const double r_px = 1.1 * camera.camera_matrix(0, 0) * radius / depth;
     const int x = std::clamp(static_cast<int>(std::lround(uv->x())), 0, maps_[v].width - 1);
     const int y = std::clamp(static_cast<int>(std::lround(uv->y())), 0, maps_[v].height - 1);
-    // Only the outside test takes radius_fraction: a smaller sphere never proves a cube whole.
-    if (maps_[v].to_silhouette.at<float>(y, x) >
-        radius_fraction * r_px + options_.silhouette_margin_px) {
+    if (maps_[v].to_silhouette.at<float>(y, x) > r_px + options_.silhouette_margin_px) {
       return CubeVerdict::kOutside;
     }
     if (maps_[v].to_background.at<float>(y, x) < r_px) all_inside = false;
@@ -87,6 +102,25 @@ CubeVerdict Carver::Judge(const Cube& cube, bool* seen_as_wood,
   return all_inside ? CubeVerdict::kInside : CubeVerdict::kBoundary;
 }
 
+bool Carver::OutsideInSomeView(const Cube& cube, double radius_fraction) const {
+  const double radius = 0.5 * std::sqrt(3.0) * cube.side;
+  for (size_t v = 0; v < maps_.size(); ++v) {
+    const CameraCalibration& camera = rig_.cameras[v];
+    const auto uv = camera.Project(cube.centre);
+    if (!uv || !camera.InImage(*uv)) continue;
+    const double depth = (camera.camera_from_platform() * cube.centre).z();
+    if (depth <= radius) continue;
+    const double r_px = 1.1 * camera.camera_matrix(0, 0) * radius / depth;
+    const int x = std::clamp(static_cast<int>(std::lround(uv->x())), 0, maps_[v].width - 1);
+    const int y = std::clamp(static_cast<int>(std::lround(uv->y())), 0, maps_[v].height - 1);
+    const double reach = radius_fraction * r_px + options_.silhouette_margin_px;
+    const cv::Mat& silhouette =
+        options_.leaf_wood_radius_px > 0 ? maps_[v].to_wide_wood : maps_[v].to_silhouette;
+    if (silhouette.at<float>(y, x) > reach) return true;
+  }
+  return false;
+}
+
 void Carver::Carve(const Cube& cube, std::vector<Cube>* kept) const {
   bool seen_as_wood = true;
   const CubeVerdict verdict = Judge(cube, &seen_as_wood);
@@ -95,10 +129,8 @@ void Carver::Carve(const Cube& cube, std::vector<Cube>* kept) const {
   const bool leaf = cube.side <= options_.min_cell_m * 1.0001;
   if (verdict == CubeVerdict::kInside || leaf) {
     bool tight = true;
-    if (verdict == CubeVerdict::kBoundary && options_.leaf_radius_fraction < 1.0) {
-      bool unused = true;
-      tight = Judge(cube, &unused, options_.leaf_radius_fraction) != CubeVerdict::kOutside;
-    }
+    if (verdict == CubeVerdict::kBoundary && options_.leaf_radius_fraction < 1.0)
+      tight = !OutsideInSomeView(cube, options_.leaf_radius_fraction);
     kept->push_back({cube.centre, cube.side, seen_as_wood, tight});
     return;
   }

@@ -6,7 +6,8 @@
 // A cube whose bounding sphere projects entirely outside the (dilated) silhouette of some view is
 // carved; one inside every view is kept whole; the rest are split down to min_cell_m and then
 // kept (and a kept smallest cube on the boundary is marked `tight` if a sphere of
-// leaf_radius_fraction of its bounding radius also touches every silhouette). A post in front
+// leaf_radius_fraction of its bounding radius also touches every silhouette, or, with
+// leaf_wood_radius_px, the wide wood beside it). A post in front
 // hides what is behind it: its pixels do not carve, but neither do they prove a cube whole, and
 // a cube near thick wood in no view at all (behind posts in every view) is not kept. Carver is
 // immutable after construction and thread-safe to share.
@@ -47,9 +48,13 @@ class Carver {
   Carver& operator=(const Carver&) = delete;
 
   // The cube's verdict; *seen_as_wood is false if some view that sees it finds no thick wood
-  // near it (it is kept only because a post hides it there). `radius_fraction` (in [0, 1])
-  // scales the sphere of the outside test only (HeadOptions::leaf_radius_fraction).
-  CubeVerdict Judge(const Cube& cube, bool* seen_as_wood, double radius_fraction = 1.0) const;
+  // near it (it is kept only because a post hides it there).
+  CubeVerdict Judge(const Cube& cube, bool* seen_as_wood) const;
+  // The tight test (HeadOptions::leaf_radius_fraction): true if some view that sees `cube` (as
+  // Judge counts them) finds its sphere of radius_fraction x its bounding radius wholly outside
+  // its silhouette, or, when leaf_wood_radius_px > 0, outside both the silhouette and the wood
+  // that a disc of that radius fits in.
+  bool OutsideInSomeView(const Cube& cube, double radius_fraction) const;
   // Appends to *kept the leaves of `cube`'s octree that survive carving.
   void Carve(const Cube& cube, std::vector<Cube>* kept) const;
 
