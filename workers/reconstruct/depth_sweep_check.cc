@@ -82,6 +82,10 @@ SweptRunFeatures MeasureSweptRun(const Polyline3& run, const std::vector<View2D>
   for (size_t w = 0; w < n_views; ++w) {
     const CameraCalibration& camera = rig.cameras[w];
     const View2D& view = views[w];
+    if (view.classes.data.size() != static_cast<size_t>(view.width) * view.height ||
+        view.classes.width != view.width || view.classes.height != view.height) {
+      continue;
+    }
     const double fx = camera.camera_matrix(0, 0);
     const Eigen::Isometry3d from_platform = camera.camera_from_platform();
     int inside = 0, on_foreground = 0, tangent_count = 0;

@@ -44,7 +44,9 @@ double ForegroundWidthAcross(const View2D& view, const Eigen::Vector2d& uv,
                              const Eigen::Vector2d& along, double max_half_px = 20.0);
 
 // The features of `run` (points ordered along it, radii > 0) in `views` seen by rig.cameras
-// (same count), `samples[i]` built from views[i] with rig.cameras[i] (ViewSamples).
+// (same count), `samples[i]` built from views[i] with rig.cameras[i] (ViewSamples). A view without
+// a class image (View2D::classes of another size) is left out, as a view the run does not reach.
+// Fewer than 2 points, zero length or radii not one per point: the defaults above.
 SweptRunFeatures MeasureSweptRun(const Polyline3& run, const std::vector<View2D>& views,
                                  const RigCalibration& rig,
                                  const std::vector<ViewSamples>& samples);

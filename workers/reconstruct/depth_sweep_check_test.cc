@@ -100,6 +100,16 @@ TEST(MeasureSweptRun, AGhostsImpliedRadiiDisagree) {
   EXPECT_GT(f.width_log_excess, 0.6);  // view 2 shows it ~3 times as wide as it projects
 }
 
+TEST(MeasureSweptRun, LeavesOutAViewWithoutAClassImage) {
+  const RigCalibration rig = sim::MakeRig().value();
+  std::vector<View2D> views = GhostViews(rig);
+  views[2].classes = ClassImage();  // the thick view: without it the two thin views agree
+  const SweptRunFeatures f = MeasureSweptRun(CurvedCane(0.004), views, rig, SamplesOf(views, rig));
+  EXPECT_EQ(f.views, 2);
+  EXPECT_LT(f.width_log_spread, 0.3);
+  EXPECT_GT(f.foreground, 0.9);
+}
+
 TEST(MeasureSweptRun, ARunOffTheWoodLeavesTheForeground) {
   const RigCalibration rig = sim::MakeRig().value();
   const Polyline3 cane = CurvedCane(0.004);
