@@ -82,7 +82,7 @@ struct DepthSweepOptions {
   bool check = false;
   double check_max_width_log_spread = 0.5;  // views' implied radii: max - min of logs (median)
   double check_max_width_log_excess = 10.0; // measured vs projected width, |log| (10: off)
-  double check_min_foreground = 0.0;        // min over views: cross-section on foreground (0: off)
+  double check_min_foreground = 0.5;        // min over views: cross-section on foreground (0: off)
 
   // INVALID_ARGUMENT naming the field ("sweep.<field>") for non-finite or out-of-range values.
   absl::Status Validate() const;

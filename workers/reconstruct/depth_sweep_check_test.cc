@@ -177,12 +177,14 @@ TEST(SweepCheck, KeepsATrueCane) {
 }
 
 TEST(PassesCheck, EachLimitDropsWhatExceedsIt) {
-  const DepthSweepOptions options;  // spread 0.5, excess and foreground off
+  DepthSweepOptions options;  // spread 0.5, excess off, foreground off here
+  options.check_min_foreground = 0.0;
   SweptRunFeatures f;
   f.width_log_spread = 0.49;
   f.width_log_excess = 5.0;
   f.foreground = 0.0;
   EXPECT_TRUE(PassesCheck(f, options));
+  EXPECT_FALSE(PassesCheck(f, DepthSweepOptions{}));  // the default foreground limit, 0.5
   f.width_log_spread = 0.51;
   EXPECT_FALSE(PassesCheck(f, options));
   f.width_log_spread = 0.0;
