@@ -43,6 +43,25 @@ absl::Status ReadSweepFlags(Flags& flags, reconstruct::DepthSweepOptions* option
   VB_ASSIGN_OR_RETURN(const double min_stretch_share,
                       flags.Double("sweep-min-stretch-share",
                                    options->min_stretch_accepted_share));
+  VB_ASSIGN_OR_RETURN(const bool check, flags.Bool("sweep-check", options->check));
+  VB_ASSIGN_OR_RETURN(const double check_spread, flags.Double("sweep-check-spread",
+                                                              options->check_max_width_log_spread));
+  VB_ASSIGN_OR_RETURN(const double check_excess, flags.Double("sweep-check-excess",
+                                                              options->check_max_width_log_excess));
+  VB_ASSIGN_OR_RETURN(const double check_foreground,
+                      flags.Double("sweep-check-foreground", options->check_min_foreground));
+  if (!(check_spread >= 0.0) || !std::isfinite(check_spread)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("--sweep-check-spread must be finite and >= 0, got ", check_spread));
+  }
+  if (!(check_excess >= 0.0) || !std::isfinite(check_excess)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("--sweep-check-excess must be finite and >= 0, got ", check_excess));
+  }
+  if (!(check_foreground >= 0.0 && check_foreground <= 1.0)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("--sweep-check-foreground must be in [0, 1], got ", check_foreground));
+  }
   if (min_views < 2 || min_views > 64) {
     return absl::InvalidArgumentError(
         absl::StrCat("--sweep-min-views must be in [2, 64], got ", min_views));
@@ -74,6 +93,10 @@ absl::Status ReadSweepFlags(Flags& flags, reconstruct::DepthSweepOptions* option
   options->unique_exclusion_steps = static_cast<int>(unique_steps);
   options->max_ambiguous_share = max_ambiguous;
   options->min_stretch_accepted_share = min_stretch_share;
+  options->check = check;
+  options->check_max_width_log_spread = check_spread;
+  options->check_max_width_log_excess = check_excess;
+  options->check_min_foreground = check_foreground;
   return absl::OkStatus();
 }
 

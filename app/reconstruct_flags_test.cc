@@ -73,7 +73,9 @@ TEST(ReconstructFlags, SweepFlagsKeepTheDefaultsOrSetTheSweep) {
   EXPECT_EQ(options.min_views, reconstruct::DepthSweepOptions{}.min_views);
   auto flags = ParseAll({"--sweep", "true", "--sweep-min-views", "2", "--sweep-max-step", "3",
                          "--sweep-accept-px", "1.25", "--sweep-max-ambiguous", "0.3",
-                         "--sweep-min-stretch-share", "0.4", "--sweep-unique-steps", "2"});
+                         "--sweep-min-stretch-share", "0.4", "--sweep-unique-steps", "2",
+                         "--sweep-check", "true", "--sweep-check-spread", "0.35",
+                         "--sweep-check-excess", "0.6", "--sweep-check-foreground", "0.7"});
   ASSERT_TRUE(flags.ok());
   ASSERT_TRUE(ReadSweepFlags(*flags, &options).ok());
   EXPECT_TRUE(options.enabled);
@@ -83,6 +85,10 @@ TEST(ReconstructFlags, SweepFlagsKeepTheDefaultsOrSetTheSweep) {
   EXPECT_DOUBLE_EQ(options.max_ambiguous_share, 0.3);
   EXPECT_DOUBLE_EQ(options.min_stretch_accepted_share, 0.4);
   EXPECT_EQ(options.unique_exclusion_steps, 2);
+  EXPECT_TRUE(options.check);
+  EXPECT_DOUBLE_EQ(options.check_max_width_log_spread, 0.35);
+  EXPECT_DOUBLE_EQ(options.check_max_width_log_excess, 0.6);
+  EXPECT_DOUBLE_EQ(options.check_min_foreground, 0.7);
   EXPECT_TRUE(flags->Finish().ok());
   EXPECT_TRUE(options.Validate().ok());
 }
@@ -97,6 +103,10 @@ TEST(ReconstructFlags, SweepFlagsRejectBadValuesNamingTheFlag) {
       {{"--sweep-unique-steps", "-1"}, "--sweep-unique-steps"},
       {{"--sweep-max-ambiguous", "1.5"}, "--sweep-max-ambiguous"},
       {{"--sweep-min-stretch-share", "-0.1"}, "--sweep-min-stretch-share"},
+      {{"--sweep-check", "2"}, "--sweep-check"},
+      {{"--sweep-check-spread", "-1"}, "--sweep-check-spread"},
+      {{"--sweep-check-excess", "-0.1"}, "--sweep-check-excess"},
+      {{"--sweep-check-foreground", "-0.5"}, "--sweep-check-foreground"},
   };
   for (const auto& [args, name] : cases) {
     auto flags = ParseAll(args);

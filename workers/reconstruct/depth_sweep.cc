@@ -11,11 +11,15 @@
 #include "absl/strings/str_cat.h"
 #include "core/geometry.h"
 #include "core/status_macros.h"
+#include "workers/reconstruct/depth_sweep_check.h"
 #include "workers/reconstruct/depth_sweep_internal.h"
 #include "workers/reconstruct/image_probes.h"
 
 namespace vb::reconstruct {
 namespace {
+
+// Spacing of the skeleton samples the check's tangent lookups use (correspondence's default).
+constexpr double kSkeletonSampleStepPx = 4.0;
 
 // Per view: 1 where a cane's projected cross-section (plus explained_px) covers the pixel.
 using ExplainedMask = std::vector<uint8_t>;
@@ -210,6 +214,13 @@ absl::Status DepthSweepOptions::Validate() const {
   if (!(min_stretch_accepted_share >= 0.0 && min_stretch_accepted_share <= 1.0))
     return absl::InvalidArgumentError(absl::StrCat(
         "sweep.min_stretch_accepted_share must be in [0, 1], is ", min_stretch_accepted_share));
+  VB_RETURN_IF_ERROR(
+      CheckNonNegative(check_max_width_log_spread, kStage, "check_max_width_log_spread"));
+  VB_RETURN_IF_ERROR(
+      CheckNonNegative(check_max_width_log_excess, kStage, "check_max_width_log_excess"));
+  if (!(check_min_foreground >= 0.0 && check_min_foreground <= 1.0))
+    return absl::InvalidArgumentError(
+        absl::StrCat("sweep.check_min_foreground must be in [0, 1], is ", check_min_foreground));
   if (image_margin_px < 0)
     return absl::InvalidArgumentError(
         absl::StrCat("sweep.image_margin_px must be >= 0, is ", image_margin_px));
@@ -290,6 +301,12 @@ std::vector<Polyline3> RunsOf(const std::vector<SweptSample>& samples, size_t vi
 
 }  // namespace
 
+bool PassesCheck(const SweptRunFeatures& features, const DepthSweepOptions& options) {
+  return features.width_log_spread <= options.check_max_width_log_spread &&
+         features.width_log_excess <= options.check_max_width_log_excess &&
+         features.foreground >= options.check_min_foreground;
+}
+
 absl::Status SweepUnexplainedPaths(const std::vector<View2D>& views, const RigCalibration& rig,
                                    const WorkingVolume& volume, const DepthSweepOptions& options,
                                    const Deadline& deadline, std::vector<Polyline3>* canes,
@@ -314,6 +331,9 @@ absl::Status SweepUnexplainedPaths(const std::vector<View2D>& views, const RigCa
   }
   std::vector<Eigen::AlignedBox3d> boxes;
   for (const Polyline3& cane : *canes) boxes.push_back(BoxOf(cane));
+  std::vector<ViewSamples> view_samples;
+  for (size_t w = 0; w < views.size(); ++w)
+    view_samples.emplace_back(views[w], rig.cameras[w], kSkeletonSampleStepPx);
 
   for (size_t v = 0; v < views.size(); ++v) {
     VB_RETURN_IF_ERROR(deadline.Check("depth sweep"));
@@ -363,8 +383,19 @@ absl::Status SweepUnexplainedPaths(const std::vector<View2D>& views, const RigCa
         ++out.samples;
         out.accepted_samples += sample.accepted;
       }
-      for (Polyline3& cane :
-           RunsOf(samples, views.size(), options, static_cast<int>(v), &out.added)) {
+      std::vector<SweptCane> found;
+      std::vector<Polyline3> runs =
+          RunsOf(samples, views.size(), options, static_cast<int>(v), &found);
+      for (size_t r = 0; r < runs.size(); ++r) {
+        Polyline3& cane = runs[r];
+        found[r].features = MeasureSweptRun(cane, views, rig, view_samples);
+        found[r].checked = PassesCheck(found[r].features, options);
+        if (options.check && !found[r].checked) {
+          ++out.rejected_canes;
+          out.rejected_length_m += cane.Length();
+          continue;
+        }
+        out.added.push_back(found[r]);
         out.added_length_m += cane.Length();
         ++out.added_canes;
         boxes.push_back(BoxOf(cane));

@@ -33,6 +33,8 @@
 //     too (its unary cost at most accept_px squared per other view); a run with a larger share
 //     of ambiguous samples than `max_ambiguous_share` is not added, nor is any run of a stretch
 //     whose accepted share of samples is below `min_stretch_accepted_share`.
+//  6. The check (`check`, off by default): each run's MeasureSweptRun features
+//     (depth_sweep_check.h) must pass the `check_*` limits (PassesCheck).
 // Thread-safe (a pure function of its inputs).
 #pragma once
 
@@ -42,6 +44,7 @@
 #include "core/calibration.h"
 #include "core/deadline.h"
 #include "core/geometry.h"
+#include "workers/reconstruct/depth_sweep_check.h"
 #include "workers/reconstruct/piece3d.h"
 #include "workers/reconstruct/view2d.h"
 
@@ -73,6 +76,13 @@ struct DepthSweepOptions {
   int unique_exclusion_steps = 4;     // another consistent depth this far away: ambiguous
   double max_ambiguous_share = 1.0;   // runs with more ambiguous samples are dropped (1: off)
   double min_stretch_accepted_share = 0.0;  // stretches accepted less are dropped (0: off)
+  // A check on each run before it is added (depth_sweep_check.h, MeasureSweptRun; off by
+  // default: docs/reconstruction.md section 4e, "A check on what the sweep adds (s20)"). A run is
+  // dropped when any of the limits below fails.
+  bool check = false;
+  double check_max_width_log_spread = 0.5;  // views' implied radii: max - min of logs (median)
+  double check_max_width_log_excess = 10.0; // measured vs projected width, |log| (10: off)
+  double check_min_foreground = 0.5;        // min over views: cross-section on foreground (0: off)
 
   // INVALID_ARGUMENT naming the field ("sweep.<field>") for non-finite or out-of-range values.
   absl::Status Validate() const;
@@ -84,6 +94,8 @@ struct SweptCane {
   double ambiguous_share = 0.0;   // of its samples, those with another consistent depth
   double stretch_accepted_share = 0.0;  // accepted samples of its stretch
   int samples = 0;                // samples of its run
+  SweptRunFeatures features;      // MeasureSweptRun of the cane
+  bool checked = false;           // it passes the check's limits (whether or not check is on)
 };
 
 struct DepthSweepSummary {
@@ -93,8 +105,13 @@ struct DepthSweepSummary {
   int accepted_samples = 0;         // of which accepted
   int added_canes = 0;              // canes appended to the input
   double added_length_m = 0.0;
+  int rejected_canes = 0;           // runs the check dropped (options.check)
+  double rejected_length_m = 0.0;
   std::vector<SweptCane> added;     // per added cane, in the order appended
 };
+
+// Whether `features` pass the options' check_* limits (whatever options.check says).
+bool PassesCheck(const SweptRunFeatures& features, const DepthSweepOptions& options);
 
 // Sweeps views[0], views[1], ... in turn as described above and appends the canes found to
 // *canes (unoriented polylines, as AssembleCanes returns them; the canes given are not changed).

@@ -7,10 +7,13 @@
 // VB_SWEEP_RMS_PX, VB_SWEEP_MIN_LENGTH_M, VB_SWEEP_SMOOTH, VB_SWEEP_CAP_PX,
 // VB_SWEEP_MIN_STRETCH_PX, VB_SWEEP_MAX_STEP, VB_SWEEP_UNIQUE_STEPS, VB_SWEEP_MAX_AMBIGUOUS,
 // VB_SWEEP_MIN_STRETCH_SHARE,
-// VB_SWEEP_LINE_MARGIN_PX.
+// VB_SWEEP_LINE_MARGIN_PX, and the check's VB_SWEEP_CHECK (0/1), VB_SWEEP_CHECK_SPREAD,
+// VB_SWEEP_CHECK_EXCESS, VB_SWEEP_CHECK_FOREGROUND. With VB_SWEEP_RUNS_CSV
+// set to a path, one line per added cane (its labels and MeasureSweptRun features) goes there.
 
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <vector>
 
 #include "core/geometry.h"
@@ -40,6 +43,10 @@ DepthSweepOptions SweepOptionsFromEnv() {
   OverrideFromEnv("VB_SWEEP_LINE_MARGIN_PX", &options.line_margin_px);
   OverrideFromEnv("VB_SWEEP_MAX_AMBIGUOUS", &options.max_ambiguous_share);
   OverrideFromEnv("VB_SWEEP_MIN_STRETCH_SHARE", &options.min_stretch_accepted_share);
+  OverrideFromEnv("VB_SWEEP_CHECK", &options.check);
+  OverrideFromEnv("VB_SWEEP_CHECK_SPREAD", &options.check_max_width_log_spread);
+  OverrideFromEnv("VB_SWEEP_CHECK_EXCESS", &options.check_max_width_log_excess);
+  OverrideFromEnv("VB_SWEEP_CHECK_FOREGROUND", &options.check_min_foreground);
   return options;
 }
 
@@ -74,6 +81,14 @@ TEST(DepthSweep, DISABLED_Report) {
   double by_sin[3] = {}, by_sin_right[3] = {}, wrong_on_ray = 0;
   double wrong_near_wire = 0, wrong_near_post = 0;  // off-wood length within 10 mm / 5 cm
   double recall0 = 0, recall1 = 0, precision0 = 0, precision1 = 0;
+  double rejected = 0;
+  const char* csv_path = std::getenv("VB_SWEEP_RUNS_CSV");
+  FILE* csv = csv_path != nullptr ? std::fopen(csv_path, "w") : nullptr;
+  if (csv != nullptr) {
+    std::fprintf(csv, "seed,view,length_m,on_vine_m,on_drawn_m,recovered_m,ambiguous,views,"
+                      "width_log_spread,width_log_excess,foreground,tangent,turning_per_m,"
+                      "straightness,mean_y_m,checked\n");
+  }
   for (int k = 0; k < count; ++k) {
     const SimulatedStop stop = MakeRenderedStop(first + k, images, fiducials);
     ASSERT_FALSE(stop.views.empty());
@@ -94,6 +109,7 @@ TEST(DepthSweep, DISABLED_Report) {
       unexplained[v] += summary.unexplained_px[v];
       stretches[v] += summary.stretches[v];
     }
+    rejected += summary.rejected_length_m;
     samples += summary.samples;
     accepted += summary.accepted_samples;
     canes_added += summary.added_canes;
@@ -107,9 +123,12 @@ TEST(DepthSweep, DISABLED_Report) {
       const int amb = info.ambiguous_share == 0 ? 0 : info.ambiguous_share < 0.3 ? 1 : 2;
       const int str = info.stretch_accepted_share < 0.5 ? 0 : 1;
       const std::vector<double> arc = line.ArcLengths();
+      double run_vine = 0, run_drawn = 0;
       for (double s = 0.0025; s < length; s += 0.005) {
         const Eigen::Vector3d p = line.PointAt(s, arc);
         const bool on_vine = NearAnyCane(p, truth.canes);
+        run_vine += 0.005 * on_vine;
+        run_drawn += 0.005 * NearAnyCane(p, stop.drawn.canes);
         added += 0.005;
         right_vine += 0.005 * on_vine;
         right_drawn += 0.005 * NearAnyCane(p, stop.drawn.canes);
@@ -154,6 +173,25 @@ TEST(DepthSweep, DISABLED_Report) {
         const int sb = best_sin < 0.3 ? 0 : best_sin < 0.6 ? 1 : 2;
         by_sin[sb] += 0.005;
         by_sin_right[sb] += 0.005 * on_vine;
+      }
+      if (csv != nullptr) {
+        // The true length the assembled canes leave out that this cane holds.
+        double run_recovered = 0;
+        const std::vector<Cane> before = AsCanes(*canes), run = AsCanes({line});
+        for (const Cane& cane : truth.canes) {
+          const std::vector<double> true_arc = cane.polyline.ArcLengths();
+          for (double s = 0.0025; s < cane.polyline.Length(); s += 0.005) {
+            const Eigen::Vector3d p = cane.polyline.PointAt(s, true_arc);
+            if (!NearAnyCane(p, before) && NearAnyCane(p, run)) run_recovered += 0.005;
+          }
+        }
+        const SweptRunFeatures& f = info.features;
+        std::fprintf(csv, "%lu,%d,%.4f,%.4f,%.4f,%.4f,%.3f,%d,%.4f,%.4f,%.4f,%.4f,%.3f,%.4f,%.4f,"
+                          "%d\n",
+                     static_cast<unsigned long>(first + k), info.view, length, run_vine,
+                     run_drawn, run_recovered, info.ambiguous_share, f.views, f.width_log_spread,
+                     f.width_log_excess, f.foreground, f.tangent, f.turning_per_m,
+                     f.straightness, f.mean_y_m, info.checked ? 1 : 0);
       }
     }
     // The true length the assembled canes leave out, and how much of it the added canes hold.
@@ -221,6 +259,10 @@ TEST(DepthSweep, DISABLED_Report) {
               "recovered by the added canes %.3f (share of the left out %.3f)\n",
               true_length / count, unrecalled / count, unrecalled / true_length,
               recovered / count, recovered / std::max(unrecalled, 1e-9));
+  if (csv != nullptr) std::fclose(csv);
+  std::printf("check %s (spread %.2f excess %.2f foreground %.2f): dropped %.3f m per stop\n",
+              sweep.check ? "on" : "off", sweep.check_max_width_log_spread,
+              sweep.check_max_width_log_excess, sweep.check_min_foreground, rejected / count);
   std::printf("as a bag (Flat): recall %.4f -> %.4f, precision %.4f -> %.4f\n", recall0 / count,
               recall1 / count, precision0 / count, precision1 / count);
 }
