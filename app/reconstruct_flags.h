@@ -26,11 +26,11 @@ absl::Status ReadSelectionFlags(Flags& flags, reconstruct::CorrespondenceOptions
 
 // Reads into *options (defaults: its values as given) the depth sweep of step 4e
 // (workers/reconstruct/depth_sweep.h):
-//   --sweep true|false: run it;
+//   --sweep true|false: run it (on by default);
 //   --sweep-min-views N, --sweep-max-step N, --sweep-accept-px X, --sweep-unique-steps N,
 //   --sweep-max-ambiguous X, --sweep-min-stretch-share X: its fields min_views, max_step,
 //     accept_px, unique_exclusion_steps, max_ambiguous_share and min_stretch_accepted_share.
-//   --sweep-check true|false, --sweep-check-spread X, --sweep-check-excess X,
+//   --sweep-check true|false (on by default), --sweep-check-spread X, --sweep-check-excess X,
 //   --sweep-check-foreground X: the check on each added run (check, check_max_width_log_spread,
 //     check_max_width_log_excess, check_min_foreground).
 // INVALID_ARGUMENT naming the flag: a value that does not parse or is out of the field's range

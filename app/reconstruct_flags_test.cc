@@ -71,21 +71,21 @@ TEST(ReconstructFlags, SweepFlagsKeepTheDefaultsOrSetTheSweep) {
   ASSERT_TRUE(ReadSweepFlags(*absent, &options).ok());
   EXPECT_EQ(options.enabled, reconstruct::DepthSweepOptions{}.enabled);
   EXPECT_EQ(options.min_views, reconstruct::DepthSweepOptions{}.min_views);
-  auto flags = ParseAll({"--sweep", "true", "--sweep-min-views", "2", "--sweep-max-step", "3",
+  auto flags = ParseAll({"--sweep", "false", "--sweep-min-views", "2", "--sweep-max-step", "3",
                          "--sweep-accept-px", "1.25", "--sweep-max-ambiguous", "0.3",
                          "--sweep-min-stretch-share", "0.4", "--sweep-unique-steps", "2",
-                         "--sweep-check", "true", "--sweep-check-spread", "0.35",
+                         "--sweep-check", "false", "--sweep-check-spread", "0.35",
                          "--sweep-check-excess", "0.6", "--sweep-check-foreground", "0.7"});
   ASSERT_TRUE(flags.ok());
   ASSERT_TRUE(ReadSweepFlags(*flags, &options).ok());
-  EXPECT_TRUE(options.enabled);
+  EXPECT_FALSE(options.enabled);
   EXPECT_EQ(options.min_views, 2);
   EXPECT_EQ(options.max_step, 3);
   EXPECT_DOUBLE_EQ(options.accept_px, 1.25);
   EXPECT_DOUBLE_EQ(options.max_ambiguous_share, 0.3);
   EXPECT_DOUBLE_EQ(options.min_stretch_accepted_share, 0.4);
   EXPECT_EQ(options.unique_exclusion_steps, 2);
-  EXPECT_TRUE(options.check);
+  EXPECT_FALSE(options.check);
   EXPECT_DOUBLE_EQ(options.check_max_width_log_spread, 0.35);
   EXPECT_DOUBLE_EQ(options.check_max_width_log_excess, 0.6);
   EXPECT_DOUBLE_EQ(options.check_min_foreground, 0.7);

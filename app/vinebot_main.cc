@@ -33,7 +33,7 @@ const std::vector<Command>& Commands() {
       {"bundle info", "--bundle DIR", vb::app::RunBundleInfo},
       {"reconstruct",
        "--bundle DIR --out model.json [--deadline-s T] [--alpha A] [--select-context]"
-       " [--context-alpha A] [--sweep] [--head-peel] [--head-min-cell M]"
+       " [--context-alpha A] [--sweep false] [--head-peel] [--head-min-cell M]"
        " [--head-depth-factor F] [--head-leaf-fraction F] [--head-centre-on-trunk]"
        " [--head-leaf-wood-px X]"
        " [--head-bases] [--head-bases-reach M] [--head-bases-thick-views N]"
@@ -57,7 +57,7 @@ const std::vector<Command>& Commands() {
        " [--input images|labels|truth] [--rig-refine off|canes|trellis] [--alpha A]"
        " [--select-context] [--context-alpha A] [--head-peel] [--head-min-cell M]"
        " [--head-depth-factor F] [--head-leaf-fraction F] [--head-centre-on-trunk]"
-       " [--head-leaf-wood-px X] [--sweep]"
+       " [--head-leaf-wood-px X] [--sweep false]"
        " [--grow-refit M] [--grow-max-length M] [--head-bases] [--head-bases-reach M]"
        " [--head-bases-thick-views N] [--head-bases-inside M] [--sweep-*: app/reconstruct_flags.h]",
        vb::app::RunBenchReconstruct},

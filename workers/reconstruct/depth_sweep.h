@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 // A depth sweep along the skeleton paths that no cane explains (docs/reconstruction.md, section
-// 4e; beyond the paper, s19; off by default). Correspondence only reconstructs what a pair of 2D
+// 4e; beyond the paper, s19; on by default since s20). Correspondence only reconstructs what a pair of 2D
 // segments yields as a run of epipolar crossings that scores above the match classifier's
 // threshold; a cane whose best pair is ill-conditioned, or whose two views disagree on width,
 // is left out although every view shows its skeleton. This stage asks all views at once, per
@@ -33,7 +33,7 @@
 //     too (its unary cost at most accept_px squared per other view); a run with a larger share
 //     of ambiguous samples than `max_ambiguous_share` is not added, nor is any run of a stretch
 //     whose accepted share of samples is below `min_stretch_accepted_share`.
-//  6. The check (`check`, off by default): each run's MeasureSweptRun features
+//  6. The check (`check`, on by default): each run's MeasureSweptRun features
 //     (depth_sweep_check.h) must pass the `check_*` limits (PassesCheck).
 // Thread-safe (a pure function of its inputs).
 #pragma once
@@ -51,9 +51,9 @@
 namespace vb::reconstruct {
 
 struct DepthSweepOptions {
-  // Run the stage (reconstruct.h runs it after assembly, before growth). Off by default:
-  // docs/reconstruction.md section 4e gives its figures.
-  bool enabled = false;
+  // Run the stage (reconstruct.h runs it after assembly, before growth). On by default since
+  // s20, with the check below: docs/reconstruction.md section 4e gives its figures.
+  bool enabled = true;
   double explained_px = 3.0;          // a cane's cross-section this near explains a skeleton px
   double min_stretch_px = 25.0;       // shorter unexplained runs of a segment are left
   int thick_margin_px = 3;            // skeleton points this near the thick region are left
@@ -76,10 +76,10 @@ struct DepthSweepOptions {
   int unique_exclusion_steps = 4;     // another consistent depth this far away: ambiguous
   double max_ambiguous_share = 1.0;   // runs with more ambiguous samples are dropped (1: off)
   double min_stretch_accepted_share = 0.0;  // stretches accepted less are dropped (0: off)
-  // A check on each run before it is added (depth_sweep_check.h, MeasureSweptRun; off by
+  // A check on each run before it is added (depth_sweep_check.h, MeasureSweptRun; on by
   // default: docs/reconstruction.md section 4e, "A check on what the sweep adds (s20)"). A run is
   // dropped when any of the limits below fails.
-  bool check = false;
+  bool check = true;
   double check_max_width_log_spread = 0.5;  // views' implied radii: max - min of logs (median)
   double check_max_width_log_excess = 10.0; // measured vs projected width, |log| (10: off)
   double check_min_foreground = 0.5;        // min over views: cross-section on foreground (0: off)

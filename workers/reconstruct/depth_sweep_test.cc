@@ -202,10 +202,16 @@ TEST(SweepUnexplainedPaths, LeavesTheCanesWhenDisabled) {
   const std::vector<View2D> views = ViewsOf({truth}, rig);
   std::vector<Polyline3> canes;
   DepthSweepSummary summary;
-  ASSERT_TRUE(SweepUnexplainedPaths(views, rig, WorkingVolume{}, DepthSweepOptions{},
-                                    Deadline::Infinite(), &canes, &summary).ok());
+  DepthSweepOptions options;
+  options.enabled = false;  // on by default
+  ASSERT_TRUE(SweepUnexplainedPaths(views, rig, WorkingVolume{}, options, Deadline::Infinite(),
+                                    &canes, &summary).ok());
   EXPECT_TRUE(canes.empty());
   EXPECT_EQ(summary.samples, 0);
+  // The same views with the defaults: the cane is found, so the test above can fail.
+  ASSERT_TRUE(SweepUnexplainedPaths(views, rig, WorkingVolume{}, DepthSweepOptions{},
+                                    Deadline::Infinite(), &canes, &summary).ok());
+  EXPECT_EQ(canes.size(), 1u);
 }
 
 TEST(SweepUnexplainedPaths, RejectsAViewCountThatDisagreesWithTheRig) {

@@ -45,7 +45,7 @@ absl::StatusOr<RenderedMatch> RenderAndMatch(uint64_t seed, bool images, bool fi
 // HeadExit.DISABLED_Report), with `options`' fields of each stage and no deadline: AssembleCanes
 // on `pieces`, the canes mostly outside options.volume dropped, then GrowCaneEnds on `views`
 // through `rig` when options.grow grows before connection (as ReconstructFromViews does; the
-// depth sweep of step 4e, off by default, is not run here even when options.sweep enables it).
+// depth sweep of step 4e is not run here, although options.sweep enables it by default).
 struct GrownCanes {
   std::vector<Polyline3> canes;
   std::vector<Eigen::Vector3d> hints;  // every point of `canes`, in order: the head's hints
@@ -57,10 +57,10 @@ absl::StatusOr<GrownCanes> AssembleAndGrow(const std::vector<View2D>& views,
                                            const ReconstructOptions& options);
 
 // The stages after correspondence as the diagnosis reports run them (not all of
-// ReconstructFromViews: no extension, no left-out wood), with `options`' fields of each stage and
-// no deadline: AssembleCanes on `pieces`, the canes mostly outside options.volume dropped;
-// ReconstructHeadAndTrunk on `views`, hinted by the assembled canes' points; PrepareCanes and
-// FindJoins.
+// ReconstructFromViews: no depth sweep, no extension, no left-out wood), with `options`' fields of
+// each stage and no deadline: AssembleCanes on `pieces`, the canes mostly outside options.volume
+// dropped; ReconstructHeadAndTrunk on `views`, hinted by the assembled canes' points;
+// PrepareCanes and FindJoins.
 struct AssembledStop {
   std::vector<Polyline3> canes;  // assembled, inside the working volume
   HeadAndTrunk head;

@@ -8,7 +8,7 @@
 //      and minimum expected loss (correspondence.h) 7. joint Ceres refinement (cane_fit.h)
 //   4. assemble 3D pieces into canes (cane_assembly.h) 8. wires and posts (trellis3d.h)
 //   4e. canes found by a depth sweep along the skeleton paths no assembled cane explains
-//       (depth_sweep.h; off by default), before 4d
+//       (depth_sweep.h; on by default since s20), before 4d
 //   4d. the assembled canes' ends grown through junctions on two-view evidence (grow.h; on by
 //       default), before 5
 //   5b. the cane ends pointing at the head extended to it (head_bases.h; off by default)
