@@ -58,9 +58,20 @@ using cutloss::HeadSurfaceDistance;
 using cutloss::MakeStop;
 using cutloss::Nearest;
 
+// The whole number in `name`, or `fallback` when it is not set; a value that is not one
+// (EnvNumber's errors, or a fraction) fails the calling test, naming the variable.
 int EnvInt(const char* name, int fallback) {
-  const char* v = std::getenv(name);
-  return v != nullptr ? std::atoi(v) : fallback;
+  const auto x = cutloss::EnvNumber(name);
+  if (!x.ok()) {
+    ADD_FAILURE() << x.status();
+    return fallback;
+  }
+  if (!x->has_value()) return fallback;
+  if (**x != std::floor(**x) || std::fabs(**x) > 1e9) {
+    ADD_FAILURE() << name << " must be a whole number, is " << **x;
+    return fallback;
+  }
+  return static_cast<int>(**x);
 }
 std::string EnvString(const char* name, const char* fallback) {
   const char* v = std::getenv(name);
@@ -101,6 +112,30 @@ std::string ArcBin(double ds) {
   return "model cut > 60 mm nearer the tip";
 }
 
+TEST(CutLossEnv, NumbersAreParsedWholeOrRejectedByName) {
+  unsetenv("VB_CUT_LOSS_ENV_TEST");
+  auto x = cutloss::EnvNumber("VB_CUT_LOSS_ENV_TEST");
+  ASSERT_TRUE(x.ok());
+  EXPECT_FALSE(x->has_value());
+  setenv("VB_CUT_LOSS_ENV_TEST", "-2.5", 1);
+  x = cutloss::EnvNumber("VB_CUT_LOSS_ENV_TEST");
+  ASSERT_TRUE(x.ok());
+  EXPECT_EQ(x->value_or(0.0), -2.5);
+  for (const char* bad : {"", "abc", "0.5x", "nan", "inf"}) {
+    setenv("VB_CUT_LOSS_ENV_TEST", bad, 1);
+    x = cutloss::EnvNumber("VB_CUT_LOSS_ENV_TEST");
+    EXPECT_EQ(x.status().code(), absl::StatusCode::kInvalidArgument) << bad;
+    EXPECT_NE(x.status().message().find("VB_CUT_LOSS_ENV_TEST"), std::string::npos) << bad;
+  }
+  // MakeStop rejects a bad variable by name before it renders anything.
+  unsetenv("VB_CUT_LOSS_ENV_TEST");
+  setenv("VB_HEAD_BASES", "2", 1);
+  const auto stop = MakeStop(1300, "images", "");
+  unsetenv("VB_HEAD_BASES");
+  EXPECT_EQ(stop.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(stop.status().message().find("VB_HEAD_BASES"), std::string::npos);
+}
+
 TEST(CutLoss, DISABLED_Report) {
   const int seed0 = EnvInt("VB_SEED", 1300);
   const int stops = EnvInt("VB_STOPS", 10);
@@ -132,9 +167,11 @@ TEST(CutLoss, DISABLED_Report) {
     // VB_MODEL_DIAMETER_WEIGHT: the diameter weights (kept canes and spurs) of the decision on the
     // model only, to see what the reconstructed diameters cost the choice.
     decide::DecideOptions model_options = options;
-    if (const char* w = std::getenv("VB_MODEL_DIAMETER_WEIGHT")) {
-      model_options.weights.w[decide::kKeepDiameterOutsideMm] = std::atof(w);
-      model_options.weights.w[decide::kSpurDiameterOutsideMm] = std::atof(w) / 3.0;
+    const auto w = cutloss::EnvNumber("VB_MODEL_DIAMETER_WEIGHT");
+    ASSERT_TRUE(w.ok()) << w.status();
+    if (w->has_value()) {
+      model_options.weights.w[decide::kKeepDiameterOutsideMm] = **w;
+      model_options.weights.w[decide::kSpurDiameterOutsideMm] = **w / 3.0;
     }
     auto md = decide::Decide(model, policy, model_options);
     if (!md.ok()) {

@@ -2,11 +2,13 @@
 #include "tests/cut_loss_stop.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <map>
 #include <set>
 
+#include "absl/strings/str_cat.h"
 #include "core/vine_model_json.h"
 #include "sim/vine_generator.h"
 #include "workers/capture/sim_capture.h"
@@ -16,6 +18,41 @@
 #include "workers/reconstruct/synthetic_views.h"
 
 namespace vb::cutloss {
+
+absl::StatusOr<std::optional<double>> EnvNumber(const char* name) {
+  const char* v = std::getenv(name);
+  if (v == nullptr) return std::nullopt;
+  char* end = nullptr;
+  const double x = std::strtod(v, &end);
+  if (end == v || *end != '\0' || !std::isfinite(x))
+    return absl::InvalidArgumentError(
+        absl::StrCat(name, " must be one finite number, is \"", v, "\""));
+  return x;
+}
+
+namespace {
+
+// *field from the environment variable `name` when it is set (EnvNumber's errors).
+absl::Status OverrideNumber(const char* name, double* field) {
+  auto x = EnvNumber(name);
+  if (!x.ok()) return x.status();
+  if (x->has_value()) *field = **x;
+  return absl::OkStatus();
+}
+
+// *field from the environment variable `name` when it is set: 0 or 1, else INVALID_ARGUMENT
+// naming it.
+absl::Status OverrideSwitch(const char* name, bool* field) {
+  auto x = EnvNumber(name);
+  if (!x.ok()) return x.status();
+  if (!x->has_value()) return absl::OkStatus();
+  if (**x != 0.0 && **x != 1.0)
+    return absl::InvalidArgumentError(absl::StrCat(name, " must be 0 or 1, is ", **x));
+  *field = **x == 1.0;
+  return absl::OkStatus();
+}
+
+}  // namespace
 
 // The stop as the bench renders and reconstructs it.
 absl::StatusOr<Stop> MakeStop(uint64_t seed, const std::string& input, const std::string& cache) {
@@ -32,6 +69,31 @@ absl::StatusOr<Stop> MakeStop(uint64_t seed, const std::string& input, const std
     stop.model = *std::move(model);
     return stop;
   }
+  reconstruct::ReconstructOptions options;
+  // Head variants (docs/reconstruction.md step 5, s19), for the head oracles; give each variant
+  // its own VB_CACHE: VB_HEAD_DEPTH_FACTOR, VB_HEAD_LEAF_FRACTION, VB_HEAD_MIN_CELL (numbers),
+  // VB_HEAD_CENTRE_ON_TRUNK, VB_HEAD_PEEL (0 or 1).
+  for (const auto& [name, field] :
+       {std::pair{"VB_HEAD_DEPTH_FACTOR", &options.head.head_depth_factor},
+        std::pair{"VB_HEAD_LEAF_FRACTION", &options.head.leaf_radius_fraction},
+        std::pair{"VB_HEAD_MIN_CELL", &options.head.min_cell_m}}) {
+    if (auto s = OverrideNumber(name, field); !s.ok()) return s;
+  }
+  if (auto s = OverrideSwitch("VB_HEAD_CENTRE_ON_TRUNK", &options.head.head_centre_on_trunk);
+      !s.ok())
+    return s;
+  if (auto s = OverrideSwitch("VB_HEAD_PEEL", &options.head.peel_canes); !s.ok()) return s;
+  if (auto s = options.head.Validate(); !s.ok()) return s;
+  // VB_HEAD_BASES (0 or 1): the cane bases at the head (head_bases.h; give each its own VB_CACHE);
+  // VB_HEAD_BASES_CURVE=G: their course's curvature as a fraction of the end's (curve_gain);
+  // VB_HEAD_BASES_SKELETON=PX: their max_skeleton_px.
+  if (auto s = OverrideSwitch("VB_HEAD_BASES", &options.head_bases.enabled); !s.ok()) return s;
+  if (auto s = OverrideNumber("VB_HEAD_BASES_CURVE", &options.head_bases.curve_gain); !s.ok())
+    return s;
+  if (auto s = OverrideNumber("VB_HEAD_BASES_SKELETON", &options.head_bases.max_skeleton_px);
+      !s.ok())
+    return s;
+  if (auto s = options.head_bases.Validate(); !s.ok()) return s;
   const int vine = 1;
   auto scene = sim::GenerateScene(seed, vine);
   if (!scene.ok()) return scene.status();
@@ -44,27 +106,6 @@ absl::StatusOr<Stop> MakeStop(uint64_t seed, const std::string& input, const std
   for (size_t c = 0; c < capture->bundle.images.size(); ++c)
     rig.cameras.push_back(capture->bundle.CalibrationOf(c));
   rig.fiducials = capture->bundle.calibration.fiducials;
-  reconstruct::ReconstructOptions options;
-  // Head variants (docs/reconstruction.md step 5, s19), for the head oracles; give each variant
-  // its own VB_CACHE: VB_HEAD_DEPTH_FACTOR, VB_HEAD_LEAF_FRACTION, VB_HEAD_MIN_CELL (numbers),
-  // VB_HEAD_CENTRE_ON_TRUNK, VB_HEAD_PEEL (0 or 1).
-  if (const char* v = std::getenv("VB_HEAD_DEPTH_FACTOR"))
-    options.head.head_depth_factor = std::atof(v);
-  if (const char* v = std::getenv("VB_HEAD_LEAF_FRACTION"))
-    options.head.leaf_radius_fraction = std::atof(v);
-  if (const char* v = std::getenv("VB_HEAD_MIN_CELL")) options.head.min_cell_m = std::atof(v);
-  if (const char* v = std::getenv("VB_HEAD_CENTRE_ON_TRUNK"))
-    options.head.head_centre_on_trunk = std::atoi(v) != 0;
-  if (const char* v = std::getenv("VB_HEAD_PEEL")) options.head.peel_canes = std::atoi(v) != 0;
-  if (auto s = options.head.Validate(); !s.ok()) return s;
-  // VB_HEAD_BASES=1: the cane bases at the head on (head_bases.h; give it its own VB_CACHE).
-  if (const char* v = std::getenv("VB_HEAD_BASES")) options.head_bases.enabled = std::atoi(v) != 0;
-  // VB_HEAD_BASES_CURVE=G: their course's curvature as a fraction of the end's (curve_gain).
-  if (const char* v = std::getenv("VB_HEAD_BASES_CURVE"))
-    options.head_bases.curve_gain = std::atof(v);
-  // VB_HEAD_BASES_SKELETON=PX: their max_skeleton_px.
-  if (const char* v = std::getenv("VB_HEAD_BASES_SKELETON"))
-    options.head_bases.max_skeleton_px = std::atof(v);
   absl::StatusOr<reconstruct::ReconstructResult> result;
   if (input == "images") {
     std::vector<Image> images;

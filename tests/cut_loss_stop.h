@@ -25,11 +25,17 @@ struct Stop {
 // and reconstructed from `input`: "images" (the pipeline), "labels" (the renderer's labels
 // replace segmentation) or "truth" (SyntheticViews of the ground truth). With a non-empty `cache`
 // directory the truth and the model are written there (model_SEED_INPUT.json, truth_SEED.json)
-// and read back instead when both exist. The environment's VB_HEAD_BASES (1: on) sets
+// and read back instead when both exist. The environment's VB_HEAD_BASES (0 or 1) sets
 // ReconstructOptions::head_bases.enabled, VB_HEAD_BASES_CURVE its curve_gain,
-// VB_HEAD_BASES_SKELETON its max_skeleton_px. Errors: the renderer's, the reconstruction's,
-// file I/O.
+// VB_HEAD_BASES_SKELETON its max_skeleton_px; VB_HEAD_DEPTH_FACTOR, VB_HEAD_LEAF_FRACTION,
+// VB_HEAD_MIN_CELL, VB_HEAD_CENTRE_ON_TRUNK and VB_HEAD_PEEL (0 or 1) the head's options.
+// Errors: a variable that is not a number (EnvNumber) or fails the options' Validate, naming it;
+// the renderer's, the reconstruction's, file I/O.
 absl::StatusOr<Stop> MakeStop(uint64_t seed, const std::string& input, const std::string& cache);
+
+// The number the environment variable `name` holds, or nullopt when it is not set. INVALID_ARGUMENT
+// naming the variable when its value is not one finite number (empty, trailing text, "nan").
+absl::StatusOr<std::optional<double>> EnvNumber(const char* name);
 
 // Nearest cane of `m` to `p`: its index (-1 if `m` has no canes); its distance and the arc length
 // of the nearest axis point are written to *distance and *arc.
