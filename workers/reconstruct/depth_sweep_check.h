@@ -18,7 +18,9 @@
 
 namespace vb::reconstruct {
 
-// Measures of one run (a polyline with its radius), over the views in which it projects.
+// Measures of one run (a polyline with its radius), over the views in which it projects. Every
+// "median" here is the upper median: the element at index n / 2 of the sorted values, so with an
+// even count the larger of the middle two (the limits were chosen with it).
 struct SweptRunFeatures {
   int views = 0;               // views in which at least half of its points project inside
   // Per point, each view's foreground width across the projected run (ForegroundWidthAcross)

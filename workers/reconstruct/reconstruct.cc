@@ -205,9 +205,11 @@ absl::StatusOr<ReconstructResult> ReconstructFromViews(const std::vector<View2D>
   const JoinImageFn join_images = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
     return MeasureJoinImages(a, b, views, rig);
   };
-  // Tight leaves (HeadOptions::leaf_radius_fraction < 1) shrink the head's spheres; connection
-  // is given them grown back by what the tight test takes off (about the loose head its joins
-  // were trained on), and the model keeps the tight ones (docs/reconstruction.md step 5, s19).
+  // Tight leaves (HeadOptions::leaf_radius_fraction < 1) leave some smallest cubes out of the
+  // head; connection is given every sphere grown by the reach the tight test gives up, (1 -
+  // fraction) of a smallest cube's bounding radius, an approximation of the loose head its joins
+  // were trained on (it grows the kept spheres rather than restoring the dropped leaves), and the
+  // model keeps the tight ones (docs/reconstruction.md step 5, s19).
   HeadModel connect_head = head.head;
   const double grow_m = (1.0 - options.head.leaf_radius_fraction) * 0.5 * std::sqrt(3.0) *
                         options.head.min_cell_m;
