@@ -83,7 +83,8 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   VB_ASSIGN_OR_RETURN(const int64_t vines, flags.Int("vines", 10));
   VB_ASSIGN_OR_RETURN(const int64_t seed_base, flags.Int("seed-base", 9000));
   VB_ASSIGN_OR_RETURN(const double calibration_error_px, flags.Double("calibration-error-px", 1.0));
-  VB_ASSIGN_OR_RETURN(const PixelFormat format, flags.Format("pixel-format", PixelFormat::kBayerRg8));
+  VB_ASSIGN_OR_RETURN(const PixelFormat format,
+                      flags.Format("pixel-format", PixelFormat::kBayerRg8));
   VB_ASSIGN_OR_RETURN(const int64_t threads, flags.Int("threads", 2));
   VB_ASSIGN_OR_RETURN(const bool per_vine, flags.Bool("per-vine", false));
   // --input images (the real pipeline), labels (perfect segmentation: the renderer's label
@@ -99,7 +100,8 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   VB_ASSIGN_OR_RETURN(const std::string rig_refine, flags.String("rig-refine", "canes"));
   // --fiducials: the platform carries fiducials (sim/fiducials.h), drawn in the images and listed
   // in the calibration; the rig refinement uses them unless --rig-refine off.
-  VB_ASSIGN_OR_RETURN(const bool fiducials, flags.Bool("fiducials", capture::SimCaptureOptions{}.fiducials));
+  VB_ASSIGN_OR_RETURN(const bool fiducials,
+                      flags.Bool("fiducials", capture::SimCaptureOptions{}.fiducials));
   // --extend on|off: the single-view extension of cane tips (step 4c); default as ExtendOptions.
   VB_ASSIGN_OR_RETURN(const bool extend,
                       flags.Bool("extend", reconstruct::ExtendOptions{}.enabled));
@@ -132,9 +134,11 @@ absl::Status RunBenchReconstruct(Flags& flags) {
     return absl::InvalidArgumentError("--truth-break-px needs --input truth");
   if (truth_merge && truth_break_px <= 0.0)
     return absl::InvalidArgumentError("--truth-merge-overlaps needs --truth-break-px > 0");
-  if (vines < 1 || vines > 10000) return absl::InvalidArgumentError("--vines must be in [1, 10000]");
+  if (vines < 1 || vines > 10000)
+    return absl::InvalidArgumentError("--vines must be in [1, 10000]");
   if (seed_base < 0) return absl::InvalidArgumentError("--seed-base must be >= 0");
-  if (threads < 1 || threads > 64) return absl::InvalidArgumentError("--threads must be in [1, 64]");
+  if (threads < 1 || threads > 64)
+    return absl::InvalidArgumentError("--threads must be in [1, 64]");
   VB_ASSIGN_OR_RETURN(const PruningPolicy policy, PolicyOrDefault(policy_path));
 
   capture::SimCaptureOptions sim_options;
@@ -281,7 +285,8 @@ absl::Status RunBenchReconstruct(Flags& flags) {
                    &ViewCoverage::trunk_in_fewer_than_two_fraction);
   const nlohmann::json cuts = CutMetricsSummary(cut_metrics);
   double min_head = 1.0;
-  for (const ReconstructionMetrics& m : metrics) min_head = std::min(min_head, m.head_enclosed_fraction);
+  for (const ReconstructionMetrics& m : metrics)
+    min_head = std::min(min_head, m.head_enclosed_fraction);
 
   nlohmann::json stage_median = nlohmann::json::object();
   nlohmann::json stage_p90 = nlohmann::json::object();

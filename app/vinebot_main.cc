@@ -99,7 +99,8 @@ int main(int argc, char** argv) {
     if (space == std::string::npos) {
       if (name != argv[1]) continue;
     } else {
-      if (argc < 3 || name.substr(0, space) != argv[1] || name.substr(space + 1) != argv[2]) continue;
+      if (argc < 3 || name.substr(0, space) != argv[1] || name.substr(space + 1) != argv[2])
+        continue;
       first = 3;
     }
     auto flags = vb::app::Flags::Parse(argc, argv, first);

@@ -29,9 +29,9 @@
 //
 // Knobs: VB_SEED (1300), VB_STOPS (10), VB_INPUT (images | labels | truth: perfect 2D views),
 // VB_MODEL_DIAMETER_WEIGHT (the keep diameter weight of the model's decision only; spurs get a
-// third), VB_CACHE (a directory: reconstructed models and truths are stored there by seed and input and
-// read back on the next run), VB_VERBOSE (one line per missed truth cut), VB_HEAD_BASES (1: the
-// cane bases at the head on, workers/reconstruct/head_bases.h; with a cache of its own),
+// third), VB_CACHE (a directory: reconstructed models and truths are stored there by seed and
+// input and read back on the next run), VB_VERBOSE (one line per missed truth cut), VB_HEAD_BASES
+// (0 or 1: the cane bases at the head, workers/reconstruct/head_bases.h; a cache of its own),
 // VB_HEAD_BASES_CURVE (their curve_gain), VB_HEAD_BASES_SKELETON (their max_skeleton_px; each
 // variant with a cache of its own).
 #include <algorithm>
@@ -100,7 +100,8 @@ struct Tally {
   void Print(const char* title, int denominator) const {
     std::printf("%s (%d; fraction of %d)\n", title, total, denominator);
     for (const auto& [what, n] : counts)
-      std::printf("  %-72s %5d  %.3f\n", what.c_str(), n, denominator ? double(n) / denominator : 0.0);
+      std::printf("  %-72s %5d  %.3f\n", what.c_str(), n,
+                  denominator ? double(n) / denominator : 0.0);
   }
 };
 
@@ -150,7 +151,8 @@ TEST(CutLoss, DISABLED_Report) {
   // Oracles: matched truth cuts and model cuts.
   int carry_matched = 0, carry_cuts = 0, carry_vines = 0;
   int head_matched = 0, head_cuts = 0;
-  int head_scheme_matched = 0, head_scheme_cuts = 0, head_noslide_matched = 0, head_noslide_cuts = 0;
+  int head_scheme_matched = 0, head_scheme_cuts = 0;
+  int head_noslide_matched = 0, head_noslide_cuts = 0;
   int noslide_matched = 0, noslide_cuts = 0;
   int truehead_matched = 0, truehead_cuts = 0;
   int choice_vines = 0, choice_near_ties = 0;
@@ -175,7 +177,8 @@ TEST(CutLoss, DISABLED_Report) {
     }
     auto md = decide::Decide(model, policy, model_options);
     if (!md.ok()) {
-      std::printf("seed %d: no model plan: %s\n", int(seed), std::string(md.status().message()).c_str());
+      std::printf("seed %d: no model plan: %s\n", int(seed),
+                  std::string(md.status().message()).c_str());
       truth_cuts += td->plan.cuts.size();
       for (size_t i = 0; i < td->plan.cuts.size(); ++i) missed.Add("no model plan");
       continue;
@@ -229,7 +232,8 @@ TEST(CutLoss, DISABLED_Report) {
       const int M = Nearest(model, c.point, &d, &arc);
       if (M < 0 || d > 0.010) {
         bool elsewhere = false;
-        for (int m = 0; m < int(model.canes.size()); ++m) elsewhere = elsewhere || corr[m] == int(T);
+        for (int m = 0; m < int(model.canes.size()); ++m)
+          elsewhere = elsewhere || corr[m] == int(T);
         why = std::string("A not recalled at the cut") +
               (elsewhere ? ", cane recalled elsewhere" : ", cane not recalled") + where;
         // How far along the true cane its first recalled sample lies beyond the cut, and
@@ -376,7 +380,8 @@ TEST(CutLoss, DISABLED_Report) {
         choice_diff += diff;
         if (diff.sum() > -0.1) ++choice_near_ties;
       }
-      auto placed = decide::PlaceCuts(model, *candidates, policy, *scheme, options.max_head_slide_m);
+      auto placed =
+          decide::PlaceCuts(model, *candidates, policy, *scheme, options.max_head_slide_m);
       if (placed.ok()) {
         CutPlan plan = mp;
         plan.keep = scheme->keep;
