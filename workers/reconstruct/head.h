@@ -76,8 +76,8 @@ struct HeadOptions {
   int foreground_reach_px = 0;
   // A cube (or tight-test sphere) held only by that reach, outside the thick mask, in more than
   // this many views is carved: a head part the opening lost in one view is still thick in the
-  // others, a cane base is thin in every view. In [1, 3]; 3 (any number of views of a rig of
-  // three) leaves the reach unrestricted.
+  // others, a cane base is thin in every view. >= 1; 3 or more (a rig of three views) leaves
+  // the reach unrestricted.
   int foreground_reach_max_views = 3;
   // Centre the head's depth on the trunk's top (the head sits on the trunk) rather than on the
   // median depth of the depth hints within its extent (s19; off: as before).

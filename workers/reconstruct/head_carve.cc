@@ -31,8 +31,9 @@ std::vector<uint8_t> ReachIntoForeground(const View2D& view, const std::vector<u
   cv::Mat mask(view.height, view.width, CV_8U, out.data());
   const cv::Rect box = cv::boundingRect(mask);
   if (box.area() == 0) return out;
-  const cv::Rect roi = (box + cv::Size(2 * reach_px, 2 * reach_px) - cv::Point(reach_px, reach_px)) &
-                       cv::Rect(0, 0, view.width, view.height);
+  const cv::Rect roi =
+      (box + cv::Size(2 * reach_px, 2 * reach_px) - cv::Point(reach_px, reach_px)) &
+      cv::Rect(0, 0, view.width, view.height);
   cv::Mat classes(view.height, view.width, CV_8U, const_cast<uint8_t*>(view.classes.data.data()));
   const cv::Mat foreground = classes(roi) == static_cast<int>(PixelClass::kForeground);
   // Geodesic dilation: one step at a time, each kept within the foreground, so the silhouette

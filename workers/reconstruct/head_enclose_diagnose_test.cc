@@ -16,7 +16,8 @@
 //   VB_INPUT=images VB_SEED=1300 VB_STOPS=1 vb_reconstruct_test
 //     --gtest_also_run_disabled_tests --gtest_filter='HeadEnclose.DISABLED_Misses'
 // VB_BAYER=1 renders as the bench does (MakeBayerStop below; the s20 runs did not).
-// Knobs: VB_HEAD_LEAF_FRACTION, VB_HEAD_LEAF_WOOD_PX, VB_HEAD_FG_REACH_PX (the configured head's options).
+// Knobs: VB_HEAD_LEAF_FRACTION, VB_HEAD_LEAF_WOOD_PX, VB_HEAD_FG_REACH_PX,
+// VB_HEAD_FG_REACH_VIEWS (the configured head's options).
 // Tuning seeds only (1100-1999; docs/reconstruction.md "Seeds").
 #include <algorithm>
 #include <cmath>
@@ -115,6 +116,7 @@ TEST(HeadEnclose, DISABLED_Misses) {
   OverrideFromEnv("VB_HEAD_LEAF_FRACTION", &configured.leaf_radius_fraction);
   OverrideFromEnv("VB_HEAD_LEAF_WOOD_PX", &configured.leaf_wood_radius_px);
   OverrideFromEnv("VB_HEAD_FG_REACH_PX", &configured.foreground_reach_px);
+  OverrideFromEnv("VB_HEAD_FG_REACH_VIEWS", &configured.foreground_reach_max_views);
   ASSERT_TRUE(configured.Validate().ok());
   HeadOptions loose = configured;
   loose.leaf_radius_fraction = 1.0;
@@ -147,8 +149,9 @@ TEST(HeadEnclose, DISABLED_Misses) {
     std::vector<Polyline3> canes = std::move(grown->canes);
     ASSERT_TRUE(
         SweepUnexplainedPaths(views, rig, options.volume, options.sweep, deadline, &canes).ok());
-    if (!options.grow.after_connection)
+    if (!options.grow.after_connection) {
       ASSERT_TRUE(GrowCaneEnds(views, rig, options.volume, options.grow, &canes).ok());
+    }
     std::vector<Eigen::Vector3d> hints;
     for (const Polyline3& cane : canes) hints.insert(hints.end(), cane.points.begin(),
                                                      cane.points.end());
