@@ -111,6 +111,10 @@ absl::Status ReadHeadFlags(Flags& flags, reconstruct::HeadOptions* options) {
                       flags.Bool("head-centre-on-trunk", options->head_centre_on_trunk));
   VB_ASSIGN_OR_RETURN(const double wood_px,
                       flags.Double("head-leaf-wood-px", options->leaf_wood_radius_px));
+  VB_ASSIGN_OR_RETURN(const int64_t reach_px,
+                      flags.Int("head-fg-reach-px", options->foreground_reach_px));
+  VB_ASSIGN_OR_RETURN(const int64_t reach_views,
+                      flags.Int("head-fg-reach-views", options->foreground_reach_max_views));
   if (!(min_cell > 0.0) || !(min_cell <= options->coarse_cell_m)) {
     return absl::InvalidArgumentError(absl::StrCat("--head-min-cell must be in (0, ",
                                                    options->coarse_cell_m, "], got ", min_cell));
@@ -127,12 +131,22 @@ absl::Status ReadHeadFlags(Flags& flags, reconstruct::HeadOptions* options) {
     return absl::InvalidArgumentError(
         absl::StrCat("--head-leaf-wood-px must be finite and >= 0, got ", wood_px));
   }
+  if (reach_px < 0 || reach_px > 100) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("--head-fg-reach-px must be in [0, 100], got ", reach_px));
+  }
+  if (reach_views < 1 || reach_views > 100) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("--head-fg-reach-views must be in [1, 100], got ", reach_views));
+  }
   options->peel_canes = peel;
   options->min_cell_m = min_cell;
   options->head_depth_factor = depth_factor;
   options->leaf_radius_fraction = leaf_fraction;
   options->head_centre_on_trunk = centre_on_trunk;
   options->leaf_wood_radius_px = wood_px;
+  options->foreground_reach_px = static_cast<int>(reach_px);
+  options->foreground_reach_max_views = static_cast<int>(reach_views);
   return absl::OkStatus();
 }
 

@@ -41,10 +41,12 @@ absl::Status ReadSweepFlags(Flags& flags, reconstruct::DepthSweepOptions* option
 //   --head-peel true|false (peel_canes), --head-min-cell M (min_cell_m),
 //   --head-depth-factor F (head_depth_factor), --head-leaf-fraction F (leaf_radius_fraction),
 //   --head-centre-on-trunk true|false (head_centre_on_trunk),
-//   --head-leaf-wood-px X (leaf_wood_radius_px).
+//   --head-leaf-wood-px X (leaf_wood_radius_px), --head-fg-reach-px N (foreground_reach_px),
+//   --head-fg-reach-views K (foreground_reach_max_views).
 // INVALID_ARGUMENT naming the flag: a value that does not parse, --head-min-cell not in
 // (0, coarse_cell_m], --head-depth-factor not finite or <= 0, --head-leaf-fraction not in [0, 1],
-// --head-leaf-wood-px not finite or < 0.
+// --head-leaf-wood-px not finite or < 0, --head-fg-reach-px not in [0, 100],
+// --head-fg-reach-views not in [1, 100].
 absl::Status ReadHeadFlags(Flags& flags, reconstruct::HeadOptions* options);
 
 // Reads into *options (defaults: its values as given):

@@ -130,9 +130,12 @@ TEST(ReconstructFlags, HeadFlagsSetTheHeadOptionsAndDefaultsStay) {
   EXPECT_EQ(options.leaf_radius_fraction, defaults.leaf_radius_fraction);
   EXPECT_EQ(options.head_centre_on_trunk, defaults.head_centre_on_trunk);
   EXPECT_EQ(options.leaf_wood_radius_px, defaults.leaf_wood_radius_px);
+  EXPECT_EQ(options.foreground_reach_px, defaults.foreground_reach_px);
+  EXPECT_EQ(options.foreground_reach_max_views, defaults.foreground_reach_max_views);
   auto flags = ParseAll({"--head-peel", "--head-min-cell", "0.005", "--head-depth-factor=0.6",
                          "--head-leaf-fraction", "0.25", "--head-centre-on-trunk",
-                         "--head-leaf-wood-px", "5"});
+                         "--head-leaf-wood-px", "5", "--head-fg-reach-px", "8",
+                         "--head-fg-reach-views", "1"});
   ASSERT_TRUE(flags.ok());
   ASSERT_TRUE(ReadHeadFlags(*flags, &options).ok());
   EXPECT_TRUE(options.peel_canes);
@@ -141,6 +144,8 @@ TEST(ReconstructFlags, HeadFlagsSetTheHeadOptionsAndDefaultsStay) {
   EXPECT_DOUBLE_EQ(options.leaf_radius_fraction, 0.25);
   EXPECT_TRUE(options.head_centre_on_trunk);
   EXPECT_DOUBLE_EQ(options.leaf_wood_radius_px, 5.0);
+  EXPECT_EQ(options.foreground_reach_px, 8);
+  EXPECT_EQ(options.foreground_reach_max_views, 1);
   EXPECT_TRUE(flags->Finish().ok());  // every flag was read
   EXPECT_TRUE(options.Validate().ok());
 }
@@ -157,6 +162,10 @@ TEST(ReconstructFlags, RejectsBadHeadValuesNamingTheFlag) {
       {{"--head-centre-on-trunk", "maybe"}, "--head-centre-on-trunk"},
       {{"--head-leaf-wood-px", "-1"}, "--head-leaf-wood-px"},
       {{"--head-leaf-wood-px", "inf"}, "--head-leaf-wood-px"},
+      {{"--head-fg-reach-px", "-1"}, "--head-fg-reach-px"},
+      {{"--head-fg-reach-px", "101"}, "--head-fg-reach-px"},
+      {{"--head-fg-reach-px", "2.5"}, "--head-fg-reach-px"},
+      {{"--head-fg-reach-views", "0"}, "--head-fg-reach-views"},
   };
   for (const auto& [args, name] : cases) {
     auto flags = ParseAll(args);

@@ -54,6 +54,10 @@ absl::Status HeadOptions::Validate() const {
   }
   if (!std::isfinite(leaf_wood_radius_px) || leaf_wood_radius_px < 0)
     return absl::InvalidArgumentError("head options: leaf_wood_radius_px must be >= 0");
+  if (foreground_reach_px < 0 || foreground_reach_px > 100)
+    return absl::InvalidArgumentError("head options: foreground_reach_px must be in [0, 100]");
+  if (foreground_reach_max_views < 1)
+    return absl::InvalidArgumentError("head options: foreground_reach_max_views must be >= 1");
   if (min_views < 1) return absl::InvalidArgumentError("head options: min_views must be >= 1");
   return absl::OkStatus();
 }

@@ -68,6 +68,17 @@ struct HeadOptions {
   // Canes thinner than 2 x this radius stay out, so the test stays tight along cane bases.
   // 0: off (s19's test).
   double leaf_wood_radius_px = 0.0;
+  // The silhouette that carves (and judges the slabs, the tight test, seen-as-wood) also holds
+  // the foreground joined to the thick mask within this many px of foreground (s21,
+  // docs/reconstruction.md step 5, "Enclosing every head: the silhouette"): the thick mask is
+  // an opening by a 9 px disc, which loses a head's narrow parts and corners, often in one view
+  // (tuning stops 1470, 1699: head points up to 18 px outside it, on foreground). 0: off.
+  int foreground_reach_px = 0;
+  // A cube (or tight-test sphere) held only by that reach, outside the thick mask, in more than
+  // this many views is carved: a head part the opening lost in one view is still thick in the
+  // others, a cane base is thin in every view. >= 1; 3 or more (a rig of three views) leaves
+  // the reach unrestricted.
+  int foreground_reach_max_views = 3;
   // Centre the head's depth on the trunk's top (the head sits on the trunk) rather than on the
   // median depth of the depth hints within its extent (s19; off: as before).
   bool head_centre_on_trunk = false;

@@ -19,14 +19,46 @@ struct SilhouetteMaps {
   // CV_32F, when HeadOptions::leaf_wood_radius_px > 0: distance to the silhouette or to wood
   // that a disc of that radius fits in (the opening of the foreground by that disc).
   cv::Mat to_wide_wood;
+  // CV_32F, when HeadOptions::foreground_reach_px > 0: to_silhouette of the thick mask before
+  // it reached into the foreground (the silhouette above is the grown one).
+  cv::Mat to_unreached;
 };
+
+std::vector<uint8_t> ReachIntoForeground(const View2D& view, const std::vector<uint8_t>& silhouette,
+                                         int reach_px) {
+  std::vector<uint8_t> out = silhouette;
+  if (reach_px <= 0) return out;
+  cv::Mat mask(view.height, view.width, CV_8U, out.data());
+  const cv::Rect box = cv::boundingRect(mask);
+  if (box.area() == 0) return out;
+  const cv::Rect roi =
+      (box + cv::Size(2 * reach_px, 2 * reach_px) - cv::Point(reach_px, reach_px)) &
+      cv::Rect(0, 0, view.width, view.height);
+  cv::Mat classes(view.height, view.width, CV_8U, const_cast<uint8_t*>(view.classes.data.data()));
+  const cv::Mat foreground = classes(roi) == static_cast<int>(PixelClass::kForeground);
+  // Geodesic dilation: one step at a time, each kept within the foreground, so the silhouette
+  // reaches only along wood that touches it. Cross and square steps alternate (an octagon, close
+  // to a disc of reach_px).
+  const cv::Mat cross = cv::getStructuringElement(cv::MORPH_CROSS, {3, 3});
+  const cv::Mat square = cv::getStructuringElement(cv::MORPH_RECT, {3, 3});
+  cv::Mat grown = mask(roi).clone();
+  for (int step = 0; step < reach_px; ++step) {
+    cv::Mat next;
+    cv::dilate(grown, next, step % 2 == 0 ? cross : square);
+    grown = (next & foreground) | grown;
+  }
+  grown.copyTo(mask(roi));
+  return out;
+}
 
 namespace {
 
-// `silhouette`: the view's thick mask, or that mask with the canes peeled off (head_peel.h).
-// `wood_radius_px` > 0 also makes to_wide_wood.
-SilhouetteMaps MakeMaps(const View2D& view, const std::vector<uint8_t>& silhouette,
-                        double wood_radius_px) {
+// `silhouette`: the view's thick mask, or that mask with the canes peeled off (head_peel.h),
+// grown into the foreground by reach_px (ReachIntoForeground). `wood_radius_px` > 0 also makes
+// to_wide_wood.
+SilhouetteMaps MakeMaps(const View2D& view, const std::vector<uint8_t>& unreached,
+                        int reach_px, double wood_radius_px) {
+  const std::vector<uint8_t> silhouette = ReachIntoForeground(view, unreached, reach_px);
   SilhouetteMaps maps;
   maps.width = view.width;
   maps.height = view.height;
@@ -37,6 +69,11 @@ SilhouetteMaps MakeMaps(const View2D& view, const std::vector<uint8_t>& silhouet
   cv::Mat inside = mask != 0;
   cv::Mat outside = (mask == 0) & (classes != static_cast<int>(PixelClass::kPost));
   cv::distanceTransform(outside, maps.to_silhouette, cv::DIST_L2, 3);
+  if (reach_px > 0) {
+    cv::Mat before(view.height, view.width, CV_8U, const_cast<uint8_t*>(unreached.data()));
+    cv::Mat outside_before = (before == 0) & (classes != static_cast<int>(PixelClass::kPost));
+    cv::distanceTransform(outside_before, maps.to_unreached, cv::DIST_L2, 3);
+  }
   cv::distanceTransform(inside, maps.to_background, cv::DIST_L2, 3);
   cv::Mat not_thick = mask == 0;
   cv::distanceTransform(not_thick, maps.to_thick, cv::DIST_L2, 3);
@@ -60,10 +97,10 @@ Carver::Carver(const std::vector<View2D>& views, const RigCalibration& rig,
                const HeadOptions& options, const std::vector<Eigen::Vector3d>& canes)
     : rig_(rig), options_(options) {
   for (size_t v = 0; v < views.size(); ++v) {
-    maps_.push_back(MakeMaps(views[v],
-                             options.peel_canes ? PeelCanesOffSilhouette(views[v], rig.cameras[v],
-                                                                         canes, options)
-                                                : views[v].thick_mask,
+    const std::vector<uint8_t> silhouette =
+        options.peel_canes ? PeelCanesOffSilhouette(views[v], rig.cameras[v], canes, options)
+                           : views[v].thick_mask;
+    maps_.push_back(MakeMaps(views[v], silhouette, options.foreground_reach_px,
                              options.leaf_radius_fraction < 1.0 ? options.leaf_wood_radius_px
                                                                 : 0.0));
   }
@@ -76,6 +113,7 @@ CubeVerdict Carver::Judge(const Cube& cube, bool* seen_as_wood) const {
   int seen = 0;
   bool all_inside = true;
   bool touches_wood = false;  // behind posts in every view is not evidence of a head
+  int reached_only = 0;
   *seen_as_wood = true;
   for (size_t v = 0; v < maps_.size(); ++v) {
     const CameraCalibration& camera = rig_.cameras[v];
@@ -88,9 +126,8 @@ CubeVerdict Carver::Judge(const Cube& cube, bool* seen_as_wood) const {
     const double r_px = 1.1 * camera.camera_matrix(0, 0) * radius / depth;
     const int x = std::clamp(static_cast<int>(std::lround(uv->x())), 0, maps_[v].width - 1);
     const int y = std::clamp(static_cast<int>(std::lround(uv->y())), 0, maps_[v].height - 1);
-    if (maps_[v].to_silhouette.at<float>(y, x) > r_px + options_.silhouette_margin_px) {
+    if (OutsideIn(v, x, y, r_px + options_.silhouette_margin_px, &reached_only))
       return CubeVerdict::kOutside;
-    }
     if (maps_[v].to_background.at<float>(y, x) < r_px) all_inside = false;
     if (maps_[v].to_thick.at<float>(y, x) <= r_px + options_.silhouette_margin_px)
       touches_wood = true;
@@ -104,6 +141,7 @@ CubeVerdict Carver::Judge(const Cube& cube, bool* seen_as_wood) const {
 
 bool Carver::OutsideInSomeView(const Cube& cube, double radius_fraction) const {
   const double radius = 0.5 * std::sqrt(3.0) * cube.side;
+  int reached_only = 0;
   for (size_t v = 0; v < maps_.size(); ++v) {
     const CameraCalibration& camera = rig_.cameras[v];
     const auto uv = camera.Project(cube.centre);
@@ -114,11 +152,21 @@ bool Carver::OutsideInSomeView(const Cube& cube, double radius_fraction) const {
     const int x = std::clamp(static_cast<int>(std::lround(uv->x())), 0, maps_[v].width - 1);
     const int y = std::clamp(static_cast<int>(std::lround(uv->y())), 0, maps_[v].height - 1);
     const double reach = radius_fraction * r_px + options_.silhouette_margin_px;
-    const cv::Mat& silhouette =
-        options_.leaf_wood_radius_px > 0 ? maps_[v].to_wide_wood : maps_[v].to_silhouette;
-    if (silhouette.at<float>(y, x) > reach) return true;
+    if (options_.leaf_wood_radius_px > 0) {
+      if (maps_[v].to_wide_wood.at<float>(y, x) > reach) return true;
+    } else if (OutsideIn(v, x, y, reach, &reached_only)) {
+      return true;
+    }
   }
   return false;
+}
+
+bool Carver::OutsideIn(size_t v, int x, int y, double reach, int* reached_only) const {
+  if (maps_[v].to_silhouette.at<float>(y, x) > reach) return true;
+  if (maps_[v].to_unreached.empty() || maps_[v].to_unreached.at<float>(y, x) <= reach)
+    return false;
+  // Held by the reach alone in this view: allowed in at most foreground_reach_max_views views.
+  return ++*reached_only > options_.foreground_reach_max_views;
 }
 
 void Carver::Carve(const Cube& cube, std::vector<Cube>* kept) const {

@@ -59,10 +59,24 @@ class Carver {
   void Carve(const Cube& cube, std::vector<Cube>* kept) const;
 
  private:
+  // True if pixel (x, y) of view v lies farther than `reach` px from its silhouette, or from
+  // the unreached thick mask when *reached_only (the views so far held by the reach alone,
+  // incremented here) would pass HeadOptions::foreground_reach_max_views.
+  bool OutsideIn(size_t v, int x, int y, double reach, int* reached_only) const;
+
   const RigCalibration& rig_;
   const HeadOptions& options_;
   std::vector<SilhouetteMaps> maps_;
 };
+
+// `silhouette` (a view's thick mask, width x height, 0/1) grown into the view's foreground
+// (PixelClass::kForeground): the pixels joined to it by a path of at most `reach_px` steps
+// through foreground (8-connected, cross and square steps alternating: about a disc). Narrow
+// parts and corners of a head that the thick mask's opening lost come back; a cane leaving the
+// silhouette comes back for reach_px of its length only (HeadOptions::foreground_reach_px).
+// reach_px <= 0 returns `silhouette` unchanged.
+std::vector<uint8_t> ReachIntoForeground(const View2D& view, const std::vector<uint8_t>& silhouette,
+                                         int reach_px);
 
 // Voxels of side `cell` over a box, for connected components of the kept cubes.
 class VoxelGrid {
