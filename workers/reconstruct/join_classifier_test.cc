@@ -224,7 +224,15 @@ TEST(JoinClassifier, DISABLED_TrainOnSimulatedStops) {
   const int stops = env ? std::atoi(env) : 100;
   const ReconstructOptions options;
   std::vector<LabelledJoin> examples;
+  // VB_JOIN_DUMP=path: the labelled joins also written there as CSV (offline model comparison,
+  // docs/reconstruction.md section 6, "Joins: the oracle's bound and a nonlinear classifier").
+  const char* dump_path = std::getenv("VB_JOIN_DUMP");
+  FILE* dump = dump_path != nullptr ? std::fopen(dump_path, "w") : nullptr;
+  ASSERT_TRUE(dump_path == nullptr || dump != nullptr) << "cannot write " << dump_path;
+  // VB_TRAIN_INPUT=labels|images: one input only (both by default).
+  const char* only = std::getenv("VB_TRAIN_INPUT");
   for (bool images : {false, true}) {
+    if (only != nullptr && std::string(only) != (images ? "images" : "labels")) continue;
     for (int k = 0; k < stops; ++k) {
       const SimulatedStop stop = MakeRenderedStop(1000 + k, images, /*fiducials=*/true);
       if (stop.views.empty()) continue;
@@ -250,8 +258,18 @@ TEST(JoinClassifier, DISABLED_TrainOnSimulatedStops) {
           FindJoins(*prepared, head->head, options.connect, join_images);
       const std::vector<LabelledJoin> labelled = LabelJoins(*prepared, joins, stop.scene.vine);
       examples.insert(examples.end(), labelled.begin(), labelled.end());
+      if (dump != nullptr) {
+        // One line per join: seed, input (0 labels, 1 images), label, the features.
+        for (const LabelledJoin& e : labelled) {
+          std::fprintf(dump, "%d,%d,%d", 1000 + k, images ? 1 : 0, e.right ? 1 : 0);
+          for (double v : e.features) std::fprintf(dump, ",%.6g", v);
+          std::fprintf(dump, "\n");
+        }
+        std::fflush(dump);
+      }
     }
   }
+  if (dump != nullptr) std::fclose(dump);
   // Trained twice on the same joins: with the image features, and without them (a control:
   // what retraining alone gains on today's pipeline).
   for (bool with_images : {true, false}) {
