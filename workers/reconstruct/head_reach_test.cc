@@ -11,56 +11,16 @@
 #include "sim/rig.h"
 #include "workers/reconstruct/head.h"
 #include "workers/reconstruct/head_carve.h"
+#include "workers/reconstruct/head_test_util.h"
 #include "workers/reconstruct/synthetic_views.h"
 
 namespace vb::reconstruct {
 namespace {
 
 using head_internal::ReachIntoForeground;
-
-ReconstructionMetrics HeadMetrics(const HeadModel& reconstructed, const HeadModel& truth) {
-  VineModel model;
-  model.head = reconstructed;
-  VineModel true_model;
-  true_model.head = truth;
-  return EvaluateReconstruction(model, true_model).value();
-}
-
-// A trunk 0.86 m tall at (0, 0.8) with a head of five 3 cm spheres in a row along x on its top
-// (as head_test.cc).
-VineModel RowOfSpheresOnATrunk() {
-  VineModel vine;
-  Cane trunk;
-  trunk.id = CaneId(1);
-  trunk.kind = CaneKind::kTrunk;
-  for (double z = 0.0; z <= 0.86 + 1e-4; z += 0.02) {
-    trunk.polyline.points.push_back({0.0, 0.8, z});
-    trunk.polyline.radii.push_back(0.02);
-  }
-  vine.canes.push_back(trunk);
-  for (double x : {-0.06, -0.03, 0.0, 0.03, 0.06})
-    vine.head.spheres.push_back({{x, 0.8, 0.89}, 0.03});
-  return vine;
-}
-
-// Erodes the view's thick mask by a square of (2 n + 1) px, its classes (foreground) left as
-// they were: a head rim that the thick mask's opening loses in this view alone.
-void ErodeThickMask(int n, View2D* view) {
-  const int w = view->width, h = view->height;
-  for (int pass = 0; pass < 2; ++pass) {  // rows, then columns
-    const std::vector<uint8_t> in = view->thick_mask;
-    for (int y = 0; y < h; ++y)
-      for (int x = 0; x < w; ++x) {
-        uint8_t v = 1;
-        for (int d = -n; d <= n && v; ++d) {
-          const int xx = pass == 0 ? std::clamp(x + d, 0, w - 1) : x;
-          const int yy = pass == 1 ? std::clamp(y + d, 0, h - 1) : y;
-          v = in[static_cast<size_t>(yy) * w + xx];
-        }
-        view->thick_mask[static_cast<size_t>(y) * w + x] = v;
-      }
-  }
-}
+using testing_util::ErodeThickMask;
+using testing_util::HeadMetrics;
+using testing_util::RowOfSpheresOnATrunk;
 
 // The largest x of the spheres.
 double MaxX(const HeadModel& head) {
@@ -98,7 +58,9 @@ TEST(ReachIntoForeground, GrowsAlongTouchingForegroundByTheReachOnly) {
   int added = 0;
   for (size_t i = 0; i < grown.size(); ++i) {
     if (grown[i] && !view.thick_mask[i]) ++added;
-    if (view.thick_mask[i]) EXPECT_EQ(grown[i], 1);  // the silhouette stays
+    if (view.thick_mask[i]) {
+      EXPECT_EQ(grown[i], 1);  // the silhouette stays
+    }
   }
   EXPECT_EQ(added, 5) << "background, and foreground not joined to the silhouette, stay out";
   EXPECT_EQ(grown[2 * 40 + 2], 0);

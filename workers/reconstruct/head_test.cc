@@ -10,41 +10,17 @@
 #include "gtest/gtest.h"
 #include "sim/rig.h"
 #include "sim/vine_generator.h"
+#include "workers/reconstruct/head_test_util.h"
 #include "workers/reconstruct/reconstruct.h"
 #include "workers/reconstruct/synthetic_views.h"
 
 namespace vb::reconstruct {
 namespace {
 
-// The head metrics (enclosure, volume ratio) of a reconstructed head against the true one.
-ReconstructionMetrics HeadMetrics(const HeadModel& reconstructed, const HeadModel& truth) {
-  VineModel model;
-  model.head = reconstructed;
-  VineModel true_model;
-  true_model.head = truth;
-  return EvaluateReconstruction(model, true_model).value();
-}
-
-// A vertical trunk of the given radius at (x, y), sampled every step_m from the ground to top_z.
-Cane VerticalTrunk(double x, double y, double top_z, double step_m, double radius_m) {
-  Cane trunk;
-  trunk.id = CaneId(1);
-  trunk.kind = CaneKind::kTrunk;
-  for (double z = 0.0; z <= top_z + 1e-4; z += step_m) {
-    trunk.polyline.points.push_back({x, y, z});
-    trunk.polyline.radii.push_back(radius_m);
-  }
-  return trunk;
-}
-
-// A trunk 0.86 m tall at (0, 0.8) with a head of five 3 cm spheres in a row along x on its top.
-VineModel RowOfSpheresOnATrunk() {
-  VineModel vine;
-  vine.canes.push_back(VerticalTrunk(0.0, 0.8, 0.86, 0.02, 0.02));
-  for (double x : {-0.06, -0.03, 0.0, 0.03, 0.06})
-    vine.head.spheres.push_back({{x, 0.8, 0.89}, 0.03});
-  return vine;
-}
+using testing_util::ErodeThickMask;
+using testing_util::HeadMetrics;
+using testing_util::RowOfSpheresOnATrunk;
+using testing_util::VerticalTrunk;
 
 // Enclosure of the true head by the carved spheres, on simulated vines drawn without rendering
 // (so any miss is the carving's, not the segmentation's). Seeds from the development range.
@@ -306,25 +282,6 @@ TEST(ReconstructHeadAndTrunk, TightLeavesShrinkTheHullAndKeepTheHead) {
   const double loose_out = XOvershoot(loose->head, -0.09, 0.09);
   EXPECT_LT(tight_out, 0.0087 + 0.002 + 0.005) << "tight " << tight_out;
   EXPECT_LT(tight_out, loose_out - 0.003) << "tight " << tight_out << " loose " << loose_out;
-}
-
-// Erodes the view's thick mask by a square of (2 n + 1) px, leaving its classes (foreground) as
-// they were: a head part that the thick mask's opening loses in this view alone.
-void ErodeThickMask(int n, View2D* view) {
-  const int w = view->width, h = view->height;
-  for (int pass = 0; pass < 2; ++pass) {  // rows, then columns
-    const std::vector<uint8_t> in = view->thick_mask;
-    for (int y = 0; y < h; ++y)
-      for (int x = 0; x < w; ++x) {
-        uint8_t v = 1;
-        for (int d = -n; d <= n && v; ++d) {
-          const int xx = pass == 0 ? std::clamp(x + d, 0, w - 1) : x;
-          const int yy = pass == 1 ? std::clamp(y + d, 0, h - 1) : y;
-          v = in[static_cast<size_t>(yy) * w + xx];
-        }
-        view->thick_mask[static_cast<size_t>(y) * w + x] = v;
-      }
-  }
 }
 
 // One view's thick mask loses a 9 px rim of the head to its opening (tuning stops 1215, 1473:
