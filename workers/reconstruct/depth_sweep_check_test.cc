@@ -15,23 +15,12 @@
 namespace vb::reconstruct {
 namespace {
 
+using testing_util::ViewsOf;
+
 Polyline3 CurvedCane(double radius_m) {
   Polyline3 line = testing_util::CurvedCane(-0.25, 0.15, 0.9, 0.4, /*bend_out=*/0.1);
   for (double& r : line.radii) r = radius_m;
   return line;
-}
-
-// The views of one cane and nothing else (no head).
-std::vector<View2D> ViewsOf(const Polyline3& line, const RigCalibration& rig) {
-  VineModel model;
-  Cane cane;
-  cane.id = CaneId(1);
-  cane.kind = CaneKind::kTrunk;
-  cane.polyline = line;
-  model.canes.push_back(cane);
-  SyntheticViewOptions options;
-  options.draw_head = false;
-  return SyntheticViews(model, rig, options, 40.0);
 }
 
 std::vector<ViewSamples> SamplesOf(const std::vector<View2D>& views, const RigCalibration& rig) {

@@ -15,25 +15,11 @@
 namespace vb::reconstruct {
 namespace {
 
+using testing_util::ViewsOf;
+
 // testing_util::CurvedCane bent out of the plane more (0.1 u^2) than the grow tests bend it.
 Polyline3 CurvedCane(double x0, double x1, double z0, double slope) {
   return testing_util::CurvedCane(x0, x1, z0, slope, /*bend_out=*/0.1);
-}
-
-// Views drawn from `lines` alone (no trunk, no head: nothing thick).
-std::vector<View2D> ViewsOf(const std::vector<Polyline3>& lines, const RigCalibration& rig) {
-  VineModel model;
-  for (size_t i = 0; i < lines.size(); ++i) {
-    Cane cane;
-    cane.id = CaneId(static_cast<int>(i) + 1);
-    cane.kind = i == 0 ? CaneKind::kTrunk : CaneKind::kCane;
-    if (i > 0) cane.parent_id = CaneId(1);
-    cane.polyline = lines[i];
-    model.canes.push_back(cane);
-  }
-  SyntheticViewOptions options;
-  options.draw_head = false;
-  return SyntheticViews(model, rig, options, 40.0);
 }
 
 DepthSweepOptions On() {

@@ -21,18 +21,7 @@ namespace vb::reconstruct {
 namespace {
 
 using testing_util::CurvedCane;
-
-std::vector<View2D> ViewsOf(const Polyline3& line, const RigCalibration& rig) {
-  VineModel model;
-  Cane cane;
-  cane.id = CaneId(2);
-  cane.kind = CaneKind::kCane;
-  cane.polyline = line;
-  model.canes.push_back(cane);
-  SyntheticViewOptions options;
-  options.draw_head = false;
-  return SyntheticViews(model, rig, options, 40.0);
-}
+using testing_util::ViewsOf;
 
 double DistanceToLine(const Eigen::Vector3d& p, const Polyline3& line) {
   double d = 0.0;
