@@ -108,6 +108,19 @@ Carver::Carver(const std::vector<View2D>& views, const RigCalibration& rig,
 
 Carver::~Carver() = default;
 
+std::optional<Carver::InView> Carver::Place(const Cube& cube, double radius, size_t v) const {
+  const CameraCalibration& camera = rig_.cameras[v];
+  const auto uv = camera.Project(cube.centre);
+  if (!uv || !camera.InImage(*uv)) return std::nullopt;
+  const double depth = (camera.camera_from_platform() * cube.centre).z();
+  if (depth <= radius) return std::nullopt;
+  InView at;
+  at.r_px = 1.1 * camera.camera_matrix(0, 0) * radius / depth;
+  at.x = std::clamp(static_cast<int>(std::lround(uv->x())), 0, maps_[v].width - 1);
+  at.y = std::clamp(static_cast<int>(std::lround(uv->y())), 0, maps_[v].height - 1);
+  return at;
+}
+
 CubeVerdict Carver::Judge(const Cube& cube, bool* seen_as_wood) const {
   const double radius = 0.5 * std::sqrt(3.0) * cube.side;
   int seen = 0;
@@ -116,16 +129,11 @@ CubeVerdict Carver::Judge(const Cube& cube, bool* seen_as_wood) const {
   int reached_only = 0;
   *seen_as_wood = true;
   for (size_t v = 0; v < maps_.size(); ++v) {
-    const CameraCalibration& camera = rig_.cameras[v];
-    const auto uv = camera.Project(cube.centre);
-    if (!uv || !camera.InImage(*uv)) continue;
-    const double depth = (camera.camera_from_platform() * cube.centre).z();
-    if (depth <= radius) continue;
+    const std::optional<InView> at = Place(cube, radius, v);
+    if (!at) continue;
     ++seen;
-    // 10% slack for the lens distortion's change of scale across the image.
-    const double r_px = 1.1 * camera.camera_matrix(0, 0) * radius / depth;
-    const int x = std::clamp(static_cast<int>(std::lround(uv->x())), 0, maps_[v].width - 1);
-    const int y = std::clamp(static_cast<int>(std::lround(uv->y())), 0, maps_[v].height - 1);
+    const int x = at->x, y = at->y;
+    const double r_px = at->r_px;
     if (OutsideIn(v, x, y, r_px + options_.silhouette_margin_px, &reached_only))
       return CubeVerdict::kOutside;
     if (maps_[v].to_background.at<float>(y, x) < r_px) all_inside = false;
@@ -143,15 +151,10 @@ bool Carver::OutsideInSomeView(const Cube& cube, double radius_fraction) const {
   const double radius = 0.5 * std::sqrt(3.0) * cube.side;
   int reached_only = 0;
   for (size_t v = 0; v < maps_.size(); ++v) {
-    const CameraCalibration& camera = rig_.cameras[v];
-    const auto uv = camera.Project(cube.centre);
-    if (!uv || !camera.InImage(*uv)) continue;
-    const double depth = (camera.camera_from_platform() * cube.centre).z();
-    if (depth <= radius) continue;
-    const double r_px = 1.1 * camera.camera_matrix(0, 0) * radius / depth;
-    const int x = std::clamp(static_cast<int>(std::lround(uv->x())), 0, maps_[v].width - 1);
-    const int y = std::clamp(static_cast<int>(std::lround(uv->y())), 0, maps_[v].height - 1);
-    const double reach = radius_fraction * r_px + options_.silhouette_margin_px;
+    const std::optional<InView> at = Place(cube, radius, v);
+    if (!at) continue;
+    const int x = at->x, y = at->y;
+    const double reach = radius_fraction * at->r_px + options_.silhouette_margin_px;
     if (options_.leaf_wood_radius_px > 0) {
       if (maps_[v].to_wide_wood.at<float>(y, x) > reach) return true;
     } else if (OutsideIn(v, x, y, reach, &reached_only)) {

@@ -15,6 +15,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "core/calibration.h"
@@ -59,6 +60,16 @@ class Carver {
   void Carve(const Cube& cube, std::vector<Cube>* kept) const;
 
  private:
+  // Where a cube's bounding sphere (radius `radius`) falls in view v: its centre pixel, clamped
+  // to the image, and its radius in px (10% slack for the lens distortion's change of scale
+  // across the image). Nothing when the centre projects outside the image or the sphere reaches
+  // the camera.
+  struct InView {
+    int x = 0, y = 0;
+    double r_px = 0.0;
+  };
+  std::optional<InView> Place(const Cube& cube, double radius, size_t v) const;
+
   // True if pixel (x, y) of view v lies farther than `reach` px from its silhouette, or from
   // the unreached thick mask when *reached_only (the views so far held by the reach alone,
   // incremented here) would pass HeadOptions::foreground_reach_max_views.
