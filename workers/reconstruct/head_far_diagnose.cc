@@ -34,6 +34,20 @@ int HeadFarBin(double distance_m) {
   return HeadFarTally::kBins - 1;
 }
 
+InnerEnd InnerEndToHead(const Polyline3& line, const HeadModel& head) {
+  Eigen::Vector3d at_front, at_back;
+  const double d_front = connect_internal::DistanceToHead(line.points.front(), head, &at_front);
+  const double d_back = connect_internal::DistanceToHead(line.points.back(), head, &at_back);
+  InnerEnd end;
+  end.last = d_back < d_front;
+  end.distance_m = std::min(d_front, d_back);
+  const Eigen::Vector3d inner = end.last ? line.points.back() : line.points.front();
+  const Eigen::Vector3d to_head = (end.last ? at_back : at_front) - inner;
+  if (end.distance_m > 0.0 && to_head.norm() >= 1e-9)
+    end.cos = connect_internal::EndOutward(line, end.last).dot(to_head.normalized());
+  return end;
+}
+
 void HeadFarTally::Add(const VineModel& connected, const PreparedCanes& prepared,
                        const std::vector<JoinCandidate>& joins, const VineModel& truth,
                        std::FILE* csv, uint64_t seed) {
@@ -59,18 +73,9 @@ void HeadFarTally::Add(const VineModel& connected, const PreparedCanes& prepared
       seen.points.erase(seen.points.begin());
       seen.radii.erase(seen.radii.begin());
     }
-    Eigen::Vector3d at_front, at_back;
-    const double d_front =
-        connect_internal::DistanceToHead(seen.points.front(), connected.head, &at_front);
-    const double d_back =
-        connect_internal::DistanceToHead(seen.points.back(), connected.head, &at_back);
-    const bool last = d_back < d_front;
-    const double d = std::min(d_front, d_back);
-    const Eigen::Vector3d inner = last ? seen.points.back() : seen.points.front();
-    const Eigen::Vector3d to_head = (last ? at_back : at_front) - inner;
-    const double cos = d <= 0.0 || to_head.norm() < 1e-9
-                           ? 1.0
-                           : connect_internal::EndOutward(seen, last).dot(to_head.normalized());
+    const InnerEnd end = InnerEndToHead(seen, connected.head);
+    const bool last = end.last;
+    const double d = end.distance_m, cos = end.cos;
     // The join that hangs it: from the prepared cane holding its base to one its parent holds.
     int child = -1;
     double child_d = 1e9;

@@ -61,4 +61,14 @@ class HeadFarTally {
 // The bin of HeadFarTally a distance from the head's surface falls in.
 int HeadFarBin(double distance_m);
 
+// The end of `line` nearer the surface of `head`'s spheres (which must not be empty): whether it
+// is the last point, its signed distance from that surface, and the cosine between the line's
+// outward tangent there (EndOutward) and the direction to the nearest surface point (1 inside).
+struct InnerEnd {
+  bool last = false;
+  double distance_m = 0;
+  double cos = 1;
+};
+InnerEnd InnerEndToHead(const Polyline3& line, const HeadModel& head);
+
 }  // namespace vb::reconstruct

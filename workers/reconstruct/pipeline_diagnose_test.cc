@@ -17,7 +17,6 @@
 #include "gtest/gtest.h"
 #include "workers/reconstruct/connect_test_util.h"
 #include "workers/reconstruct/correspondence_test_util.h"
-#include "workers/reconstruct/connect_internal.h"
 #include "workers/reconstruct/diagnose_util.h"
 #include "workers/reconstruct/head_far_diagnose.h"
 #include "workers/reconstruct/join_test_util.h"
@@ -203,22 +202,11 @@ RouteLoss MeasureRouteLoss(const VineModel& model, const VineModel& truth) {
       if (parent_in_model && nearest > 0.15 && true_parent == 0) {
         loss.beyond_from_head += w;
         if (!model.head.spheres.empty()) {
-          const Eigen::Vector3d& first = hung.points[bridged ? 1 : 0];
-          const bool last = (hung.points.back() - first).norm() > 1e-12 &&
-                            connect_internal::DistanceToHead(hung.points.back(), model.head,
-                                                             nullptr) <
-                                connect_internal::DistanceToHead(first, model.head, nullptr);
-          Eigen::Vector3d at;
-          const Eigen::Vector3d inner = last ? hung.points.back() : first;
-          const double d = connect_internal::DistanceToHead(inner, model.head, &at);
           Polyline3 seen = hung;
           if (bridged) seen.points.erase(seen.points.begin()), seen.radii.erase(seen.radii.begin());
-          const double cos =
-              d <= 0.0 || (at - inner).norm() < 1e-9
-                  ? 1.0
-                  : connect_internal::EndOutward(seen, last).dot((at - inner).normalized());
-          loss.from_head_by_reach[HeadFarBin(d)] += w;
-          if (cos >= 0.8) loss.from_head_pointing[HeadFarBin(d)] += w;
+          const InnerEnd end = InnerEndToHead(seen, model.head);
+          loss.from_head_by_reach[HeadFarBin(end.distance_m)] += w;
+          if (end.cos >= 0.8) loss.from_head_pointing[HeadFarBin(end.distance_m)] += w;
         }
       }
       double on_ancestor = 0;
