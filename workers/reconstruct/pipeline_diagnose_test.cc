@@ -3,6 +3,9 @@
 // rendered stops (the bench's stops, MakeRenderedStop). Run with
 //   VB_INPUT=labels|images VB_SEED=1100 VB_STOPS=10 vb_reconstruct_test
 //     --gtest_also_run_disabled_tests --gtest_filter='PipelineStages.DISABLED_*'
+// VB_HEAD_FAR=1 adds the canes hung on another cane by their distance from the head
+// (head_far_diagnose.h; VB_HEAD_FAR_CSV=path, one line each); VB_EXIT_REACH, VB_EXIT_COS and
+// VB_EXIT_MIN_RADIUS set the head exits of connection (connect.h step 6c).
 // Tuning seeds only (1100-1999; docs/reconstruction.md "Seeds").
 #include <algorithm>
 #include <cstdio>
@@ -286,7 +289,8 @@ TEST(PipelineStages, DISABLED_Report) {
            {"VB_MIN_EVIDENCE", &options.assembly.min_evidence_m},
            {"VB_MIN_PIECE_P", &options.assembly.min_piece_probability},
            {"VB_EXIT_REACH", &options.connect.head_exit_reach_m},
-           {"VB_EXIT_COS", &options.connect.head_exit_min_cos}})
+           {"VB_EXIT_COS", &options.connect.head_exit_min_cos},
+           {"VB_EXIT_MIN_RADIUS", &options.connect.head_exit_min_radius_m}})
     OverrideFromEnv(name, field);
   OverrideFromEnv("VB_MERGE", &options.connect.merge_continuations);
   OverrideFromEnv("VB_MIN_HITS", &options.correspondence.min_hits);
