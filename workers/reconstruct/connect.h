@@ -57,7 +57,8 @@
 //     this vine's, and is left out (counted in ConnectSummary::dropped_thickening and unattached).
 //  6c. Head exits (beyond the paper; off by default, `head_exit_reach_m` 0: about half of what it
 //     gains on the metric is canes of canes hung on the head, docs/reconstruction.md section 6,
-//     "Head exits"; benched again in s22 with a radius test, "Head joins that reach farther"). Canes leaving the head together lose their inner parts in the head's thick
+//     "Head exits"; benched again in s22 with a radius test, "Head joins that reach farther").
+//     Canes leaving the head together lose their inner parts in the head's thick
 //     foreground, and the outer piece of such a cane, beyond max_attach_m of the head, hangs on
 //     a cane it passes. A cane hung on another cane, unless it continues that cane from one of
 //     its ends (step 4's gap and angle, but at either end and in either direction: looser than
