@@ -127,6 +127,7 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   // (app/reconstruct_flags.h).
   VB_RETURN_IF_ERROR(ReadHeadFlags(flags, &options.head));
   VB_RETURN_IF_ERROR(ReadHeadBasesFlags(flags, &options.head_bases));
+  VB_RETURN_IF_ERROR(ReadHeadExitFlags(flags, &options.connect));  // --head-exit-* (step 6c)
   VB_RETURN_IF_ERROR(flags.Finish());
   if (!(truth_break_px >= 0.0 && truth_break_px <= 100.0))
     return absl::InvalidArgumentError("--truth-break-px must be in [0, 100]");

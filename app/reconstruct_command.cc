@@ -22,6 +22,7 @@ absl::Status RunReconstruct(Flags& flags) {
   VB_RETURN_IF_ERROR(ReadSweepFlags(flags, &options.sweep));
   VB_RETURN_IF_ERROR(ReadHeadFlags(flags, &options.head));
   VB_RETURN_IF_ERROR(ReadHeadBasesFlags(flags, &options.head_bases));
+  VB_RETURN_IF_ERROR(ReadHeadExitFlags(flags, &options.connect));  // --head-exit-* (step 6c)
   VB_RETURN_IF_ERROR(flags.Finish());
   if (!(deadline_s > 0)) return absl::InvalidArgumentError("--deadline-s must be > 0");
   if (threads < 1 || threads > 64) return absl::InvalidArgumentError("--threads must be in [1, 64]");

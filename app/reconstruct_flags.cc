@@ -189,4 +189,32 @@ absl::Status ReadHeadBasesFlags(Flags& flags, reconstruct::HeadBasesOptions* opt
   return absl::OkStatus();
 }
 
+absl::Status ReadHeadExitFlags(Flags& flags, reconstruct::ConnectOptions* options) {
+  VB_ASSIGN_OR_RETURN(const double reach,
+                      flags.Double("head-exit-reach", options->head_exit_reach_m));
+  VB_ASSIGN_OR_RETURN(const double min_cos,
+                      flags.Double("head-exit-cos", options->head_exit_min_cos));
+  VB_ASSIGN_OR_RETURN(const double min_radius,
+                      flags.Double("head-exit-min-radius", options->head_exit_min_radius_m));
+  VB_ASSIGN_OR_RETURN(const bool left_out,
+                      flags.Bool("head-exit-left-out", options->head_exit_left_out));
+  if (!(reach >= 0.0) || !std::isfinite(reach)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("--head-exit-reach must be finite and >= 0, got ", reach));
+  }
+  if (!(min_cos >= -1.0 && min_cos <= 1.0)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("--head-exit-cos must be in [-1, 1], got ", min_cos));
+  }
+  if (!(min_radius >= 0.0) || !std::isfinite(min_radius)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("--head-exit-min-radius must be finite and >= 0, got ", min_radius));
+  }
+  options->head_exit_reach_m = reach;
+  options->head_exit_min_radius_m = min_radius;
+  options->head_exit_min_cos = min_cos;
+  options->head_exit_left_out = left_out;
+  return absl::OkStatus();
+}
+
 }  // namespace vb::app

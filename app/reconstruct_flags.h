@@ -2,11 +2,13 @@
 // Flags shared by `vinebot reconstruct` and `vinebot bench reconstruct` that set the match
 // selection of correspondence (step 3; workers/reconstruct/correspondence.h), the depth sweep
 // (step 4e; workers/reconstruct/depth_sweep.h), the head's options (step 5;
-// workers/reconstruct/head.h) and the cane bases at the head (workers/reconstruct/head_bases.h).
+// workers/reconstruct/head.h), the cane bases at the head (workers/reconstruct/head_bases.h) and
+// the head exits of connection (step 6c; workers/reconstruct/connect.h).
 #pragma once
 
 #include "absl/status/status.h"
 #include "app/flags.h"
+#include "workers/reconstruct/connect.h"
 #include "workers/reconstruct/correspondence.h"
 #include "workers/reconstruct/depth_sweep.h"
 #include "workers/reconstruct/head.h"
@@ -62,5 +64,18 @@ absl::Status ReadHeadFlags(Flags& flags, reconstruct::HeadOptions* options);
 // or <= 0, --head-bases-thick-views < 0, --head-bases-inside not finite or < 0,
 // --head-bases-curve outside [0, 2], --head-bases-skeleton not finite or < 0.
 absl::Status ReadHeadBasesFlags(Flags& flags, reconstruct::HeadBasesOptions* options);
+
+// Reads into *options (defaults: its values as given) the head exits of connection (step 6c,
+// connect.h): a cane hung on another cane whose inner end lies within reach of the head's
+// surface and points at it hangs on the head instead:
+//   --head-exit-reach M: head_exit_reach_m (0, the default, turns step 6c off);
+//   --head-exit-cos C: head_exit_min_cos, the least cosine between the inner end's outward
+//     tangent and the direction to the head;
+//   --head-exit-min-radius M: head_exit_min_radius_m, the least mean radius over 3 cm at the
+//     inner end (0: no test);
+//   --head-exit-left-out true|false: head_exit_left_out, left-out canes too.
+// INVALID_ARGUMENT naming the flag: a value that does not parse, --head-exit-reach or
+// --head-exit-min-radius not finite or < 0, --head-exit-cos not in [-1, 1].
+absl::Status ReadHeadExitFlags(Flags& flags, reconstruct::ConnectOptions* options);
 
 }  // namespace vb::app

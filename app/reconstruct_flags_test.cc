@@ -226,5 +226,50 @@ TEST(ReconstructFlags, RejectsBadHeadBasesValuesNamingTheFlag) {
   }
 }
 
+TEST(ReconstructFlags, HeadExitFlagsKeepTheDefaultsOrSetTheOptions) {
+  auto absent = ParseAll({});
+  ASSERT_TRUE(absent.ok());
+  reconstruct::ConnectOptions options;
+  ASSERT_TRUE(ReadHeadExitFlags(*absent, &options).ok());
+  const reconstruct::ConnectOptions defaults;
+  EXPECT_EQ(options.head_exit_reach_m, defaults.head_exit_reach_m);
+  EXPECT_EQ(options.head_exit_min_cos, defaults.head_exit_min_cos);
+  EXPECT_EQ(options.head_exit_min_radius_m, defaults.head_exit_min_radius_m);
+  EXPECT_EQ(options.head_exit_left_out, defaults.head_exit_left_out);
+
+  auto flags = ParseAll({"--head-exit-reach", "0.35", "--head-exit-cos=0.9",
+                         "--head-exit-min-radius", "0.003", "--head-exit-left-out", "true"});
+  ASSERT_TRUE(flags.ok());
+  ASSERT_TRUE(ReadHeadExitFlags(*flags, &options).ok());
+  EXPECT_DOUBLE_EQ(options.head_exit_reach_m, 0.35);  // 0 (off) by default
+  EXPECT_DOUBLE_EQ(options.head_exit_min_cos, 0.9);
+  EXPECT_DOUBLE_EQ(options.head_exit_min_radius_m, 0.003);  // 0 (no test) by default
+  EXPECT_TRUE(options.head_exit_left_out);
+  EXPECT_TRUE(flags->Finish().ok());
+  EXPECT_TRUE(options.Validate().ok());
+}
+
+TEST(ReconstructFlags, RejectsBadHeadExitValuesNamingTheFlag) {
+  const std::vector<std::pair<std::vector<const char*>, std::string>> cases = {
+      {{"--head-exit-reach", "-0.1"}, "--head-exit-reach"},
+      {{"--head-exit-reach", "inf"}, "--head-exit-reach"},
+      {{"--head-exit-reach", "nan"}, "--head-exit-reach"},
+      {{"--head-exit-cos", "1.5"}, "--head-exit-cos"},
+      {{"--head-exit-cos", "-2"}, "--head-exit-cos"},
+      {{"--head-exit-cos", "nan"}, "--head-exit-cos"},
+      {{"--head-exit-min-radius", "-0.001"}, "--head-exit-min-radius"},
+      {{"--head-exit-min-radius", "inf"}, "--head-exit-min-radius"},
+      {{"--head-exit-left-out", "maybe"}, "--head-exit-left-out"},
+  };
+  for (const auto& [args, name] : cases) {
+    auto flags = ParseAll(args);
+    ASSERT_TRUE(flags.ok());
+    reconstruct::ConnectOptions options;
+    const absl::Status status = ReadHeadExitFlags(*flags, &options);
+    EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument) << args[0] << " " << args[1];
+    EXPECT_NE(status.message().find(name), std::string::npos) << status.message();
+  }
+}
+
 }  // namespace
 }  // namespace vb::app

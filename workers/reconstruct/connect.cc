@@ -71,6 +71,10 @@ absl::Status ConnectOptions::Validate() const {
   if (!(head_exit_min_cos >= -1.0 && head_exit_min_cos <= 1.0)) {
     return absl::InvalidArgumentError("connect options: head_exit_min_cos must be in [-1, 1]");
   }
+  if (!std::isfinite(head_exit_min_radius_m) || head_exit_min_radius_m < 0) {
+    return absl::InvalidArgumentError(
+        "connect options: head_exit_min_radius_m must be finite and >= 0");
+  }
   if (!(head_exit_min_support >= 0.0 && head_exit_min_support <= 1.0)) {
     return absl::InvalidArgumentError(
         "connect options: head_exit_min_support must be in [0, 1]");

@@ -57,7 +57,8 @@
 //     this vine's, and is left out (counted in ConnectSummary::dropped_thickening and unattached).
 //  6c. Head exits (beyond the paper; off by default, `head_exit_reach_m` 0: about half of what it
 //     gains on the metric is canes of canes hung on the head, docs/reconstruction.md section 6,
-//     "Head exits"). Canes leaving the head together lose their inner parts in the head's thick
+//     "Head exits"; benched again in s22 with a radius test, "Head joins that reach farther").
+//     Canes leaving the head together lose their inner parts in the head's thick
 //     foreground, and the outer piece of such a cane, beyond max_attach_m of the head, hangs on
 //     a cane it passes. A cane hung on another cane, unless it continues that cane from one of
 //     its ends (step 4's gap and angle, but at either end and in either direction: looser than
@@ -66,6 +67,7 @@
 //     `head_exit_reach_m` of that surface and whose outward tangent there points at its nearest
 //     point (cosine >= `head_exit_min_cos`), with at least `head_exit_min_support` of the
 //     straight line to it wood in the images (GapSupportFn; 0: no test, and no function needed),
+//     and at least `head_exit_min_radius_m` thick there (its mean radius over 3 cm; 0: no test),
 //     hangs on the head by that end; its base is drawn there as step 5 draws any base. The canes
 //     hung on it go with it. A fork off a cane beside the head whose base points at that cane,
 //     not at the head, keeps its parent; one pointing at the head does not.
@@ -156,6 +158,11 @@ struct ConnectOptions {
   double head_exit_min_support = 0.0;  // ... at least this fraction of that straight line wood
                                      // (GapSupportFn); 0 (as measured): no test. Its base is
                                      // drawn on the head as step 5 draws any base
+  double head_exit_min_radius_m = 0.0;  // ... its mean radius over the 3 cm at that end at least
+                                     // this (a fork off a cane is thinner than the head's canes,
+                                     // 0.5-0.85 of its parent); 0 (the default): no test.
+                                     // 0.003 was measured (docs/reconstruction.md section 6,
+                                     // "Head joins that reach farther (s22)")
   bool head_exit_left_out = false;   // ... left-out canes too (they come into the tree); off:
                                      // on the bench they cost precision (neighbours' canes)
   double drop_thickening_ratio = 1.1;  // a cane in the tree without children that reaches beyond

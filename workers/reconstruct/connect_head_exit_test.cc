@@ -123,6 +123,49 @@ TEST(ConnectHeadExit, AnInnerEndBeyondReachOrOverBackgroundStaysOnItsCane) {
   EXPECT_NE(EndingAt(*unseen, kHTip)->parent_id, CaneId(1));
 }
 
+TEST(ConnectHeadExit, AThinPieceStaysOnItsCaneWithARadiusTest) {
+  // The same piece, 2.5 mm thick (a fork off a cane is thinner than the head's canes): with
+  // head_exit_min_radius_m 3 mm it stays on N; 4 mm thick (TwoCanesLeavingTogether) it goes.
+  ConnectOptions options = WithHeadExit(0.3);
+  options.head_exit_min_radius_m = 0.003;
+  std::vector<Polyline3> canes = TwoCanesLeavingTogether();
+  canes[1] = Line({0.25, 0.8, 1.003}, {0.5, 0.8, 0.93}, 0.0025);
+  ConnectSummary thin_summary;
+  const auto thin =
+      ConnectCanes(canes, Trunk(), Head(), options, &thin_summary, ThickNearHead);
+  ASSERT_TRUE(thin.ok()) << thin.status();
+  const Cane* h = EndingAt(*thin, kHTip);
+  const Cane* n = EndingAt(*thin, kNTip);
+  ASSERT_NE(h, nullptr);
+  ASSERT_NE(n, nullptr);
+  EXPECT_EQ(h->parent_id, n->id);
+  EXPECT_EQ(thin_summary.head_exits, 0);
+  ConnectSummary thick_summary;
+  const auto thick = ConnectCanes(TwoCanesLeavingTogether(), Trunk(), Head(), options,
+                                  &thick_summary, ThickNearHead);
+  ASSERT_TRUE(thick.ok()) << thick.status();
+  EXPECT_EQ(EndingAt(*thick, kHTip)->parent_id, CaneId(1));
+  EXPECT_EQ(thick_summary.head_exits, 1);
+}
+
+TEST(ConnectHeadExit, APiecePointingAcrossTheHeadStaysOnItsCane) {
+  // H's inner end 20 cm from the head as before, but the piece runs across the direction to the
+  // head (along y): its outward tangent there is perpendicular to it (cosine 0 < 0.8).
+  std::vector<Polyline3> canes = TwoCanesLeavingTogether();
+  canes[1] = Line({0.25, 0.8, 1.003}, {0.25, 1.05, 1.003}, 0.004);
+  const Eigen::Vector3d tip(0.25, 1.05, 1.003);
+  ConnectSummary summary;
+  const auto model =
+      ConnectCanes(canes, Trunk(), Head(), WithHeadExit(0.3), &summary, ThickNearHead);
+  ASSERT_TRUE(model.ok()) << model.status();
+  const Cane* h = EndingAt(*model, tip);
+  const Cane* n = EndingAt(*model, kNTip);
+  ASSERT_NE(h, nullptr);
+  ASSERT_NE(n, nullptr);
+  EXPECT_EQ(h->parent_id, n->id);
+  EXPECT_EQ(summary.head_exits, 0);
+}
+
 TEST(ConnectHeadExit, BadOptionsAreRejectedByName) {
   ConnectOptions options;
   options.head_exit_reach_m = -0.1;
@@ -133,6 +176,9 @@ TEST(ConnectHeadExit, BadOptionsAreRejectedByName) {
   options = ConnectOptions();
   options.head_exit_min_support = -0.1;
   EXPECT_NE(options.Validate().message().find("head_exit_min_support"), std::string::npos);
+  options = ConnectOptions();
+  options.head_exit_min_radius_m = -0.001;
+  EXPECT_NE(options.Validate().message().find("head_exit_min_radius_m"), std::string::npos);
 }
 
 }  // namespace

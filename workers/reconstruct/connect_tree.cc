@@ -149,9 +149,10 @@ bool IsContinuation(const std::vector<Polyline3>& canes, const JoinCandidate& c,
 // Step 6c: a cane hung on another cane (not as its continuation) or left out (with
 // head_exit_left_out) whose inner end (the one nearer the head's surface) lies within
 // head_exit_reach_m of it and points at it (head_exit_min_cos), the straight line to it wood
-// enough in the images (head_exit_min_support), hangs on the head by that end. Canes leaving the
-// head together in one direction lose their inner parts in the thick foreground there, and their
-// outer pieces otherwise hang on a cane they pass. Each such join is appended to `joins`.
+// enough in the images (head_exit_min_support), thick enough there (head_exit_min_radius_m),
+// hangs on the head by that end. Canes leaving the head together in one direction lose their
+// inner parts in the thick foreground there, and their outer pieces otherwise hang on a cane they
+// pass. Each such join is appended to `joins`.
 void HangHeadExits(const std::vector<Polyline3>& canes, const HeadModel& head,
                    const GapSupportFn& gap_support, const ConnectOptions& options,
                    std::vector<JoinCandidate>* joins, std::vector<int>* kept,
@@ -170,6 +171,12 @@ void HangHeadExits(const std::vector<Polyline3>& canes, const HeadModel& head,
     if (!(d <= options.head_exit_reach_m)) continue;  // NaN ends too
     const Eigen::Vector3d inner = last ? cane.points.back() : cane.points.front();
     const Eigen::Vector3d at = last ? at_back : at_front;
+    if (options.head_exit_min_radius_m > 0.0) {
+      const double length = cane.Length(), s = std::min(0.03, length);
+      const double radius = last ? connect_internal::MeanRadius(cane, length - s, length)
+                                 : connect_internal::MeanRadius(cane, 0.0, s);
+      if (!(radius >= options.head_exit_min_radius_m)) continue;  // a fork off a cane
+    }
     if (d > 0.0) {
       const Eigen::Vector3d to_head = (at - inner).normalized();
       if (EndOutward(cane, last).dot(to_head) < options.head_exit_min_cos) continue;

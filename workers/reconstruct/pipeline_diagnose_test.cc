@@ -3,6 +3,9 @@
 // rendered stops (the bench's stops, MakeRenderedStop). Run with
 //   VB_INPUT=labels|images VB_SEED=1100 VB_STOPS=10 vb_reconstruct_test
 //     --gtest_also_run_disabled_tests --gtest_filter='PipelineStages.DISABLED_*'
+// VB_HEAD_FAR=1 adds the canes hung on another cane by their distance from the head
+// (head_far_diagnose.h; VB_HEAD_FAR_CSV=path, one line each); VB_EXIT_REACH, VB_EXIT_COS and
+// VB_EXIT_MIN_RADIUS set the head exits of connection (connect.h step 6c).
 // Tuning seeds only (1100-1999; docs/reconstruction.md "Seeds").
 #include <algorithm>
 #include <cstdio>
@@ -18,6 +21,7 @@
 #include "workers/reconstruct/connect_test_util.h"
 #include "workers/reconstruct/correspondence_test_util.h"
 #include "workers/reconstruct/diagnose_util.h"
+#include "workers/reconstruct/head_far_diagnose.h"
 #include "workers/reconstruct/join_test_util.h"
 #include "workers/reconstruct/reconstruct.h"
 
@@ -108,6 +112,11 @@ struct RouteLoss {
                              // of any join, whatever the classifier)
   double beyond_from_head = 0;  // of parent_beyond: canes whose true parent is the trunk (the
                                 // head's surface, not measured here, may be nearer)
+  // beyond_from_head by how far the hung cane's inner end (nearer the model head) lies from the
+  // model head's spheres (HeadFarBin: < 15, 15-25, 25-40, > 40 cm), and of that, pointing at the
+  // head (cosine of its outward tangent there with the direction to the head >= 0.8)
+  double from_head_by_reach[HeadFarTally::kBins] = {};
+  double from_head_pointing[HeadFarTally::kBins] = {};
   double parent_near = 0;    // one is within 3 cm: a wrong choice of parent
   double merged_parent = 0;  // of the three above: the wrong parent has >= 5 cm within 1 cm
                              // of a true ancestor (a parent merged with another cane)
@@ -117,6 +126,10 @@ struct RouteLoss {
     parent_far += o.parent_far * w, parent_near += o.parent_near * w;
     parent_beyond += o.parent_beyond * w, beyond_from_head += o.beyond_from_head * w;
     merged_parent += o.merged_parent * w;
+    for (int b = 0; b < HeadFarTally::kBins; ++b) {
+      from_head_by_reach[b] += o.from_head_by_reach[b] * w;
+      from_head_pointing[b] += o.from_head_pointing[b] * w;
+    }
   }
 };
 
@@ -189,7 +202,16 @@ RouteLoss MeasureRouteLoss(const VineModel& model, const VineModel& truth) {
       if (!parent_in_model) loss.parent_absent += w;
       else if (nearest <= 0.03) loss.parent_near += w;
       else loss.parent_far += w, loss.parent_beyond += nearest > 0.15 ? w : 0.0;
-      if (parent_in_model && nearest > 0.15 && true_parent == 0) loss.beyond_from_head += w;
+      if (parent_in_model && nearest > 0.15 && true_parent == 0) {
+        loss.beyond_from_head += w;
+        if (!model.head.spheres.empty()) {
+          Polyline3 seen = hung;
+          if (bridged) seen.points.erase(seen.points.begin()), seen.radii.erase(seen.radii.begin());
+          const InnerEnd end = InnerEndToHead(seen, model.head);
+          loss.from_head_by_reach[HeadFarBin(end.distance_m)] += w;
+          if (end.cos >= 0.8) loss.from_head_pointing[HeadFarBin(end.distance_m)] += w;
+        }
+      }
       double on_ancestor = 0;
       for (const Eigen::Vector3d& q : model.canes[bad].polyline.Sample(0.005))
         for (int a : ancestry)
@@ -265,7 +287,10 @@ TEST(PipelineStages, DISABLED_Report) {
            {"VB_KEEP_MIN_LENGTH", &options.connect.keep_min_length_m},
            {"VB_MIN_ISOLATED", &options.assembly.min_isolated_length_m},
            {"VB_MIN_EVIDENCE", &options.assembly.min_evidence_m},
-           {"VB_MIN_PIECE_P", &options.assembly.min_piece_probability}})
+           {"VB_MIN_PIECE_P", &options.assembly.min_piece_probability},
+           {"VB_EXIT_REACH", &options.connect.head_exit_reach_m},
+           {"VB_EXIT_COS", &options.connect.head_exit_min_cos},
+           {"VB_EXIT_MIN_RADIUS", &options.connect.head_exit_min_radius_m}})
     OverrideFromEnv(name, field);
   OverrideFromEnv("VB_MERGE", &options.connect.merge_continuations);
   OverrideFromEnv("VB_MIN_HITS", &options.correspondence.min_hits);
@@ -274,6 +299,10 @@ TEST(PipelineStages, DISABLED_Report) {
   double unattached_recall = 0;
   ParentBreakdown parents;
   RouteLoss route_loss;
+  HeadFarTally head_far;
+  const bool head_far_on = std::getenv("VB_HEAD_FAR") != nullptr;
+  std::FILE* head_far_csv = nullptr;  // VB_HEAD_FAR_CSV=path: one line per hung cane
+  if (const char* path = std::getenv("VB_HEAD_FAR_CSV")) head_far_csv = std::fopen(path, "w");
   for (int k = 0; k < count; ++k) {
     const uint64_t seed = first + k;
     // Correspondence with the rig refined in between, as the pipeline does it.
@@ -338,6 +367,7 @@ TEST(PipelineStages, DISABLED_Report) {
       std::printf("  without bridges: %.3f / %.3f\n", mb.cane_recall, mb.cane_precision);
     }
     const RouteLoss route = MeasureRouteLoss(built->refined, truth);
+    if (head_far_on) head_far.Add(connected, prepared, joins, truth, head_far_csv, seed);
     route_loss.Add(route, 1.0 / count);
     pieces_row.Add(mp, count);
     assembled_row.Add(ma, count);
@@ -485,6 +515,14 @@ TEST(PipelineStages, DISABLED_Report) {
               "merged with an ancestor %.4f\n",
               r.unattached, r.merged_child, r.ghost_parent, r.parent_absent, r.parent_far,
               r.parent_beyond, r.beyond_from_head, r.parent_near, r.merged_parent);
+  std::printf("  of the last's canes from the head, by the hung cane's inner end from the model "
+              "head (< 15 / 15-25 / 25-40 / > 40 cm): %.4f / %.4f / %.4f / %.4f; pointing at it "
+              "(cos >= 0.8): %.4f / %.4f / %.4f / %.4f\n",
+              r.from_head_by_reach[0], r.from_head_by_reach[1], r.from_head_by_reach[2],
+              r.from_head_by_reach[3], r.from_head_pointing[0], r.from_head_pointing[1],
+              r.from_head_pointing[2], r.from_head_pointing[3]);
+  if (head_far_on) head_far.Print();
+  if (head_far_csv) std::fclose(head_far_csv);
 }
 
 }  // namespace
