@@ -238,12 +238,12 @@ TEST(ReconstructFlags, HeadExitFlagsKeepTheDefaultsOrSetTheOptions) {
   EXPECT_EQ(options.head_exit_left_out, defaults.head_exit_left_out);
 
   auto flags = ParseAll({"--head-exit-reach", "0.35", "--head-exit-cos=0.9",
-                         "--head-exit-min-radius", "0.003", "--head-exit-left-out", "true"});
+                         "--head-exit-min-radius", "0.004", "--head-exit-left-out", "true"});
   ASSERT_TRUE(flags.ok());
   ASSERT_TRUE(ReadHeadExitFlags(*flags, &options).ok());
-  EXPECT_DOUBLE_EQ(options.head_exit_reach_m, 0.35);  // 0 (off) by default
+  EXPECT_DOUBLE_EQ(options.head_exit_reach_m, 0.35);  // 0.3 by default
   EXPECT_DOUBLE_EQ(options.head_exit_min_cos, 0.9);
-  EXPECT_DOUBLE_EQ(options.head_exit_min_radius_m, 0.003);  // 0 (no test) by default
+  EXPECT_DOUBLE_EQ(options.head_exit_min_radius_m, 0.004);  // 0.003 by default
   EXPECT_TRUE(options.head_exit_left_out);
   EXPECT_TRUE(flags->Finish().ok());
   EXPECT_TRUE(options.Validate().ok());

@@ -45,9 +45,9 @@
 //     with no candidate join at all (nothing within `max_attach_m`) stays out. A cane reaching
 //     farther along the row is kept so too when it tapers away from the vine's centre (its third
 //     nearer the centre on average at least `keep_taper_ratio` times as thick as the other end's
-//     third, TaperTowardCentre): canes thin from base to tip, so the far piece of this vine's cane thins
-//     outward and a neighbour's cane, entering the view tip first, thins inward. Such a cane
-//     hangs by its thicker end only.
+//     third, TaperTowardCentre): canes thin from base to tip, so the far piece of this vine's
+//     cane thins outward and a neighbour's cane, entering the view tip first, thins inward. Such
+//     a cane hangs by its thicker end only.
 //     Optionally (off by default: no gain on the bench), steps 3b and 6 are repeated in turn
 //     until neither brings another cane into the tree (`repeat_rescue`): a cane kept by step 6
 //     may be the likely join that rescues another.
@@ -55,17 +55,17 @@
 //     reaches beyond `keep_within_m` and is at least `drop_thickening_ratio` times as thick at
 //     its far third as at its third nearer the centre is a neighbour's cane hung by its tip on
 //     this vine's, and is left out (counted in ConnectSummary::dropped_thickening and unattached).
-//  6c. Head exits (beyond the paper; off by default, `head_exit_reach_m` 0: about half of what it
-//     gains on the metric is canes of canes hung on the head, docs/reconstruction.md section 6,
-//     "Head exits"; benched again in s22 with a radius test, "Head joins that reach farther").
-//     Canes leaving the head together lose their inner parts in the head's thick
+//  6c. Head exits (beyond the paper; on since s22 with reach 0.3 m and the radius test 3 mm:
+//     without that test about half of what it gains on the metric is canes of canes hung on the
+//     head; docs/reconstruction.md section 6, "Head exits" and "Head joins that reach farther
+//     (s22)"). Canes leaving the head together lose their inner parts in the head's thick
 //     foreground, and the outer piece of such a cane, beyond max_attach_m of the head, hangs on
 //     a cane it passes. A cane hung on another cane, unless it continues that cane from one of
 //     its ends (step 4's gap and angle, but at either end and in either direction: looser than
-//     step 4, so a cane hung at the base of a parallel cane stays), or left out (with `head_exit_left_out`, off: it costs
-//     precision), whose inner end (the one nearer the head's surface) lies within
-//     `head_exit_reach_m` of that surface and whose outward tangent there points at its nearest
-//     point (cosine >= `head_exit_min_cos`), with at least `head_exit_min_support` of the
+//     step 4, so a cane hung at the base of a parallel cane stays), or left out (with
+//     `head_exit_left_out`, off: it costs precision), whose inner end (the one nearer the head's
+//     surface) lies within `head_exit_reach_m` of that surface and whose outward tangent there
+//     points at its nearest point (cosine >= `head_exit_min_cos`), with at least `head_exit_min_support` of the
 //     straight line to it wood in the images (GapSupportFn; 0: no test, and no function needed),
 //     and at least `head_exit_min_radius_m` thick there (its mean radius over 3 cm; 0: no test),
 //     hangs on the head by that end; its base is drawn there as step 5 draws any base. The canes
@@ -149,19 +149,19 @@ struct ConnectOptions {
                                      // at its end nearer the vine's centre (TaperTowardCentre):
                                      // canes taper from base to tip, a neighbour's the other way;
                                      // 0 (or keep_within_m 0) turns this off; otherwise > 1
-  double head_exit_reach_m = 0.0;    // step 6c: a cane hung on another cane (or left out) whose
+  double head_exit_reach_m = 0.3;    // step 6c: a cane hung on another cane (or left out) whose
                                      // inner end lies within this of the head's surface, points
                                      // at it and is joined to it by wood in the images hangs on
-                                     // the head instead; 0 (the default) turns this off
+                                     // the head instead; 0 turns this off (0 before s22)
   double head_exit_min_cos = 0.8;    // ... its outward tangent there within acos(this) of the
                                      // direction to the nearest point of the head's surface
   double head_exit_min_support = 0.0;  // ... at least this fraction of that straight line wood
                                      // (GapSupportFn); 0 (as measured): no test. Its base is
                                      // drawn on the head as step 5 draws any base
-  double head_exit_min_radius_m = 0.0;  // ... its mean radius over the 3 cm at that end at least
-                                     // this (a fork off a cane is thinner than the head's canes,
-                                     // 0.5-0.85 of its parent); 0 (the default): no test.
-                                     // 0.003 was measured (docs/reconstruction.md section 6,
+  double head_exit_min_radius_m = 0.003;  // ... its mean radius over the 3 cm at that end at
+                                     // least this (a fork off a cane is thinner than the head's
+                                     // canes, 0.5-0.85 of its parent); 0: no test. 3 mm chosen on
+                                     // tuning stops 1300-1339 (docs/reconstruction.md section 6,
                                      // "Head joins that reach farther (s22)")
   bool head_exit_left_out = false;   // ... left-out canes too (they come into the tree); off:
                                      // on the bench they cost precision (neighbours' canes)

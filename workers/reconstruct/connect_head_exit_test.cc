@@ -27,6 +27,7 @@ ConnectOptions WithHeadExit(double reach_m) {
   options.head_exit_reach_m = reach_m;
   options.head_exit_min_cos = 0.8;
   options.head_exit_min_support = 0.0;
+  options.head_exit_min_radius_m = 0.0;  // no radius test (session 17's rule)
   return options;
 }
 
@@ -140,6 +141,11 @@ TEST(ConnectHeadExit, AThinPieceStaysOnItsCaneWithARadiusTest) {
   ASSERT_NE(n, nullptr);
   EXPECT_EQ(h->parent_id, n->id);
   EXPECT_EQ(thin_summary.head_exits, 0);
+  // Without the radius test the thin piece goes to the head.
+  const auto untested = ConnectCanes(canes, Trunk(), Head(), WithHeadExit(0.3), nullptr,
+                                     ThickNearHead);
+  ASSERT_TRUE(untested.ok()) << untested.status();
+  EXPECT_EQ(EndingAt(*untested, kHTip)->parent_id, CaneId(1));
   ConnectSummary thick_summary;
   const auto thick = ConnectCanes(TwoCanesLeavingTogether(), Trunk(), Head(), options,
                                   &thick_summary, ThickNearHead);
