@@ -127,6 +127,10 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   // (app/reconstruct_flags.h).
   VB_RETURN_IF_ERROR(ReadHeadFlags(flags, &options.head));
   VB_RETURN_IF_ERROR(ReadHeadBasesFlags(flags, &options.head_bases));
+  // --extend-row, --extend-across, --extend-support, --extend-depth-sd (step 4c) and
+  // --min-join-probability, --rescue-*, --keep-*, --drop-thickening (step 6).
+  VB_RETURN_IF_ERROR(ReadExtendFlags(flags, &options.extend));
+  VB_RETURN_IF_ERROR(ReadConnectFlags(flags, &options.connect));
   VB_RETURN_IF_ERROR(ReadHeadExitFlags(flags, &options.connect));  // --head-exit-* (step 6c)
   VB_RETURN_IF_ERROR(flags.Finish());
   if (!(truth_break_px >= 0.0 && truth_break_px <= 100.0))

@@ -22,10 +22,15 @@ absl::Status RunReconstruct(Flags& flags) {
   VB_RETURN_IF_ERROR(ReadSweepFlags(flags, &options.sweep));
   VB_RETURN_IF_ERROR(ReadHeadFlags(flags, &options.head));
   VB_RETURN_IF_ERROR(ReadHeadBasesFlags(flags, &options.head_bases));
+  // --extend-row, --extend-across, --extend-support, --extend-depth-sd (step 4c) and
+  // --min-join-probability, --rescue-*, --keep-*, --drop-thickening (step 6).
+  VB_RETURN_IF_ERROR(ReadExtendFlags(flags, &options.extend));
+  VB_RETURN_IF_ERROR(ReadConnectFlags(flags, &options.connect));
   VB_RETURN_IF_ERROR(ReadHeadExitFlags(flags, &options.connect));  // --head-exit-* (step 6c)
   VB_RETURN_IF_ERROR(flags.Finish());
   if (!(deadline_s > 0)) return absl::InvalidArgumentError("--deadline-s must be > 0");
-  if (threads < 1 || threads > 64) return absl::InvalidArgumentError("--threads must be in [1, 64]");
+  if (threads < 1 || threads > 64)
+    return absl::InvalidArgumentError("--threads must be in [1, 64]");
 
   reconstruct::SegmenterModel segmenter = reconstruct::BuiltinSegmenterModel();
   if (!segmenter_path.empty()) {

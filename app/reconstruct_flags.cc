@@ -2,6 +2,7 @@
 #include "app/reconstruct_flags.h"
 
 #include <cmath>
+#include <utility>
 
 #include "absl/strings/str_cat.h"
 #include "core/status_macros.h"
@@ -186,6 +187,83 @@ absl::Status ReadHeadBasesFlags(Flags& flags, reconstruct::HeadBasesOptions* opt
   options->max_inside_m = inside;
   options->curve_gain = curve;
   options->max_skeleton_px = skeleton;
+  return absl::OkStatus();
+}
+
+absl::Status ReadExtendFlags(Flags& flags, reconstruct::ExtendOptions* options) {
+  VB_ASSIGN_OR_RETURN(const double row,
+                      flags.Double("extend-row", options->max_tip_row_distance_m));
+  VB_ASSIGN_OR_RETURN(const double across,
+                      flags.Double("extend-across", options->max_tip_out_of_plane));
+  VB_ASSIGN_OR_RETURN(const double support,
+                      flags.Double("extend-support", options->max_support_px));
+  VB_ASSIGN_OR_RETURN(const double depth_sd,
+                      flags.Double("extend-depth-sd", options->max_depth_sd_m));
+  for (const auto& [value, name] : {std::pair{row, "--extend-row"},
+                                    {across, "--extend-across"},
+                                    {support, "--extend-support"}}) {
+    if (!(value >= 0.0) || !std::isfinite(value)) {
+      return absl::InvalidArgumentError(
+          absl::StrCat(name, " must be finite and >= 0 (0: off), got ", value));
+    }
+  }
+  if (!(depth_sd > 0.0) || !std::isfinite(depth_sd)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("--extend-depth-sd must be finite and > 0, got ", depth_sd));
+  }
+  options->max_tip_row_distance_m = row;
+  options->max_tip_out_of_plane = across;
+  options->max_support_px = support;
+  options->max_depth_sd_m = depth_sd;
+  return absl::OkStatus();
+}
+
+absl::Status ReadConnectFlags(Flags& flags, reconstruct::ConnectOptions* options) {
+  VB_ASSIGN_OR_RETURN(const double min_join,
+                      flags.Double("min-join-probability", options->min_join_probability));
+  VB_ASSIGN_OR_RETURN(const double rescue,
+                      flags.Double("rescue-min-probability", options->rescue_min_probability));
+  VB_ASSIGN_OR_RETURN(const double rescue_taper,
+                      flags.Double("rescue-min-taper", options->rescue_min_taper));
+  VB_ASSIGN_OR_RETURN(const double keep_within,
+                      flags.Double("keep-within", options->keep_within_m));
+  VB_ASSIGN_OR_RETURN(const double keep_length,
+                      flags.Double("keep-min-length", options->keep_min_length_m));
+  VB_ASSIGN_OR_RETURN(const double keep_taper,
+                      flags.Double("keep-taper", options->keep_taper_ratio));
+  VB_ASSIGN_OR_RETURN(const double drop,
+                      flags.Double("drop-thickening", options->drop_thickening_ratio));
+  if (!(min_join > 0.0 && min_join < 1.0)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("--min-join-probability must be in (0, 1), got ", min_join));
+  }
+  if (!(rescue == 0.0 || (rescue >= min_join && rescue < 1.0))) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("--rescue-min-probability must be 0 (off) or in [--min-join-probability (",
+                     min_join, "), 1), got ", rescue));
+  }
+  for (const auto& [value, name] : {std::pair{rescue_taper, "--rescue-min-taper"},
+                                    {keep_within, "--keep-within"},
+                                    {keep_length, "--keep-min-length"}}) {
+    if (!(value >= 0.0) || !std::isfinite(value)) {
+      return absl::InvalidArgumentError(
+          absl::StrCat(name, " must be finite and >= 0, got ", value));
+    }
+  }
+  for (const auto& [value, name] : {std::pair{keep_taper, "--keep-taper"},
+                                    {drop, "--drop-thickening"}}) {
+    if (!(value == 0.0 || (value > 1.0 && std::isfinite(value)))) {
+      return absl::InvalidArgumentError(
+          absl::StrCat(name, " must be 0 (off) or finite and > 1, got ", value));
+    }
+  }
+  options->min_join_probability = min_join;
+  options->rescue_min_probability = rescue;
+  options->rescue_min_taper = rescue_taper;
+  options->keep_within_m = keep_within;
+  options->keep_min_length_m = keep_length;
+  options->keep_taper_ratio = keep_taper;
+  options->drop_thickening_ratio = drop;
   return absl::OkStatus();
 }
 

@@ -2,8 +2,9 @@
 // Flags shared by `vinebot reconstruct` and `vinebot bench reconstruct` that set the match
 // selection of correspondence (step 3; workers/reconstruct/correspondence.h), the depth sweep
 // (step 4e; workers/reconstruct/depth_sweep.h), the head's options (step 5;
-// workers/reconstruct/head.h), the cane bases at the head (workers/reconstruct/head_bases.h) and
-// the head exits of connection (step 6c; workers/reconstruct/connect.h).
+// workers/reconstruct/head.h), the cane bases at the head (workers/reconstruct/head_bases.h), the
+// single-view extension's which-tips rules (step 4c; workers/reconstruct/extend.h), the
+// connect stage's keep rules (step 6) and its head exits (step 6c; workers/reconstruct/connect.h).
 #pragma once
 
 #include "absl/status/status.h"
@@ -11,6 +12,7 @@
 #include "workers/reconstruct/connect.h"
 #include "workers/reconstruct/correspondence.h"
 #include "workers/reconstruct/depth_sweep.h"
+#include "workers/reconstruct/extend.h"
 #include "workers/reconstruct/head.h"
 #include "workers/reconstruct/head_bases.h"
 
@@ -68,14 +70,36 @@ absl::Status ReadHeadBasesFlags(Flags& flags, reconstruct::HeadBasesOptions* opt
 // Reads into *options (defaults: its values as given) the head exits of connection (step 6c,
 // connect.h): a cane hung on another cane whose inner end lies within reach of the head's
 // surface and points at it hangs on the head instead:
-//   --head-exit-reach M: head_exit_reach_m (0, the default, turns step 6c off);
+//   --head-exit-reach M: head_exit_reach_m (0.3 by default since s22; 0 turns step 6c off);
 //   --head-exit-cos C: head_exit_min_cos, the least cosine between the inner end's outward
 //     tangent and the direction to the head;
 //   --head-exit-min-radius M: head_exit_min_radius_m, the least mean radius over 3 cm at the
-//     inner end (0: no test);
+//     inner end (0.003 by default since s22; 0: no test);
 //   --head-exit-left-out true|false: head_exit_left_out, left-out canes too.
 // INVALID_ARGUMENT naming the flag: a value that does not parse, --head-exit-reach or
 // --head-exit-min-radius not finite or < 0, --head-exit-cos not in [-1, 1].
 absl::Status ReadHeadExitFlags(Flags& flags, reconstruct::ConnectOptions* options);
+
+// Reads into *options (defaults: its values as given) the single-view extension's rules of step
+// 4c (the stage itself is --extend, read by the commands):
+//   --extend-row M (max_tip_row_distance_m), --extend-across X (max_tip_out_of_plane),
+//   --extend-support PX (max_support_px): the which-tips rules, each off at 0;
+//   --extend-depth-sd M (max_depth_sd_m): the depth's predicted sd that stops an extension.
+// INVALID_ARGUMENT naming the flag: a value that does not parse, --extend-row, --extend-across or
+// --extend-support not finite or < 0, --extend-depth-sd not finite or <= 0.
+absl::Status ReadExtendFlags(Flags& flags, reconstruct::ExtendOptions* options);
+
+// Reads into *options (defaults: its values as given) the connect stage's rules of step 6 that
+// decide which canes enter the tree:
+//   --min-join-probability P (min_join_probability, "none"'s probability),
+//   --rescue-min-probability P (rescue_min_probability; 0: off),
+//   --rescue-min-taper R (rescue_min_taper; 0: no test),
+//   --keep-within M (keep_within_m; 0: off), --keep-min-length M (keep_min_length_m),
+//   --keep-taper R (keep_taper_ratio; 0: off), --drop-thickening R (drop_thickening_ratio; 0: off).
+// INVALID_ARGUMENT naming the flag: a value that does not parse, --min-join-probability not in
+// (0, 1), --rescue-min-probability neither 0 nor in [--min-join-probability, 1),
+// --rescue-min-taper, --keep-within or --keep-min-length not finite or < 0, --keep-taper or
+// --drop-thickening neither 0 nor finite and > 1.
+absl::Status ReadConnectFlags(Flags& flags, reconstruct::ConnectOptions* options);
 
 }  // namespace vb::app

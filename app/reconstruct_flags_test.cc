@@ -226,6 +226,116 @@ TEST(ReconstructFlags, RejectsBadHeadBasesValuesNamingTheFlag) {
   }
 }
 
+TEST(ReconstructFlags, ExtendFlagsKeepTheDefaultsOrSetTheRules) {
+  auto absent = ParseAll({});
+  ASSERT_TRUE(absent.ok());
+  reconstruct::ExtendOptions options;
+  ASSERT_TRUE(ReadExtendFlags(*absent, &options).ok());
+  const reconstruct::ExtendOptions defaults;
+  EXPECT_EQ(options.max_tip_row_distance_m, defaults.max_tip_row_distance_m);
+  EXPECT_EQ(options.max_tip_out_of_plane, defaults.max_tip_out_of_plane);
+  EXPECT_EQ(options.max_support_px, defaults.max_support_px);
+  EXPECT_EQ(options.max_depth_sd_m, defaults.max_depth_sd_m);
+
+  auto flags = ParseAll({"--extend-row", "0.95", "--extend-across=0.4", "--extend-support", "0",
+                         "--extend-depth-sd", "0.008"});
+  ASSERT_TRUE(flags.ok());
+  ASSERT_TRUE(ReadExtendFlags(*flags, &options).ok());
+  EXPECT_DOUBLE_EQ(options.max_tip_row_distance_m, 0.95);
+  EXPECT_DOUBLE_EQ(options.max_tip_out_of_plane, 0.4);
+  EXPECT_DOUBLE_EQ(options.max_support_px, 0.0);  // the rule off
+  EXPECT_DOUBLE_EQ(options.max_depth_sd_m, 0.008);
+  EXPECT_TRUE(flags->Finish().ok());  // every flag was read
+  EXPECT_TRUE(options.Validate().ok());
+}
+
+TEST(ReconstructFlags, RejectsBadExtendValuesNamingTheFlag) {
+  const std::vector<std::pair<std::vector<const char*>, std::string>> cases = {
+      {{"--extend-row", "-0.1"}, "--extend-row"},
+      {{"--extend-row", "inf"}, "--extend-row"},
+      {{"--extend-across", "-1"}, "--extend-across"},
+      {{"--extend-across", "nan"}, "--extend-across"},
+      {{"--extend-support", "-0.5"}, "--extend-support"},
+      {{"--extend-depth-sd", "0"}, "--extend-depth-sd"},
+      {{"--extend-depth-sd", "x"}, "--extend-depth-sd"},
+  };
+  for (const auto& [args, name] : cases) {
+    auto flags = ParseAll(args);
+    ASSERT_TRUE(flags.ok());
+    reconstruct::ExtendOptions options;
+    const absl::Status status = ReadExtendFlags(*flags, &options);
+    EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument) << args[0] << " " << args[1];
+    EXPECT_NE(status.message().find(name), std::string::npos) << status.message();
+  }
+}
+
+TEST(ReconstructFlags, ConnectFlagsKeepTheDefaultsOrSetTheKeepRules) {
+  auto absent = ParseAll({});
+  ASSERT_TRUE(absent.ok());
+  reconstruct::ConnectOptions options;
+  ASSERT_TRUE(ReadConnectFlags(*absent, &options).ok());
+  const reconstruct::ConnectOptions defaults;
+  EXPECT_EQ(options.min_join_probability, defaults.min_join_probability);
+  EXPECT_EQ(options.rescue_min_probability, defaults.rescue_min_probability);
+  EXPECT_EQ(options.rescue_min_taper, defaults.rescue_min_taper);
+  EXPECT_EQ(options.keep_within_m, defaults.keep_within_m);
+  EXPECT_EQ(options.keep_min_length_m, defaults.keep_min_length_m);
+  EXPECT_EQ(options.keep_taper_ratio, defaults.keep_taper_ratio);
+  EXPECT_EQ(options.drop_thickening_ratio, defaults.drop_thickening_ratio);
+
+  auto flags = ParseAll({"--min-join-probability", "0.1", "--rescue-min-probability=0.2",
+                         "--rescue-min-taper", "0", "--keep-within", "0.6",
+                         "--keep-min-length", "0.1", "--keep-taper", "1.15",
+                         "--drop-thickening", "0"});
+  ASSERT_TRUE(flags.ok());
+  ASSERT_TRUE(ReadConnectFlags(*flags, &options).ok());
+  EXPECT_DOUBLE_EQ(options.min_join_probability, 0.1);
+  EXPECT_DOUBLE_EQ(options.rescue_min_probability, 0.2);
+  EXPECT_DOUBLE_EQ(options.rescue_min_taper, 0.0);
+  EXPECT_DOUBLE_EQ(options.keep_within_m, 0.6);
+  EXPECT_DOUBLE_EQ(options.keep_min_length_m, 0.1);
+  EXPECT_DOUBLE_EQ(options.keep_taper_ratio, 1.15);
+  EXPECT_DOUBLE_EQ(options.drop_thickening_ratio, 0.0);  // the rule off
+  EXPECT_TRUE(flags->Finish().ok());
+  EXPECT_TRUE(options.Validate().ok());
+}
+
+TEST(ReconstructFlags, RejectsBadConnectValuesNamingTheFlag) {
+  const std::vector<std::pair<std::vector<const char*>, std::string>> cases = {
+      {{"--min-join-probability", "0"}, "--min-join-probability"},
+      {{"--min-join-probability", "1"}, "--min-join-probability"},
+      {{"--rescue-min-probability", "1"}, "--rescue-min-probability"},
+      {{"--rescue-min-probability", "-0.1"}, "--rescue-min-probability"},
+      // Below "none"'s probability (0.12 by default) but not 0.
+      {{"--rescue-min-probability", "0.05"}, "--rescue-min-probability"},
+      {{"--min-join-probability", "0.2", "--rescue-min-probability", "0.15"},
+       "--rescue-min-probability"},
+      {{"--rescue-min-taper", "-1"}, "--rescue-min-taper"},
+      {{"--keep-within", "-0.1"}, "--keep-within"},
+      {{"--keep-within", "inf"}, "--keep-within"},
+      {{"--keep-min-length", "-0.01"}, "--keep-min-length"},
+      {{"--keep-taper", "1"}, "--keep-taper"},
+      {{"--keep-taper", "0.5"}, "--keep-taper"},
+      {{"--keep-taper", "inf"}, "--keep-taper"},
+      {{"--drop-thickening", "0.9"}, "--drop-thickening"},
+      {{"--drop-thickening", "nan"}, "--drop-thickening"},
+  };
+  for (const auto& [args, name] : cases) {
+    auto flags = ParseAll(args);
+    ASSERT_TRUE(flags.ok());
+    reconstruct::ConnectOptions options;
+    const absl::Status status = ReadConnectFlags(*flags, &options);
+    EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument) << args[0] << " " << args[1];
+    EXPECT_NE(status.message().find(name), std::string::npos) << status.message();
+  }
+  // The rescue's threshold may be 0 (off) whatever "none"'s probability.
+  auto flags = ParseAll({"--min-join-probability", "0.2", "--rescue-min-probability", "0"});
+  ASSERT_TRUE(flags.ok());
+  reconstruct::ConnectOptions options;
+  EXPECT_TRUE(ReadConnectFlags(*flags, &options).ok());
+  EXPECT_TRUE(options.Validate().ok());
+}
+
 TEST(ReconstructFlags, HeadExitFlagsKeepTheDefaultsOrSetTheOptions) {
   auto absent = ParseAll({});
   ASSERT_TRUE(absent.ok());

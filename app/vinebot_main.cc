@@ -37,7 +37,8 @@ const std::vector<Command>& Commands() {
        " [--head-depth-factor F] [--head-leaf-fraction F] [--head-centre-on-trunk]"
        " [--head-leaf-wood-px X]"
        " [--head-bases] [--head-bases-reach M] [--head-bases-thick-views N]"
-       " [--head-bases-inside M] [--sweep-*: app/reconstruct_flags.h]",
+       " [--head-bases-inside M] [--sweep-*, --head-exit-*, --extend-*, --keep-*:"
+       " app/reconstruct_flags.h]",
        vb::app::RunReconstruct},
       {"evaluate",
        "--model model.json --truth ground_truth.json [--policy policy.json] "
@@ -59,7 +60,8 @@ const std::vector<Command>& Commands() {
        " [--head-depth-factor F] [--head-leaf-fraction F] [--head-centre-on-trunk]"
        " [--head-leaf-wood-px X] [--sweep false]"
        " [--grow-refit M] [--grow-max-length M] [--head-bases] [--head-bases-reach M]"
-       " [--head-bases-thick-views N] [--head-bases-inside M] [--sweep-*: app/reconstruct_flags.h]",
+       " [--head-bases-thick-views N] [--head-bases-inside M]"
+       " [--sweep-*, --head-exit-*, --extend-*, --keep-*: app/reconstruct_flags.h]",
        vb::app::RunBenchReconstruct},
       {"plan",
        "--model model.json --cuts cut_plan.json --out trajectory.json [--tool mill_end|secateur] "

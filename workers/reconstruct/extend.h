@@ -41,7 +41,8 @@ struct ExtendOptions {
   double snap_px = 3.0;             // the projected tip must lie this close to a skeleton path
   double second_difference_sd_m = 0.001;  // prior sd of a second difference (bending per step)
   double plane_sd_m = 0.1;                // prior sd of a point's distance to the vine plane (y)
-  double max_depth_sd_m = 0.006;          // stop where a depth's predicted sd passes this
+  double max_depth_sd_m = 0.010;          // stop where a depth's predicted sd passes this (6 mm
+                                          // until s22: docs/reconstruction.md, section 10)
   double max_length_m = 0.3;              // longest extension of one tip
   double min_length_m = 0.015;            // shorter extensions are dropped
   double max_turn_rad = 0.6;              // the largest turn of the 2D path at a junction
@@ -56,9 +57,11 @@ struct ExtendOptions {
   double max_tip_out_of_plane = 0.3;    // skip a tip whose unit tangent's component across the
                                         // row (|y|, toward the cameras) passes this
   double support_span_m = 0.03;         // the cane's last stretch checked against the skeletons
-  double max_support_px = 0.8;          // skip a tip whose last support_span_m lies farther than
+  double max_support_px = 0.0;          // skip a tip whose last support_span_m lies farther than
                                         // this from the skeleton (mean distance, px, over its
-                                        // points inside the image) in some view
+                                        // points inside the image) in some view; off by default
+                                        // since s22 (0.8 before: docs/reconstruction.md,
+                                        // section 10)
 
   // INVALID_ARGUMENT naming the field for non-finite or out-of-range values.
   absl::Status Validate() const;

@@ -233,22 +233,22 @@ TEST(ExtendCanes, SkipsATipOffTheSkeleton) {
   const Cane cane = CurvedCane(0.05, 0.6);
   const std::vector<View2D> views = SyntheticViews(VineWith(cane), rig);
   // The model's cane 2 mm above the true one: ~2-3 px off the skeleton in every view, within
-  // snap_px of it at the tip.
+  // snap_px of it at the tip. The rule at 0.8 px (off by default since s22).
+  ExtendOptions rule = On();
+  rule.max_support_px = 0.8;
   for (const auto& [lift_m, extended] : {std::pair{0.0, true}, std::pair{0.002, false}}) {
     VineModel model = VineWith(Truncated(cane, 21));
     for (Eigen::Vector3d& p : model.canes[1].polyline.points) p.z() += lift_m;
     ExtendSummary summary;
-    ASSERT_TRUE(ExtendCanes(views, rig, WorkingVolume{}, On(), &model, &summary).ok());
+    ASSERT_TRUE(ExtendCanes(views, rig, WorkingVolume{}, rule, &model, &summary).ok());
     EXPECT_EQ(summary.tips_extended, extended ? 1 : 0) << lift_m;
     EXPECT_EQ(summary.tips_skipped, extended ? 0 : 1) << lift_m;
   }
-  // Without the rule the lifted cane is extended (the control).
+  // Without the rule (the default since s22) the lifted cane is extended (the control).
   VineModel model = VineWith(Truncated(cane, 21));
   for (Eigen::Vector3d& p : model.canes[1].polyline.points) p.z() += 0.002;
-  ExtendOptions any = On();
-  any.max_support_px = 0;
   ExtendSummary summary;
-  ASSERT_TRUE(ExtendCanes(views, rig, WorkingVolume{}, any, &model, &summary).ok());
+  ASSERT_TRUE(ExtendCanes(views, rig, WorkingVolume{}, On(), &model, &summary).ok());
   EXPECT_EQ(summary.tips_extended, 1);
 }
 
