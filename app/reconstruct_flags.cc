@@ -5,9 +5,23 @@
 #include <utility>
 
 #include "absl/strings/str_cat.h"
+#include "absl/strings/string_view.h"
 #include "core/status_macros.h"
 
 namespace vb::app {
+
+namespace {
+
+// OK when `value` is finite and > 0 (>= 0 when zero_ok); otherwise INVALID_ARGUMENT naming the
+// flag: "<flag> must be finite and > 0<note>, got <value>".
+absl::Status CheckFinite(double value, absl::string_view flag, bool zero_ok,
+                         absl::string_view note = "") {
+  if (std::isfinite(value) && (zero_ok ? value >= 0.0 : value > 0.0)) return absl::OkStatus();
+  return absl::InvalidArgumentError(absl::StrCat(flag, " must be finite and ",
+                                                 zero_ok ? ">= 0" : "> 0", note, ", got ", value));
+}
+
+}  // namespace
 
 absl::Status ReadSelectionFlags(Flags& flags, reconstruct::CorrespondenceOptions* options) {
   VB_ASSIGN_OR_RETURN(const double alpha, flags.Double("alpha", options->alpha));
@@ -15,13 +29,8 @@ absl::Status ReadSelectionFlags(Flags& flags, reconstruct::CorrespondenceOptions
                       flags.Bool("select-context", options->context.enabled));
   VB_ASSIGN_OR_RETURN(const double context_alpha,
                       flags.Double("context-alpha", options->context.alpha));
-  if (!(alpha > 0.0) || !std::isfinite(alpha)) {
-    return absl::InvalidArgumentError(absl::StrCat("--alpha must be finite and > 0, got ", alpha));
-  }
-  if (!(context_alpha > 0.0) || !std::isfinite(context_alpha)) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("--context-alpha must be finite and > 0, got ", context_alpha));
-  }
+  VB_RETURN_IF_ERROR(CheckFinite(alpha, "--alpha", /*zero_ok=*/false));
+  VB_RETURN_IF_ERROR(CheckFinite(context_alpha, "--context-alpha", /*zero_ok=*/false));
   if (context && context_alpha < alpha) {
     return absl::InvalidArgumentError(absl::StrCat(
         "--context-alpha (", context_alpha, ") must be >= --alpha (", alpha, ")"));
@@ -51,14 +60,8 @@ absl::Status ReadSweepFlags(Flags& flags, reconstruct::DepthSweepOptions* option
                                                               options->check_max_width_log_excess));
   VB_ASSIGN_OR_RETURN(const double check_foreground,
                       flags.Double("sweep-check-foreground", options->check_min_foreground));
-  if (!(check_spread >= 0.0) || !std::isfinite(check_spread)) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("--sweep-check-spread must be finite and >= 0, got ", check_spread));
-  }
-  if (!(check_excess >= 0.0) || !std::isfinite(check_excess)) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("--sweep-check-excess must be finite and >= 0, got ", check_excess));
-  }
+  VB_RETURN_IF_ERROR(CheckFinite(check_spread, "--sweep-check-spread", /*zero_ok=*/true));
+  VB_RETURN_IF_ERROR(CheckFinite(check_excess, "--sweep-check-excess", /*zero_ok=*/true));
   if (!(check_foreground >= 0.0 && check_foreground <= 1.0)) {
     return absl::InvalidArgumentError(
         absl::StrCat("--sweep-check-foreground must be in [0, 1], got ", check_foreground));
@@ -75,10 +78,7 @@ absl::Status ReadSweepFlags(Flags& flags, reconstruct::DepthSweepOptions* option
     return absl::InvalidArgumentError(
         absl::StrCat("--sweep-unique-steps must be in [0, 1000], got ", unique_steps));
   }
-  if (!(accept_px > 0.0) || !std::isfinite(accept_px)) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("--sweep-accept-px must be finite and > 0, got ", accept_px));
-  }
+  VB_RETURN_IF_ERROR(CheckFinite(accept_px, "--sweep-accept-px", /*zero_ok=*/false));
   if (!(max_ambiguous >= 0.0 && max_ambiguous <= 1.0)) {
     return absl::InvalidArgumentError(
         absl::StrCat("--sweep-max-ambiguous must be in [0, 1], got ", max_ambiguous));
@@ -120,18 +120,12 @@ absl::Status ReadHeadFlags(Flags& flags, reconstruct::HeadOptions* options) {
     return absl::InvalidArgumentError(absl::StrCat("--head-min-cell must be in (0, ",
                                                    options->coarse_cell_m, "], got ", min_cell));
   }
-  if (!(depth_factor > 0.0) || !std::isfinite(depth_factor)) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("--head-depth-factor must be finite and > 0, got ", depth_factor));
-  }
+  VB_RETURN_IF_ERROR(CheckFinite(depth_factor, "--head-depth-factor", /*zero_ok=*/false));
   if (!(leaf_fraction >= 0.0 && leaf_fraction <= 1.0)) {
     return absl::InvalidArgumentError(
         absl::StrCat("--head-leaf-fraction must be in [0, 1], got ", leaf_fraction));
   }
-  if (!(wood_px >= 0.0) || !std::isfinite(wood_px)) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("--head-leaf-wood-px must be finite and >= 0, got ", wood_px));
-  }
+  VB_RETURN_IF_ERROR(CheckFinite(wood_px, "--head-leaf-wood-px", /*zero_ok=*/true));
   if (reach_px < 0 || reach_px > 100) {
     return absl::InvalidArgumentError(
         absl::StrCat("--head-fg-reach-px must be in [0, 100], got ", reach_px));
@@ -161,26 +155,17 @@ absl::Status ReadHeadBasesFlags(Flags& flags, reconstruct::HeadBasesOptions* opt
   VB_ASSIGN_OR_RETURN(const double curve, flags.Double("head-bases-curve", options->curve_gain));
   VB_ASSIGN_OR_RETURN(const double skeleton,
                       flags.Double("head-bases-skeleton", options->max_skeleton_px));
-  if (!(skeleton >= 0.0) || !std::isfinite(skeleton)) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("--head-bases-skeleton must be finite and >= 0, got ", skeleton));
-  }
+  VB_RETURN_IF_ERROR(CheckFinite(skeleton, "--head-bases-skeleton", /*zero_ok=*/true));
   if (!(curve >= 0.0 && curve <= 2.0)) {
     return absl::InvalidArgumentError(
         absl::StrCat("--head-bases-curve must be in [0, 2], got ", curve));
   }
-  if (!(reach > 0.0) || !std::isfinite(reach)) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("--head-bases-reach must be finite and > 0, got ", reach));
-  }
+  VB_RETURN_IF_ERROR(CheckFinite(reach, "--head-bases-reach", /*zero_ok=*/false));
   if (thick_views < 0 || thick_views > 1000) {
     return absl::InvalidArgumentError(
         absl::StrCat("--head-bases-thick-views must be in [0, 1000], got ", thick_views));
   }
-  if (!(inside >= 0.0) || !std::isfinite(inside)) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("--head-bases-inside must be finite and >= 0, got ", inside));
-  }
+  VB_RETURN_IF_ERROR(CheckFinite(inside, "--head-bases-inside", /*zero_ok=*/true));
   options->enabled = enabled;
   options->reach_m = reach;
   options->min_thick_views = static_cast<int>(thick_views);
@@ -202,15 +187,9 @@ absl::Status ReadExtendFlags(Flags& flags, reconstruct::ExtendOptions* options) 
   for (const auto& [value, name] : {std::pair{row, "--extend-row"},
                                     {across, "--extend-across"},
                                     {support, "--extend-support"}}) {
-    if (!(value >= 0.0) || !std::isfinite(value)) {
-      return absl::InvalidArgumentError(
-          absl::StrCat(name, " must be finite and >= 0 (0: off), got ", value));
-    }
+    VB_RETURN_IF_ERROR(CheckFinite(value, name, /*zero_ok=*/true, " (0: off)"));
   }
-  if (!(depth_sd > 0.0) || !std::isfinite(depth_sd)) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("--extend-depth-sd must be finite and > 0, got ", depth_sd));
-  }
+  VB_RETURN_IF_ERROR(CheckFinite(depth_sd, "--extend-depth-sd", /*zero_ok=*/false));
   options->max_tip_row_distance_m = row;
   options->max_tip_out_of_plane = across;
   options->max_support_px = support;
@@ -245,10 +224,7 @@ absl::Status ReadConnectFlags(Flags& flags, reconstruct::ConnectOptions* options
   for (const auto& [value, name] : {std::pair{rescue_taper, "--rescue-min-taper"},
                                     {keep_within, "--keep-within"},
                                     {keep_length, "--keep-min-length"}}) {
-    if (!(value >= 0.0) || !std::isfinite(value)) {
-      return absl::InvalidArgumentError(
-          absl::StrCat(name, " must be finite and >= 0, got ", value));
-    }
+    VB_RETURN_IF_ERROR(CheckFinite(value, name, /*zero_ok=*/true));
   }
   for (const auto& [value, name] : {std::pair{keep_taper, "--keep-taper"},
                                     {drop, "--drop-thickening"}}) {
@@ -276,18 +252,12 @@ absl::Status ReadHeadExitFlags(Flags& flags, reconstruct::ConnectOptions* option
                       flags.Double("head-exit-min-radius", options->head_exit_min_radius_m));
   VB_ASSIGN_OR_RETURN(const bool left_out,
                       flags.Bool("head-exit-left-out", options->head_exit_left_out));
-  if (!(reach >= 0.0) || !std::isfinite(reach)) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("--head-exit-reach must be finite and >= 0, got ", reach));
-  }
+  VB_RETURN_IF_ERROR(CheckFinite(reach, "--head-exit-reach", /*zero_ok=*/true));
   if (!(min_cos >= -1.0 && min_cos <= 1.0)) {
     return absl::InvalidArgumentError(
         absl::StrCat("--head-exit-cos must be in [-1, 1], got ", min_cos));
   }
-  if (!(min_radius >= 0.0) || !std::isfinite(min_radius)) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("--head-exit-min-radius must be finite and >= 0, got ", min_radius));
-  }
+  VB_RETURN_IF_ERROR(CheckFinite(min_radius, "--head-exit-min-radius", /*zero_ok=*/true));
   options->head_exit_reach_m = reach;
   options->head_exit_min_radius_m = min_radius;
   options->head_exit_min_cos = min_cos;
