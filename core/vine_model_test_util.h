@@ -3,11 +3,22 @@
 #pragma once
 
 #include <optional>
+#include <utility>
 
 #include "Eigen/Core"
 #include "core/vine_model.h"
 
 namespace vb {
+
+// A cane of the given id, parent (none: a root), kind and polyline.
+inline Cane CaneOf(int id, std::optional<int> parent, CaneKind kind, Polyline3 line) {
+  Cane c;
+  c.id = CaneId(id);
+  if (parent) c.parent_id = CaneId(*parent);
+  c.kind = kind;
+  c.polyline = std::move(line);
+  return c;
+}
 
 // A straight cane from `a` to `b` (platform frame, m) of constant `radius_m`.
 inline Cane StraightCane(int id, std::optional<int> parent, CaneKind kind, const Eigen::Vector3d& a,

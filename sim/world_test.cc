@@ -5,6 +5,7 @@
 #include <cmath>
 #include <vector>
 
+#include "core/vine_model_test_util.h"
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
 #include "sim/vine_generator.h"
@@ -26,31 +27,22 @@ Polyline3 Straight(const Eigen::Vector3d& from, const Eigen::Vector3d& to, int s
   return line;
 }
 
-Cane MakeCane(int id, std::optional<int> parent, CaneKind kind, Polyline3 line) {
-  Cane c;
-  c.id = CaneId(id);
-  if (parent) c.parent_id = CaneId(*parent);
-  c.kind = kind;
-  c.polyline = std::move(line);
-  return c;
-}
-
 // Trunk 1 (z 0 -> 0.9) topped by a head sphere; cane 2 from the head along +x (1 m, z = 1.0);
 // forks 3 at x = 0.2 and 4 at x = 0.6 of cane 2; 5 grows from fork 4 and 6 from fork 3; water
 // shoot 7 from the trunk at z = 0.3; spur 8 on the head.
 Scene HandmadeScene() {
   Scene s;
   VineModel& v = s.vine;
-  v.canes.push_back(MakeCane(1, std::nullopt, CaneKind::kTrunk,
+  v.canes.push_back(CaneOf(1, std::nullopt, CaneKind::kTrunk,
                              Straight({0, 0.8, 0}, {0, 0.8, 0.9}, 9, 0.02)));
   v.head.spheres.push_back({Eigen::Vector3d(0, 0.8, 0.95), 0.05});
-  v.canes.push_back(MakeCane(2, 1, CaneKind::kCane, Straight({0.05, 0.8, 1.0}, {1.05, 0.8, 1.0}, 50, 0.005)));
-  v.canes.push_back(MakeCane(3, 2, CaneKind::kCane, Straight({0.25, 0.8, 1.0}, {0.25, 0.8, 1.5}, 20, 0.003)));
-  v.canes.push_back(MakeCane(4, 2, CaneKind::kCane, Straight({0.65, 0.8, 1.0}, {0.65, 0.8, 1.5}, 20, 0.003)));
-  v.canes.push_back(MakeCane(5, 4, CaneKind::kCane, Straight({0.65, 0.8, 1.2}, {0.9, 0.8, 1.4}, 10, 0.002)));
-  v.canes.push_back(MakeCane(6, 3, CaneKind::kCane, Straight({0.25, 0.8, 1.3}, {0.0, 0.8, 1.5}, 10, 0.002)));
-  v.canes.push_back(MakeCane(7, 1, CaneKind::kCane, Straight({0, 0.8, 0.3}, {-0.5, 0.8, 0.5}, 20, 0.003)));
-  v.canes.push_back(MakeCane(8, 1, CaneKind::kSpur, Straight({0, 0.8, 1.0}, {0, 0.8, 1.06}, 6, 0.006)));
+  v.canes.push_back(CaneOf(2, 1, CaneKind::kCane, Straight({0.05, 0.8, 1.0}, {1.05, 0.8, 1.0}, 50, 0.005)));
+  v.canes.push_back(CaneOf(3, 2, CaneKind::kCane, Straight({0.25, 0.8, 1.0}, {0.25, 0.8, 1.5}, 20, 0.003)));
+  v.canes.push_back(CaneOf(4, 2, CaneKind::kCane, Straight({0.65, 0.8, 1.0}, {0.65, 0.8, 1.5}, 20, 0.003)));
+  v.canes.push_back(CaneOf(5, 4, CaneKind::kCane, Straight({0.65, 0.8, 1.2}, {0.9, 0.8, 1.4}, 10, 0.002)));
+  v.canes.push_back(CaneOf(6, 3, CaneKind::kCane, Straight({0.25, 0.8, 1.3}, {0.0, 0.8, 1.5}, 10, 0.002)));
+  v.canes.push_back(CaneOf(7, 1, CaneKind::kCane, Straight({0, 0.8, 0.3}, {-0.5, 0.8, 0.5}, 20, 0.003)));
+  v.canes.push_back(CaneOf(8, 1, CaneKind::kSpur, Straight({0, 0.8, 1.0}, {0, 0.8, 1.06}, 6, 0.006)));
   EXPECT_TRUE(v.Validate().ok()) << v.Validate();
   return s;
 }

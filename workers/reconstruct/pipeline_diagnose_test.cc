@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "core/model_metrics.h"
+#include "core/vine_model_test_util.h"
 #include "gtest/gtest.h"
 #include "workers/reconstruct/connect_test_util.h"
 #include "workers/reconstruct/correspondence_test_util.h"
@@ -229,32 +230,23 @@ RouteLoss MeasureRouteLoss(const VineModel& model, const VineModel& truth) {
 
 // Known answers of MeasureRouteLoss (this runs in ctest): a trunk, cane A on it, B forking from
 // A's middle, C on the trunk.
-Cane MakeCane(int id, std::optional<int> parent, CaneKind kind, Polyline3 line) {
-  Cane c;
-  c.id = CaneId(id);
-  if (parent) c.parent_id = CaneId(*parent);
-  c.kind = kind;
-  c.polyline = std::move(line);
-  return c;
-}
-
 TEST(PipelineStages, RouteLossKnownAnswers) {
   using connect_test::Line;
   const Eigen::Vector3d top(0, 0, 1.0), fork(0.2, 0, 1.0);
   VineModel truth;
-  truth.canes = {MakeCane(1, {}, CaneKind::kTrunk, Line({0, 0, 0.5}, top)),
-                 MakeCane(2, 1, CaneKind::kCane, Line(top, {0.4, 0, 1.0})),        // A
-                 MakeCane(3, 2, CaneKind::kCane, Line(fork, {0.2, 0, 1.3})),       // B
-                 MakeCane(4, 1, CaneKind::kCane, Line(top, {0.3, 0.05, 1.3}))};    // C
+  truth.canes = {CaneOf(1, {}, CaneKind::kTrunk, Line({0, 0, 0.5}, top)),
+                 CaneOf(2, 1, CaneKind::kCane, Line(top, {0.4, 0, 1.0})),        // A
+                 CaneOf(3, 2, CaneKind::kCane, Line(fork, {0.2, 0, 1.3})),       // B
+                 CaneOf(4, 1, CaneKind::kCane, Line(top, {0.3, 0.05, 1.3}))};    // C
   // B's base point: 1 cm above the fork (its reconstruction starts there).
   const Polyline3 b_line = Line({0.2, 0, 1.01}, {0.2, 0, 1.3});
   const double length = 0.5 + 0.4 + 0.3 + truth.canes[3].polyline.Length();
   auto model_with = [&](const Polyline3& a_line, int b_parent) {
     VineModel m;
-    m.canes = {MakeCane(1, {}, CaneKind::kTrunk, truth.canes[0].polyline),
-               MakeCane(2, 1, CaneKind::kCane, a_line),
-               MakeCane(3, b_parent, CaneKind::kCane, b_line),
-               MakeCane(4, 1, CaneKind::kCane, truth.canes[3].polyline)};
+    m.canes = {CaneOf(1, {}, CaneKind::kTrunk, truth.canes[0].polyline),
+               CaneOf(2, 1, CaneKind::kCane, a_line),
+               CaneOf(3, b_parent, CaneKind::kCane, b_line),
+               CaneOf(4, 1, CaneKind::kCane, truth.canes[3].polyline)};
     EXPECT_TRUE(m.Validate().ok());
     return m;
   };
