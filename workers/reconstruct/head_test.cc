@@ -17,6 +17,7 @@
 namespace vb::reconstruct {
 namespace {
 
+using testing_util::CarveHead;
 using testing_util::ErodeThickMask;
 using testing_util::HeadMetrics;
 using testing_util::RowOfSpheresOnATrunk;
@@ -298,10 +299,7 @@ TEST(ReconstructHeadAndTrunk, WideWoodKeepsAHeadRimOneViewLoses) {
     HeadOptions options;
     options.leaf_radius_fraction = fraction;
     options.leaf_wood_radius_px = wood_px;
-    const auto head =
-        ReconstructHeadAndTrunk(views, rig, WorkingVolume(), options, Deadline::Infinite());
-    EXPECT_TRUE(head.ok()) << head.status();
-    return HeadMetrics(head.ok() ? head->head : HeadModel(), vine.head);
+    return HeadMetrics(CarveHead(views, rig, options), vine.head);
   };
   const ReconstructionMetrics loose = metrics(1.0, 0.0);
   const ReconstructionMetrics tight = metrics(0.5, 0.0);

@@ -7,8 +7,12 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/calibration.h"
+#include "core/deadline.h"
 #include "core/model_metrics.h"
 #include "core/vine_model.h"
+#include "gtest/gtest.h"
+#include "workers/reconstruct/head.h"
 #include "workers/reconstruct/view2d.h"
 
 namespace vb::reconstruct::testing_util {
@@ -20,6 +24,16 @@ inline ReconstructionMetrics HeadMetrics(const HeadModel& reconstructed, const H
   VineModel true_model;
   true_model.head = truth;
   return EvaluateReconstruction(model, true_model).value();
+}
+
+// The head carved from `views` with `options` (no depth hints, no deadline); a test failure and
+// an empty head when carving fails.
+inline HeadModel CarveHead(const std::vector<View2D>& views, const RigCalibration& rig,
+                           const HeadOptions& options) {
+  const auto head =
+      ReconstructHeadAndTrunk(views, rig, WorkingVolume(), options, Deadline::Infinite());
+  EXPECT_TRUE(head.ok()) << head.status();
+  return head.ok() ? head->head : HeadModel();
 }
 
 // A vertical trunk of the given radius at (x, y), sampled every step_m from the ground to top_z.
