@@ -121,6 +121,7 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   // --head-bases-* flags: the cane bases at the head (app/reconstruct_flags.h).
   reconstruct::ReconstructOptions options;
   VB_RETURN_IF_ERROR(ReadSelectionFlags(flags, &options.correspondence));
+  VB_RETURN_IF_ERROR(ReadStrandHalfFlags(flags, &options.strand_halves));  // step 2b
   VB_RETURN_IF_ERROR(ReadSweepFlags(flags, &options.sweep));  // --sweep (step 4e)
   // --head-peel, --head-min-cell, --head-depth-factor, --head-leaf-fraction,
   // --head-centre-on-trunk, --head-leaf-wood-px: the head's options
