@@ -290,7 +290,7 @@ absl::StatusOr<std::vector<ScoredCandidate>> ScoreCandidates(
       std::vector<MatchCandidate> candidates =
           FindCandidates(a, samples[a], rig.cameras[a], b, samples[b], rig.cameras[b],
                          CandidateOptionsFor(options, !other_views.empty()));
-      // Segment indices from here on are strand halves (ViewSamples).
+      // Segment indices from these on are strand halves (ViewSamples).
       const int own_a = static_cast<int>(views[a].segments.size());
       const int own_b = static_cast<int>(views[b].segments.size());
       for (size_t i = 0; i < candidates.size(); ++i) {

@@ -11,6 +11,8 @@
 //     nearer, min_epipolar_sin_refined: the better pairs share a view, and where its skeleton
 //     breaks the ill-conditioned pair is the only one left, its depth fixed by that view).
 //     A run may continue across such a stretch (max_ill_conditioned_gap_samples; off by default).
+//     In the second pass the views' strand halves (strand_halves.h) are searched after their
+//     segments, and a candidate pairing two halves across their strands is dropped.
 //  2. each candidate is triangulated and refined by a Levenberg-Marquardt fit of a 3D polyline
 //     minimising reprojection error in a and b, then checked in the other views
 //     (polyline_fit.h);
