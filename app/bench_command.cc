@@ -121,6 +121,7 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   // --head-bases-* flags: the cane bases at the head (app/reconstruct_flags.h).
   reconstruct::ReconstructOptions options;
   VB_RETURN_IF_ERROR(ReadSelectionFlags(flags, &options.correspondence));
+  VB_RETURN_IF_ERROR(ReadStrandHalfFlags(flags, &options.strand_halves));  // step 2b
   VB_RETURN_IF_ERROR(ReadSweepFlags(flags, &options.sweep));  // --sweep (step 4e)
   // --head-peel, --head-min-cell, --head-depth-factor, --head-leaf-fraction,
   // --head-centre-on-trunk, --head-leaf-wood-px: the head's options
@@ -211,6 +212,12 @@ absl::Status RunBenchReconstruct(Flags& flags) {
                               reconstruct::ExtractStructure(
                                   reconstruct::ClassesOfSimLabels(capture.labels[c]),
                                   rig.cameras[c], options.structure, Deadline::In(60.0)));
+          // The halves as Reconstruct finds them, from the rendered image.
+          if (options.strand_halves.enabled) {
+            VB_ASSIGN_OR_RETURN(view.strand_halves,
+                                reconstruct::FindStrandHalves(view, images[c],
+                                                              options.strand_halves));
+          }
           views.push_back(std::move(view));
         }
       }

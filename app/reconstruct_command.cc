@@ -19,6 +19,7 @@ absl::Status RunReconstruct(Flags& flags) {
   VB_ASSIGN_OR_RETURN(const int64_t threads, flags.Int("threads", 2));
   reconstruct::ReconstructOptions options;
   VB_RETURN_IF_ERROR(ReadSelectionFlags(flags, &options.correspondence));
+  VB_RETURN_IF_ERROR(ReadStrandHalfFlags(flags, &options.strand_halves));  // step 2b
   VB_RETURN_IF_ERROR(ReadSweepFlags(flags, &options.sweep));
   VB_RETURN_IF_ERROR(ReadHeadFlags(flags, &options.head));
   VB_RETURN_IF_ERROR(ReadHeadBasesFlags(flags, &options.head_bases));

@@ -197,6 +197,15 @@ absl::Status ReadExtendFlags(Flags& flags, reconstruct::ExtendOptions* options) 
   return absl::OkStatus();
 }
 
+absl::Status ReadStrandHalfFlags(Flags& flags, reconstruct::StrandHalfOptions* options) {
+  VB_ASSIGN_OR_RETURN(const bool enabled, flags.Bool("strand-halves", options->enabled));
+  VB_ASSIGN_OR_RETURN(const double dip, flags.Double("strand-halves-dip", options->min_seam_dip));
+  VB_RETURN_IF_ERROR(CheckFinite(dip, "--strand-halves-dip", /*zero_ok=*/true));
+  options->enabled = enabled;
+  options->min_seam_dip = dip;
+  return absl::OkStatus();
+}
+
 absl::Status ReadConnectFlags(Flags& flags, reconstruct::ConnectOptions* options) {
   VB_ASSIGN_OR_RETURN(const double min_join,
                       flags.Double("min-join-probability", options->min_join_probability));

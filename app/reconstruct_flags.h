@@ -15,6 +15,7 @@
 #include "workers/reconstruct/extend.h"
 #include "workers/reconstruct/head.h"
 #include "workers/reconstruct/head_bases.h"
+#include "workers/reconstruct/strand_halves.h"
 
 namespace vb::app {
 
@@ -88,6 +89,12 @@ absl::Status ReadHeadExitFlags(Flags& flags, reconstruct::ConnectOptions* option
 // INVALID_ARGUMENT naming the flag: a value that does not parse, --extend-row, --extend-across or
 // --extend-support not finite or < 0, --extend-depth-sd not finite or <= 0.
 absl::Status ReadExtendFlags(Flags& flags, reconstruct::ExtendOptions* options);
+
+// Reads into *options (defaults: its values as given) the strand halves of step 2b
+// (strand_halves.h): --strand-halves BOOL (enabled), --strand-halves-dip G (min_seam_dip, grey
+// levels). INVALID_ARGUMENT naming the flag: a value that does not parse, --strand-halves-dip not
+// finite or < 0.
+absl::Status ReadStrandHalfFlags(Flags& flags, reconstruct::StrandHalfOptions* options);
 
 // Reads into *options (defaults: its values as given) the connect stage's rules of step 6 that
 // decide which canes enter the tree:

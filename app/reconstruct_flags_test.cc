@@ -269,6 +269,40 @@ TEST(ReconstructFlags, RejectsBadExtendValuesNamingTheFlag) {
   }
 }
 
+TEST(ReconstructFlags, StrandHalfFlagsKeepTheDefaultsOrSetTheOptions) {
+  auto absent = ParseAll({});
+  ASSERT_TRUE(absent.ok());
+  reconstruct::StrandHalfOptions options;
+  ASSERT_TRUE(ReadStrandHalfFlags(*absent, &options).ok());
+  const reconstruct::StrandHalfOptions defaults;
+  EXPECT_EQ(options.enabled, defaults.enabled);
+  EXPECT_EQ(options.min_seam_dip, defaults.min_seam_dip);
+
+  auto flags = ParseAll({"--strand-halves", "false", "--strand-halves-dip=4.5"});
+  ASSERT_TRUE(flags.ok());
+  ASSERT_TRUE(ReadStrandHalfFlags(*flags, &options).ok());
+  EXPECT_FALSE(options.enabled);
+  EXPECT_DOUBLE_EQ(options.min_seam_dip, 4.5);
+  EXPECT_TRUE(flags->Finish().ok());  // every flag was read
+  EXPECT_TRUE(options.Validate().ok());
+}
+
+TEST(ReconstructFlags, RejectsBadStrandHalfValuesNamingTheFlag) {
+  const std::vector<std::pair<std::vector<const char*>, std::string>> cases = {
+      {{"--strand-halves-dip", "-1"}, "--strand-halves-dip"},
+      {{"--strand-halves-dip", "nan"}, "--strand-halves-dip"},
+      {{"--strand-halves", "maybe"}, "--strand-halves"},
+  };
+  for (const auto& [args, name] : cases) {
+    auto flags = ParseAll(args);
+    ASSERT_TRUE(flags.ok());
+    reconstruct::StrandHalfOptions options;
+    const absl::Status status = ReadStrandHalfFlags(*flags, &options);
+    EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument) << args[0] << " " << args[1];
+    EXPECT_NE(status.message().find(name), std::string::npos) << status.message();
+  }
+}
+
 TEST(ReconstructFlags, ConnectFlagsKeepTheDefaultsOrSetTheKeepRules) {
   auto absent = ParseAll({});
   ASSERT_TRUE(absent.ok());

@@ -11,6 +11,7 @@
 #include "absl/strings/str_cat.h"
 #include "core/statistics.h"
 #include "core/status_macros.h"
+#include "workers/reconstruct/strand_halves.h"
 
 namespace vb::reconstruct {
 namespace {
@@ -22,6 +23,20 @@ absl::Status Invalid(const std::string& field, const std::string& message) {
 bool IsEmptyView(const View2D& view) {
   return view.width == 0 && view.height == 0 && view.classes.data.empty() &&
          view.segments.empty();
+}
+
+absl::Status ValidateSegment(const Segment2D& segment, const std::string& field) {
+  if (segment.widths_px.size() != segment.points.size()) {
+    return Invalid(field, absl::StrCat(segment.points.size(), " points but ",
+                                       segment.widths_px.size(), " widths"));
+  }
+  for (size_t k = 0; k < segment.points.size(); ++k) {
+    if (!segment.points[k].allFinite() || !std::isfinite(segment.widths_px[k]) ||
+        segment.widths_px[k] < 0.0) {
+      return Invalid(field, absl::StrCat("point ", k, " not finite or negative width"));
+    }
+  }
+  return absl::OkStatus();
 }
 
 absl::Status ValidateInput(const std::vector<View2D>& views, const RigCalibration& rig) {
@@ -61,17 +76,22 @@ absl::Status ValidateInput(const std::vector<View2D>& views, const RigCalibratio
       return Invalid(field + ".centreline_distance_px", "size differs from the view's");
     }
     for (size_t s = 0; s < view.segments.size(); ++s) {
-      const Segment2D& segment = view.segments[s];
-      const std::string sf = absl::StrCat(field, ".segments[", s, "]");
-      if (segment.widths_px.size() != segment.points.size()) {
-        return Invalid(sf, absl::StrCat(segment.points.size(), " points but ",
-                                        segment.widths_px.size(), " widths"));
+      VB_RETURN_IF_ERROR(ValidateSegment(view.segments[s],
+                                         absl::StrCat(field, ".segments[", s, "]")));
+    }
+    for (size_t h = 0; h < view.strand_halves.size(); ++h) {
+      const StrandHalf& half = view.strand_halves[h];
+      const std::string hf = absl::StrCat(field, ".strand_halves[", h, "]");
+      VB_RETURN_IF_ERROR(ValidateSegment(half.path, hf));
+      if (half.to_sibling_px.size() != half.path.points.size()) {
+        return Invalid(hf, absl::StrCat(half.path.points.size(), " points but ",
+                                        half.to_sibling_px.size(), " steps to the sibling"));
       }
-      for (size_t k = 0; k < segment.points.size(); ++k) {
-        if (!segment.points[k].allFinite() || !std::isfinite(segment.widths_px[k]) ||
-            segment.widths_px[k] < 0.0) {
-          return Invalid(sf, absl::StrCat("point ", k, " not finite or negative width"));
-        }
+      if (half.sibling < 0 || half.sibling >= static_cast<int>(view.strand_halves.size())) {
+        return Invalid(hf, absl::StrCat("sibling ", half.sibling, " out of range"));
+      }
+      for (const Eigen::Vector2d& step : half.to_sibling_px) {
+        if (!step.allFinite()) return Invalid(hf, "step to the sibling not finite");
       }
     }
   }
@@ -254,7 +274,8 @@ absl::StatusOr<std::vector<ScoredCandidate>> ScoreCandidates(
   samples.clear();
   samples.reserve(views.size());
   for (size_t v = 0; v < views.size(); ++v) {
-    samples.emplace_back(views[v], rig.cameras[v], options.sample_step_px);
+    samples.emplace_back(views[v], rig.cameras[v], options.sample_step_px,
+                         options.strand_halves ? &views[v].strand_halves : nullptr);
   }
   Eigen::AlignedBox3d margin_box = options.volume.box;
   margin_box.min().array() -= 0.05;
@@ -269,8 +290,18 @@ absl::StatusOr<std::vector<ScoredCandidate>> ScoreCandidates(
       std::vector<MatchCandidate> candidates =
           FindCandidates(a, samples[a], rig.cameras[a], b, samples[b], rig.cameras[b],
                          CandidateOptionsFor(options, !other_views.empty()));
+      // Segment indices from these on are strand halves (ViewSamples).
+      const int own_a = static_cast<int>(views[a].segments.size());
+      const int own_b = static_cast<int>(views[b].segments.size());
       for (size_t i = 0; i < candidates.size(); ++i) {
         if (i % 64 == 0) VB_RETURN_IF_ERROR(deadline.Check("correspondence"));
+        const MatchCandidate& c = candidates[i];
+        if (options.strand_halves && c.segment_a >= own_a && c.segment_b >= own_b &&
+            CrossesStrands(c, views[a].strand_halves[c.segment_a - own_a],
+                           views[b].strand_halves[c.segment_b - own_b], rig.cameras[a],
+                           rig.cameras[b])) {
+          continue;
+        }
         ScoredCandidate s;
         s.candidate = std::move(candidates[i]);
         s.fit = FitPolyline(s.candidate, rig.cameras[a], rig.cameras[b], options.fit);

@@ -11,6 +11,8 @@
 //     nearer, min_epipolar_sin_refined: the better pairs share a view, and where its skeleton
 //     breaks the ill-conditioned pair is the only one left, its depth fixed by that view).
 //     A run may continue across such a stretch (max_ill_conditioned_gap_samples; off by default).
+//     In the second pass the views' strand halves (strand_halves.h) are searched after their
+//     segments, and a candidate pairing two halves across their strands is dropped.
 //  2. each candidate is triangulated and refined by a Levenberg-Marquardt fit of a 3D polyline
 //     minimising reprojection error in a and b, then checked in the other views
 //     (polyline_fit.h);
@@ -101,6 +103,12 @@ struct CorrespondenceOptions {
   // off and stay 0 with it on, while the committed second-pass weights expect them measured: with
   // it on, probabilities shift (retrain with it on before using it).
   bool refine_before_scoring = false;
+  // Search the views' strand halves (View2D::strand_halves, strand_halves.h) after their
+  // segments, both in the pairs and in the other views' checks, and drop a candidate pairing two
+  // halves across the strands (CrossesStrands). The first pass, whose pieces refine the rig, does
+  // not (reconstruct.h FirstPassOptions). Views without halves are searched as before. On since
+  // session 23 (docs/reconstruction.md section 3, "Strand halves").
+  bool strand_halves = true;
   double max_rms_px = 8.0;              // candidates fitting worse are dropped before scoring
   MatchClassifier classifier = DefaultMatchClassifier();  // candidate probabilities
   double min_probability = 0.02;        // candidates below are dropped before Gibbs sampling
@@ -203,11 +211,14 @@ std::vector<std::vector<int>> CandidateConflicts(const std::vector<ScoredCandida
 
 // The selected pieces of cane, ordered by (view_a, view_b, segment_a), then as found.
 // rig.cameras[i] took views[i]. Views may have no segments (no pieces come from them); a view
-// whose width/height is 0 and has no class image counts as empty.
+// whose width/height is 0 and has no class image counts as empty. A piece on a strand half names
+// it as segment view.segments.size() + its index in view.strand_halves.
 // INVALID_ARGUMENT: fewer than 2 views; views.size() != rig.cameras.size(); an invalid camera
 // (non-finite calibration: RigCalibration::Validate); two camera centres closer than 1 cm; a
 // view whose size differs from its camera's, or whose class/distance images have the wrong
-// size; a segment with non-finite points or widths, or widths not one per point; invalid options.
+// size; a segment or strand half with non-finite points or widths, or widths not one per point;
+// a strand half whose steps to its sibling are not one per point or whose sibling index is out
+// of range; invalid options.
 // DEADLINE_EXCEEDED (or CANCELLED) once `deadline` expires.
 absl::StatusOr<std::vector<Piece3D>> MatchSegments(const std::vector<View2D>& views,
                                                    const RigCalibration& rig,

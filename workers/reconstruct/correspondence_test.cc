@@ -110,6 +110,26 @@ TEST(MatchSegments, BadInputRejects) {
   bad = views;
   bad[2].width = 640;
   EXPECT_EQ(code(MatchSegments(bad, rig, options, inf)), absl::StatusCode::kInvalidArgument);
+  // Strand halves: a sibling out of range, steps not one per point, a non-finite width.
+  StrandHalf half;
+  half.path = views[1].segments[0];
+  half.to_sibling_px.assign(half.path.points.size(), Eigen::Vector2d(0.0, 4.0));
+  half.sibling = 0;
+  bad = views;
+  bad[1].strand_halves = {half};
+  EXPECT_TRUE(MatchSegments(bad, rig, options, inf).ok());  // a well-formed half is searched
+  for (int k = 0; k < 3; ++k) {
+    bad = views;
+    bad[1].strand_halves = {half};
+    if (k == 0) bad[1].strand_halves[0].sibling = 1;
+    if (k == 1) bad[1].strand_halves[0].to_sibling_px.pop_back();
+    if (k == 2) bad[1].strand_halves[0].path.widths_px[2] = NAN;
+    const auto r = MatchSegments(bad, rig, options, inf);
+    EXPECT_EQ(code(r), absl::StatusCode::kInvalidArgument) << k;
+    EXPECT_NE(std::string(r.status().message()).find("views[1].strand_halves[0]"),
+              std::string::npos)
+        << r.status();
+  }
   // Bad options.
   CorrespondenceOptions bad_options;
   bad_options.alpha = 0.0;

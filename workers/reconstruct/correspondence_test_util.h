@@ -22,6 +22,7 @@
 #include "workers/reconstruct/match_classifier.h"
 #include "workers/reconstruct/piece3d.h"
 #include "workers/reconstruct/segmenter.h"
+#include "workers/reconstruct/strand_halves.h"
 #include "workers/reconstruct/structure2d.h"
 #include "workers/reconstruct/synthetic_views.h"
 
@@ -108,7 +109,8 @@ inline SimulatedStop MakeSimulatedStop(uint64_t seed, double break_px = 100.0) {
 // image (`segment` true; rendered as rgb8, where the bench demosaics a Bayer mosaic: vb_capture
 // is not linked here). With `fiducials`, as the bench by default: the platform's fiducials are
 // drawn and listed in both rigs, found in each image (DetectFiducials) and cleared from the
-// classes (ClearFiducials), and each view carries its detections for the rig refinement.
+// classes (ClearFiducials), and each view carries its detections for the rig refinement. Each
+// view's strand halves are found from the rendered image (strand_halves.h, default options).
 // `rig_options` place the rig (the simulator's default rig unless given). Returns a stop
 // without views if rendering or the 2D stage fails.
 inline SimulatedStop MakeRenderedStop(uint64_t seed, bool segment, bool fiducials = false,
@@ -151,6 +153,10 @@ inline SimulatedStop MakeRenderedStop(uint64_t seed, bool segment, bool fiducial
                                    Deadline::Infinite());
     if (!view2d.ok()) return {};
     view2d->fiducials = std::move(found);
+    // As Reconstruct (and the bench's label input) do after the 2D structure.
+    auto halves = FindStrandHalves(*view2d, view->image, StrandHalfOptions{});
+    if (!halves.ok()) return {};
+    view2d->strand_halves = std::move(*halves);
     stop.views.push_back(std::move(*view2d));
   }
   return stop;

@@ -90,9 +90,13 @@ struct Open {
 
 }  // namespace
 
-ViewSamples::ViewSamples(const View2D& view, const CameraCalibration& camera, double step_px) {
-  segments_.reserve(view.segments.size());
+ViewSamples::ViewSamples(const View2D& view, const CameraCalibration& camera, double step_px,
+                         const std::vector<StrandHalf>* halves) {
+  segments_.reserve(view.segments.size() + (halves ? halves->size() : 0));
   for (const Segment2D& s : view.segments) segments_.push_back(Resample(s, camera, step_px));
+  if (halves) {
+    for (const StrandHalf& h : *halves) segments_.push_back(Resample(h.path, camera, step_px));
+  }
   Eigen::AlignedBox2d bounds;
   int pieces = 0;
   for (const SegmentSamples& s : segments_) {

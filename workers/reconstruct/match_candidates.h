@@ -29,7 +29,10 @@ struct SegmentSamples {
 // fast line and nearest-point queries.
 class ViewSamples {
  public:
-  ViewSamples(const View2D& view, const CameraCalibration& camera, double step_px);
+  // With `halves` (may be null: none), their paths are resampled after the view's segments and
+  // numbered from view.segments.size() on, as correspondence's second pass searches them.
+  ViewSamples(const View2D& view, const CameraCalibration& camera, double step_px,
+              const std::vector<StrandHalf>* halves = nullptr);
 
   const std::vector<SegmentSamples>& segments() const { return segments_; }
   // Pieces (segment, k) whose bounding boxes touch the grid cells the segment p0-p1 passes

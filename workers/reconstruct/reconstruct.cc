@@ -63,6 +63,9 @@ CorrespondenceOptions FirstPassOptions(const ReconstructOptions& options) {
   // with the rig as calibrated first hides the very errors the refinement measures (rig error
   // 0.24 -> 0.30 px on tuning seeds 1100-1129).
   first.other_views.rounds = 0;
+  // Nor are the strand halves searched there: their pieces are the less certain ones, and the
+  // halves were measured with the rig refined from the views' own segments.
+  first.strand_halves = false;
   return first;
 }
 
@@ -125,6 +128,9 @@ absl::Status ReconstructOptions::Validate() const {
   VB_RETURN_IF_ERROR(fit.Validate());
   VB_RETURN_IF_ERROR(extend.Validate());
   VB_RETURN_IF_ERROR(trellis.Validate());
+  if (absl::Status s = strand_halves.Validate(); !s.ok()) {
+    return absl::InvalidArgumentError(absl::StrCat("strand_halves.", s.message()));
+  }
   VB_RETURN_IF_ERROR(left_out_wood.Validate());
   VB_RETURN_IF_ERROR(fiducials.Validate());
   if (threads < 1) return absl::InvalidArgumentError("options.threads must be >= 1");
@@ -317,6 +323,10 @@ absl::StatusOr<ReconstructResult> Reconstruct(const std::vector<Image>& images,
     VB_ASSIGN_OR_RETURN(views[i],
                         ExtractStructure(classes[i], rig.cameras[i], options.structure, deadline));
     views[i].fiducials = std::move(found);
+    if (options.strand_halves.enabled) {
+      VB_ASSIGN_OR_RETURN(views[i].strand_halves,
+                          FindStrandHalves(views[i], images[i], options.strand_halves));
+    }
     structure_s[i] = SecondsSince(t);
     return absl::OkStatus();
   }));

@@ -7,6 +7,8 @@
 //   3. correspondence across views, Gibbs sampling  6. connect canes into one tree (connect.h)
 //      and minimum expected loss (correspondence.h) 7. joint Ceres refinement (cane_fit.h)
 //   4. assemble 3D pieces into canes (cane_assembly.h) 8. wires and posts (trellis3d.h)
+//   2b. halves of the skeleton where two canes lie side by side, from the colour image
+//       (strand_halves.h; on by default since s23), searched by 3's second pass
 //   4e. canes found by a depth sweep along the skeleton paths no assembled cane explains
 //       (depth_sweep.h; on by default since s20), before 4d
 //   4d. the assembled canes' ends grown through junctions on two-view evidence (grow.h; on by
@@ -43,6 +45,7 @@
 #include "workers/reconstruct/piece3d.h"
 #include "workers/reconstruct/rig_refine.h"
 #include "workers/reconstruct/segmenter.h"
+#include "workers/reconstruct/strand_halves.h"
 #include "workers/reconstruct/structure2d.h"
 #include "workers/reconstruct/trellis3d.h"
 
@@ -51,6 +54,10 @@ namespace vb::reconstruct {
 struct ReconstructOptions {
   WorkingVolume volume;                  // structure outside it is rejected
   Structure2DOptions structure;
+  // Halves of the skeleton where two canes lie side by side (strand_halves.h), found from the
+  // colour images by Reconstruct (ReconstructFromViews takes the views as given) and searched by
+  // the second pass of correspondence (correspondence.strand_halves).
+  StrandHalfOptions strand_halves;
   CorrespondenceOptions correspondence;
   AssemblyOptions assembly;
   DepthSweepOptions sweep;               // step 4e: unexplained skeleton paths (depth_sweep.h)

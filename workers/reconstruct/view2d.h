@@ -70,6 +70,17 @@ struct FiducialObservation {
   Eigen::Vector2d expected_px = Eigen::Vector2d::Zero();  // projection through the calibration
 };
 
+// One of the two halves of a skeleton stretch where two canes lie side by side in the view and
+// the skeleton runs between them (strand_halves.h): each half follows one cane's axis, w/4 off the
+// skeleton across a strand w wide, w/2 wide. Correspondence searches halves like segments (in its
+// second pass), numbered after the view's own segments.
+struct StrandHalf {
+  Segment2D path;      // the half's centre line and widths; node_begin/node_end are -1
+  int parent = -1;     // index into View2D::segments of the halved stretch's segment
+  int sibling = -1;    // index into View2D::strand_halves of the other half
+  std::vector<Eigen::Vector2d> to_sibling_px;  // per path point: the step to the sibling's, px
+};
+
 struct View2D {
   int width = 0;
   int height = 0;
@@ -87,6 +98,9 @@ struct View2D {
   // The platform's fiducials seen in the image (empty when the rig has none or they were not
   // looked for); rig_refine.h uses them as points of known position.
   std::vector<FiducialObservation> fiducials;
+  // Halves of the stretches where two canes lie side by side (FindStrandHalves; empty when not
+  // looked for: the 2D stage needs the colour image for them).
+  std::vector<StrandHalf> strand_halves;
 
   bool IsForeground(int x, int y) const {
     return classes.at(x, y) == PixelClass::kForeground;
