@@ -132,7 +132,8 @@ absl::StatusOr<std::vector<StrandHalf>> FindStrandHalves(const View2D& view, con
     auto seamed = [&](size_t k) {
       const double w = segment.widths_px[k];
       if (!(w >= min_width) || OnThickMask(view, segment.points[k])) return false;
-      const Eigen::Vector2d d = Direction(segment.points, k >= 2 ? k - 2 : 0, std::min(n - 1, k + 2));
+      const Eigen::Vector2d d =
+          Direction(segment.points, k >= 2 ? k - 2 : 0, std::min(n - 1, k + 2));
       if (d.isZero()) return false;
       const Eigen::Vector2d normal(-d.y(), d.x());
       const Eigen::Vector2d& p = segment.points[k];
