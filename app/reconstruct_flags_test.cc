@@ -278,10 +278,10 @@ TEST(ReconstructFlags, StrandHalfFlagsKeepTheDefaultsOrSetTheOptions) {
   EXPECT_EQ(options.enabled, defaults.enabled);
   EXPECT_EQ(options.min_seam_dip, defaults.min_seam_dip);
 
-  auto flags = ParseAll({"--strand-halves", "false", "--strand-halves-dip=4.5"});
+  auto flags = ParseAll({"--strand-halves", "true", "--strand-halves-dip=4.5"});
   ASSERT_TRUE(flags.ok());
   ASSERT_TRUE(ReadStrandHalfFlags(*flags, &options).ok());
-  EXPECT_FALSE(options.enabled);
+  EXPECT_TRUE(options.enabled);
   EXPECT_DOUBLE_EQ(options.min_seam_dip, 4.5);
   EXPECT_TRUE(flags->Finish().ok());  // every flag was read
   EXPECT_TRUE(options.Validate().ok());

@@ -37,7 +37,7 @@ const std::vector<Command>& Commands() {
        " [--head-depth-factor F] [--head-leaf-fraction F] [--head-centre-on-trunk]"
        " [--head-leaf-wood-px X]"
        " [--head-bases] [--head-bases-reach M] [--head-bases-thick-views N]"
-       " [--head-bases-inside M] [--strand-halves false] [--strand-halves-dip G]"
+       " [--head-bases-inside M] [--strand-halves] [--strand-halves-dip G]"
        " [--sweep-*, --head-exit-*, --extend-*, --keep-*:"
        " app/reconstruct_flags.h]",
        vb::app::RunReconstruct},
@@ -61,7 +61,7 @@ const std::vector<Command>& Commands() {
        " [--head-depth-factor F] [--head-leaf-fraction F] [--head-centre-on-trunk]"
        " [--head-leaf-wood-px X] [--sweep false]"
        " [--grow-refit M] [--grow-max-length M] [--head-bases] [--head-bases-reach M]"
-       " [--head-bases-thick-views N] [--head-bases-inside M] [--strand-halves false]"
+       " [--head-bases-thick-views N] [--head-bases-inside M] [--strand-halves]"
        " [--strand-halves-dip G]"
        " [--sweep-*, --head-exit-*, --extend-*, --keep-*: app/reconstruct_flags.h]",
        vb::app::RunBenchReconstruct},

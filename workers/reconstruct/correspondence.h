@@ -106,8 +106,9 @@ struct CorrespondenceOptions {
   // Search the views' strand halves (View2D::strand_halves, strand_halves.h) after their
   // segments, both in the pairs and in the other views' checks, and drop a candidate pairing two
   // halves across the strands (CrossesStrands). The first pass, whose pieces refine the rig, does
-  // not (reconstruct.h FirstPassOptions). Views without halves are searched as before. On since
-  // session 23 (docs/reconstruction.md section 3, "Strand halves").
+  // not (reconstruct.h FirstPassOptions). Views without halves (the default: the 2D stage finds
+  // none unless ReconstructOptions::strand_halves is enabled) are searched as before
+  // (docs/reconstruction.md section 3, "Strand halves").
   bool strand_halves = true;
   double max_rms_px = 8.0;              // candidates fitting worse are dropped before scoring
   MatchClassifier classifier = DefaultMatchClassifier();  // candidate probabilities

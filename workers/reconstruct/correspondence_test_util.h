@@ -110,7 +110,8 @@ inline SimulatedStop MakeSimulatedStop(uint64_t seed, double break_px = 100.0) {
 // is not linked here). With `fiducials`, as the bench by default: the platform's fiducials are
 // drawn and listed in both rigs, found in each image (DetectFiducials) and cleared from the
 // classes (ClearFiducials), and each view carries its detections for the rig refinement. Each
-// view's strand halves are found from the rendered image (strand_halves.h, default options).
+// view's strand halves are found from the rendered image with the default options (none, as
+// they are off by default; VB_STRAND_HALVES=1 switches them on for the diagnosis reports).
 // `rig_options` place the rig (the simulator's default rig unless given). Returns a stop
 // without views if rendering or the 2D stage fails.
 inline SimulatedStop MakeRenderedStop(uint64_t seed, bool segment, bool fiducials = false,
@@ -154,7 +155,11 @@ inline SimulatedStop MakeRenderedStop(uint64_t seed, bool segment, bool fiducial
     if (!view2d.ok()) return {};
     view2d->fiducials = std::move(found);
     // As Reconstruct (and the bench's label input) do after the 2D structure.
-    auto halves = FindStrandHalves(*view2d, view->image, StrandHalfOptions{});
+    StrandHalfOptions halves_options;
+    if (const char* env = std::getenv("VB_STRAND_HALVES")) {
+      halves_options.enabled = std::string(env) == "1";
+    }
+    auto halves = FindStrandHalves(*view2d, view->image, halves_options);
     if (!halves.ok()) return {};
     view2d->strand_halves = std::move(*halves);
     stop.views.push_back(std::move(*view2d));

@@ -8,7 +8,7 @@
 //      and minimum expected loss (correspondence.h) 7. joint Ceres refinement (cane_fit.h)
 //   4. assemble 3D pieces into canes (cane_assembly.h) 8. wires and posts (trellis3d.h)
 //   2b. halves of the skeleton where two canes lie side by side, from the colour image
-//       (strand_halves.h; on by default since s23), searched by 3's second pass
+//       (strand_halves.h; off by default, s23), searched by 3's second pass
 //   4e. canes found by a depth sweep along the skeleton paths no assembled cane explains
 //       (depth_sweep.h; on by default since s20), before 4d
 //   4d. the assembled canes' ends grown through junctions on two-view evidence (grow.h; on by

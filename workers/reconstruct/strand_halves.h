@@ -16,7 +16,7 @@
 // canes side by side in both views keep their order, and the crossed pairing triangulates
 // between them, 15-40 mm off in depth (CrossesStrands). Without the seam test and the ordering
 // test the halves' pieces are right about as often as not and cost more precision than they give
-// recall (sessions 18 and 23).
+// recall (sessions 18 and 23). Off by default (StrandHalfOptions::enabled).
 // Thread-safe (pure functions).
 #pragma once
 
@@ -31,7 +31,10 @@
 namespace vb::reconstruct {
 
 struct StrandHalfOptions {
-  bool enabled = true;
+  // Off by default: on tuning seeds 1100-1299 it gained recall and connectivity at little cost in
+  // precision, but 1300-1399 and the report seeds did not confirm it (precision fell more than
+  // recall rose; docs/reconstruction.md section 3, "Strand halves").
+  bool enabled = false;
   // A skeleton point is wide when its width is at least the larger of min_width_px and
   // min_width_ratio x the median width of the view's skeleton points.
   double min_width_px = 6.0;

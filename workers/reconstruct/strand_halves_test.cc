@@ -62,12 +62,19 @@ Scene MakeScene(const std::vector<Cylinder>& cylinders, double strand_y, double 
   return s;
 }
 
+// The default options, switched on (the option is off by default).
+StrandHalfOptions On() {
+  StrandHalfOptions options;
+  options.enabled = true;
+  return options;
+}
+
 // Two 6 px canes side by side, axes at y = 55 and 61: a strand 12 px wide along y = 58.
 Scene SideBySide() { return MakeScene({{55.0, 3.0}, {61.0, 3.0}}, 58.0, 12.0); }
 
 TEST(StrandHalves, TwoCanesSideBySideGetAHalfOnEachAxis) {
   const Scene s = SideBySide();
-  const auto halves = FindStrandHalves(s.view, s.image, {});
+  const auto halves = FindStrandHalves(s.view, s.image, On());
   ASSERT_TRUE(halves.ok()) << halves.status();
   ASSERT_EQ(halves->size(), 2u);
   std::vector<double> axes;
@@ -93,7 +100,7 @@ TEST(StrandHalves, TwoCanesSideBySideGetAHalfOnEachAxis) {
 
 TEST(StrandHalves, OneWideCaneHasNoSeamAndStaysWhole) {
   const Scene s = MakeScene({{58.0, 6.0}}, 58.0, 12.0);
-  const auto halves = FindStrandHalves(s.view, s.image, {});
+  const auto halves = FindStrandHalves(s.view, s.image, On());
   ASSERT_TRUE(halves.ok()) << halves.status();
   EXPECT_TRUE(halves->empty());
   // The width alone would halve it: the same strand drawn flat (no shading across it) passes a
@@ -105,39 +112,37 @@ TEST(StrandHalves, OneWideCaneHasNoSeamAndStaysWhole) {
       p[0] = p[1] = p[2] = 150;
     }
   }
-  StrandHalfOptions no_dip;
+  StrandHalfOptions no_dip = On();
   no_dip.min_seam_dip = 0.0;
   const auto split = FindStrandHalves(flat.view, flat.image, no_dip);
   ASSERT_TRUE(split.ok());
   EXPECT_EQ(split->size(), 2u);
-  EXPECT_TRUE(FindStrandHalves(flat.view, flat.image, {})->empty());
+  EXPECT_TRUE(FindStrandHalves(flat.view, flat.image, On())->empty());
 }
 
 TEST(StrandHalves, NoneWhenNarrowShortOnTheThickMaskOrOff) {
   // Narrow: the strand no wider than 1.5 x the median (the thin cane's 4 px).
   const Scene narrow = MakeScene({{55.0, 3.0}, {61.0, 3.0}}, 58.0, 5.5);
-  EXPECT_TRUE(FindStrandHalves(narrow.view, narrow.image, {})->empty());
+  EXPECT_TRUE(FindStrandHalves(narrow.view, narrow.image, On())->empty());
   // Short: 15 px of strand, under min_run_px 20.
   const Scene short_strand = MakeScene({{55.0, 3.0}, {61.0, 3.0}}, 58.0, 12.0, 45.0);
-  EXPECT_TRUE(FindStrandHalves(short_strand.view, short_strand.image, {})->empty());
+  EXPECT_TRUE(FindStrandHalves(short_strand.view, short_strand.image, On())->empty());
   // On the thick mask (the head and trunk).
   Scene thick = SideBySide();
   thick.view.thick_mask.assign(static_cast<size_t>(kWidth) * kHeight, 1);
-  EXPECT_TRUE(FindStrandHalves(thick.view, thick.image, {})->empty());
-  StrandHalfOptions off;
-  off.enabled = false;
+  EXPECT_TRUE(FindStrandHalves(thick.view, thick.image, On())->empty());
   const Scene s = SideBySide();
-  EXPECT_TRUE(FindStrandHalves(s.view, s.image, off)->empty());
+  EXPECT_TRUE(FindStrandHalves(s.view, s.image, StrandHalfOptions{})->empty());  // off
 }
 
 TEST(StrandHalves, BadImagesAndOptionsAreNamed) {
   const Scene s = SideBySide();
   const Image small(kWidth - 1, kHeight, PixelFormat::kRgb8);
-  auto status = FindStrandHalves(s.view, small, {}).status();
+  auto status = FindStrandHalves(s.view, small, On()).status();
   EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument);
   EXPECT_NE(status.message().find("image"), std::string::npos) << status.message();
   const Image mono(kWidth, kHeight, PixelFormat::kMono8);
-  status = FindStrandHalves(s.view, mono, {}).status();
+  status = FindStrandHalves(s.view, mono, On()).status();
   EXPECT_NE(status.message().find("rgb8"), std::string::npos) << status.message();
 
   const std::vector<std::pair<std::function<void(StrandHalfOptions*)>, std::string>> cases = {
@@ -147,7 +152,7 @@ TEST(StrandHalves, BadImagesAndOptionsAreNamed) {
       {[](StrandHalfOptions* o) { o->min_seam_dip = -1.0; }, "min_seam_dip"},
   };
   for (const auto& [set, field] : cases) {
-    StrandHalfOptions options;
+    StrandHalfOptions options = On();
     set(&options);
     status = FindStrandHalves(s.view, s.image, options).status();
     EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument) << field;
