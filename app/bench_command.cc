@@ -212,12 +212,10 @@ absl::Status RunBenchReconstruct(Flags& flags) {
                               reconstruct::ExtractStructure(
                                   reconstruct::ClassesOfSimLabels(capture.labels[c]),
                                   rig.cameras[c], options.structure, Deadline::In(60.0)));
-          // The halves as Reconstruct finds them, from the rendered image.
-          if (options.strand_halves.enabled) {
-            VB_ASSIGN_OR_RETURN(view.strand_halves,
-                                reconstruct::FindStrandHalves(view, images[c],
-                                                              options.strand_halves));
-          }
+          // The halves as Reconstruct finds them, from the rendered image (none when off).
+          VB_ASSIGN_OR_RETURN(view.strand_halves,
+                              reconstruct::FindStrandHalves(view, images[c],
+                                                            options.strand_halves));
           views.push_back(std::move(view));
         }
       }

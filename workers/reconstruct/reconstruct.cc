@@ -323,10 +323,8 @@ absl::StatusOr<ReconstructResult> Reconstruct(const std::vector<Image>& images,
     VB_ASSIGN_OR_RETURN(views[i],
                         ExtractStructure(classes[i], rig.cameras[i], options.structure, deadline));
     views[i].fiducials = std::move(found);
-    if (options.strand_halves.enabled) {
-      VB_ASSIGN_OR_RETURN(views[i].strand_halves,
-                          FindStrandHalves(views[i], images[i], options.strand_halves));
-    }
+    VB_ASSIGN_OR_RETURN(views[i].strand_halves,
+                        FindStrandHalves(views[i], images[i], options.strand_halves));
     structure_s[i] = SecondsSince(t);
     return absl::OkStatus();
   }));
