@@ -1,11 +1,21 @@
 // SPDX-License-Identifier: Apache-2.0
-// Scratch diagnosis (session 24): where the lost length lies. Every 5 mm sample of the vine's trunk
-// and canes inside two or more images that the final model does not recall (no model cane within
-// 10 mm), split by distance to the nearest wire, by the length of the run of lost samples it is in
-// (and whether that run is the whole cane, touches the base or the tip, or lies between recalled
-// stretches), and by kind. Run with
+// Diagnosis tools, not tests (docs/diagnosis.md, "LostWhere"): where the length the final model
+// does not recall lies, and pictures of it.
+// - LostWhere.DISABLED_Report: every 5 mm sample of the vine's trunk and canes inside two or more
+//   images that the final model does not recall (no model cane within 10 mm), split by distance
+//   to the nearest wire, by the run of lost samples it is in (its length; the whole cane, at the
+//   base, at the tip or between recalled stretches, and for the last whether the recalling model
+//   canes on either side are one and whether the chord between them would recall it), by kind and
+//   by the views where it lies along another cane of the vine.
+// - LostWhere.DISABLED_Bridges: chords between the ends of two model canes that point at each
+//   other (VB_BRIDGE_MAX, VB_BRIDGE_DEG): how much of them lies on true wood, what they recall.
+// - LostWhere.DISABLED_Overlay and DISABLED_StageOverlay: one stop (VB_SEED) drawn per view as a
+//   PPM under VB_OUT_DIR: recalled and lost samples over the classes, skeleton and model, or the
+//   samples coloured by the first stage where they are lost (FirstLostStage).
+// Run with
 //   VB_INPUT=images VB_SEED=1300 VB_STOPS=20 vb_reconstruct_test
 //     --gtest_also_run_disabled_tests --gtest_filter='LostWhere.DISABLED_Report'
+// Tuning seeds only (1100-1999; docs/reconstruction.md "Seeds").
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -184,7 +194,8 @@ TEST(LostWhere, DISABLED_Bridges) {
       const double len = pl.Length();
       if (len < 0.03) continue;
       ends.push_back({static_cast<int>(c), pl.points.front(), -pl.TangentAt(std::min(0.015, len))});
-      ends.push_back({static_cast<int>(c), pl.points.back(), pl.TangentAt(std::max(0.0, len - 0.015))});
+      ends.push_back(
+          {static_cast<int>(c), pl.points.back(), pl.TangentAt(std::max(0.0, len - 0.015))});
     }
     struct Pair { double gap; int a, b; };
     std::vector<Pair> pairs;
@@ -199,7 +210,8 @@ TEST(LostWhere, DISABLED_Bridges) {
         if (ends[b].out.normalized().dot(-u) < cos_max) continue;
         pairs.push_back({gap, static_cast<int>(a), static_cast<int>(b)});
       }
-    std::sort(pairs.begin(), pairs.end(), [](const Pair& x, const Pair& y) { return x.gap < y.gap; });
+    std::sort(pairs.begin(), pairs.end(),
+              [](const Pair& x, const Pair& y) { return x.gap < y.gap; });
     std::vector<char> used(ends.size(), 0);
     std::vector<std::pair<Polyline3, int>> chords;
     for (const Pair& pr : pairs) {
@@ -250,70 +262,41 @@ TEST(LostWhere, DISABLED_Bridges) {
   EXPECT_GT(total, 0.0);
 }
 
-// Overlays for one stop (VB_SEED): per view, a PPM under VB_OUT_DIR (/tmp) with the classes
-// (background dark, wood grey, wires blue, posts brown), the skeleton (white), the model's canes
-// (cyan) and the vine's true samples inside 2+ images, recalled (green) or lost (red).
-TEST(LostWhere, DISABLED_Overlay) {
-  const auto [first, count, images, fiducials] = ReportStopsFromEnv(1300, 1);
-  const char* dir = std::getenv("VB_OUT_DIR");
-  const std::string out = dir ? dir : "/tmp";
-  const SimulatedStop stop = MakeRenderedStop(first, images, fiducials);
-  const auto result = ReconstructFromViews(stop.views, stop.rig, ReconstructOptions{},
-                                           Deadline::Infinite());
-  ASSERT_TRUE(result.ok()) << result.status();
-  const std::vector<LengthSample> samples = SampleTrueLength(stop, 0.0025, false);
-  for (size_t v = 0; v < stop.views.size(); ++v) {
-    const View2D& view = stop.views[v];
-    const int w = view.width, h = view.height;
-    std::vector<uint8_t> rgb(static_cast<size_t>(w) * h * 3);
-    auto put = [&](int x, int y, uint8_t r, uint8_t g, uint8_t b) {
-      if (x < 0 || y < 0 || x >= w || y >= h) return;
-      uint8_t* q = &rgb[(static_cast<size_t>(y) * w + x) * 3];
-      q[0] = r; q[1] = g; q[2] = b;
-    };
+// A picture of one view for the overlays: its classes (background dark, wood grey, wires blue,
+// posts brown) and skeleton (light grey), drawn on by pixel, written as a binary PPM.
+struct Canvas {
+  int w = 0, h = 0;
+  std::vector<uint8_t> rgb;
+
+  explicit Canvas(const View2D& view)
+      : w(view.width), h(view.height), rgb(static_cast<size_t>(w) * h * 3, 25) {
+    const uint8_t wood[3] = {90, 90, 90}, wire[3] = {50, 50, 150}, post[3] = {110, 80, 50},
+                  skeleton[3] = {190, 190, 190};
     for (int y = 0; y < h; ++y)
       for (int x = 0; x < w; ++x) {
-        switch (view.classes.at(x, y)) {
-          case PixelClass::kBackground: put(x, y, 25, 25, 25); break;
-          case PixelClass::kForeground: put(x, y, 95, 95, 95); break;
-          case PixelClass::kWire: put(x, y, 50, 50, 150); break;
-          case PixelClass::kPost: put(x, y, 110, 80, 50); break;
-        }
+        const PixelClass c = view.classes.at(x, y);
+        if (c == PixelClass::kForeground) Put(x, y, wood);
+        if (c == PixelClass::kWire) Put(x, y, wire);
+        if (c == PixelClass::kPost) Put(x, y, post);
       }
     for (const Segment2D& seg : view.segments)
-      for (const Eigen::Vector2d& q : seg.points)
-        put(static_cast<int>(std::lround(q.x())), static_cast<int>(std::lround(q.y())), 210, 210,
-            210);
-    const CameraCalibration& cam = stop.true_rig.cameras[v];
-    for (const Cane& c : result->model.canes)
-      for (const Eigen::Vector3d& p : c.polyline.Sample(0.002))
-        if (const auto uv = cam.Project(p))
-          put(static_cast<int>(std::lround(uv->x())), static_cast<int>(std::lround(uv->y())), 0,
-              220, 220);
-    for (const LengthSample& s : samples) {
-      if (s.in_image < 2) continue;
-      bool hit = false;
-      for (const Cane& c : result->model.canes) {
-        double d = 0.0;
-        c.polyline.Project(s.p, &d);
-        if (d <= 0.01) { hit = true; break; }
-      }
-      if (const auto uv = cam.Project(s.p)) {
-        const int x = static_cast<int>(std::lround(uv->x())) + 0;
-        const int y = static_cast<int>(std::lround(uv->y()));
-        if (hit) put(x, y, 0, 200, 0); else { put(x, y, 255, 0, 0); put(x + 1, y, 255, 0, 0); }
-      }
-    }
-    if (std::getenv("VB_SKELETON_ON_TOP")) {
-      for (const Segment2D& seg : view.segments)
-        for (size_t i = 0; i < seg.points.size(); ++i) {
-          const uint8_t c = static_cast<uint8_t>(120 + 60 * (&seg - view.segments.data()) % 136);
-          put(static_cast<int>(std::lround(seg.points[i].x())),
-              static_cast<int>(std::lround(seg.points[i].y())), 255, 255, c);
-        }
-    }
-    const std::string path = out + "/lost_" + std::to_string(first) + "_v" + std::to_string(v) +
-                              ".ppm";
+      for (const Eigen::Vector2d& q : seg.points) Put(q, skeleton);
+  }
+  void Put(int x, int y, const uint8_t* c) {
+    if (x < 0 || y < 0 || x >= w || y >= h) return;
+    uint8_t* q = &rgb[(static_cast<size_t>(y) * w + x) * 3];
+    q[0] = c[0];
+    q[1] = c[1];
+    q[2] = c[2];
+  }
+  void Put(const Eigen::Vector2d& px, const uint8_t* c) {
+    Put(static_cast<int>(std::lround(px.x())), static_cast<int>(std::lround(px.y())), c);
+  }
+  // Writes out/<name>_<seed>_v<view>.ppm and says so.
+  void Write(const std::string& name, uint64_t seed, size_t view) const {
+    const char* dir = std::getenv("VB_OUT_DIR");
+    const std::string path = std::string(dir ? dir : "/tmp") + "/" + name + "_" +
+                             std::to_string(seed) + "_v" + std::to_string(view) + ".ppm";
     FILE* f = std::fopen(path.c_str(), "wb");
     ASSERT_NE(f, nullptr) << path;
     std::fprintf(f, "P6\n%d %d\n255\n", w, h);
@@ -321,16 +304,46 @@ TEST(LostWhere, DISABLED_Overlay) {
     std::fclose(f);
     std::printf("wrote %s\n", path.c_str());
   }
+};
+
+// Overlays for one stop (VB_SEED): per view, lost_<seed>_v<view>.ppm under VB_OUT_DIR (/tmp): the
+// Canvas, the model's canes (cyan) and the vine's true samples inside 2+ images, recalled (green)
+// or lost (red).
+TEST(LostWhere, DISABLED_Overlay) {
+  const auto [first, count, images, fiducials] = ReportStopsFromEnv(1300, 1);
+  const SimulatedStop stop = MakeRenderedStop(first, images, fiducials);
+  const auto result = ReconstructFromViews(stop.views, stop.rig, ReconstructOptions{},
+                                           Deadline::Infinite());
+  ASSERT_TRUE(result.ok()) << result.status();
+  const std::vector<LengthSample> samples = SampleTrueLength(stop, 0.0025, false);
+  const uint8_t model[3] = {0, 220, 220}, recalled[3] = {0, 200, 0}, lost[3] = {255, 0, 0};
+  for (size_t v = 0; v < stop.views.size(); ++v) {
+    Canvas canvas(stop.views[v]);
+    const CameraCalibration& cam = stop.true_rig.cameras[v];
+    for (const Cane& c : result->model.canes)
+      for (const Eigen::Vector3d& p : c.polyline.Sample(0.002))
+        if (const auto uv = cam.Project(p)) canvas.Put(*uv, model);
+    for (const LengthSample& s : samples) {
+      if (s.in_image < 2) continue;
+      const auto uv = cam.Project(s.p);
+      if (!uv) continue;
+      if (NearAnyCane(s.p, result->model.canes)) {
+        canvas.Put(*uv, recalled);
+      } else {
+        canvas.Put(*uv, lost);
+        canvas.Put(*uv + Eigen::Vector2d(1, 0), lost);
+      }
+    }
+    canvas.Write("lost", first, v);
+  }
 }
 
 // The same stop's samples coloured by the first stage where they are lost (FirstLostStage, the
 // pipeline run stage by stage as OverlapLoss.DISABLED_ByStage runs it): fg magenta, skeleton
 // orange, pair yellow, raw red, fit pink, threshold blue, Gibbs purple, assembly brown,
-// connection white, refinement grey, kept green. Skeleton drawn underneath (light grey).
+// connection white, refinement grey, kept green, over the Canvas (stage_<seed>_v<view>.ppm).
 TEST(LostWhere, DISABLED_StageOverlay) {
   const auto [first, count, images, fiducials] = ReportStopsFromEnv(1300, 1);
-  const char* dir = std::getenv("VB_OUT_DIR");
-  const std::string out = dir ? dir : "/tmp";
   const ReconstructOptions options;
   const double threshold = 1.0 / (1.0 + options.correspondence.alpha);
   const auto run = RenderAndMatch(first, images, fiducials, options);
@@ -348,7 +361,8 @@ TEST(LostWhere, DISABLED_StageOverlay) {
   ASSERT_TRUE(assembled.ok());
   const auto connected = ConnectAndRefine(views, rig, *assembled, assembled->joins, options);
   ASSERT_TRUE(connected.ok());
-  const StageGrids grids = MakeStageGrids(raw, *scored, run->matched.pieces, *assembled, *connected);
+  const StageGrids grids =
+      MakeStageGrids(raw, *scored, run->matched.pieces, *assembled, *connected);
   const SegmentMaps maps(views);
   const uint8_t colours[kLossStageCount][3] = {
       {0, 0, 0},     {255, 0, 255}, {255, 140, 0}, {255, 255, 0}, {255, 0, 0},   {255, 150, 180},
@@ -365,43 +379,21 @@ TEST(LostWhere, DISABLED_StageOverlay) {
     tally[stage[i]] += ls.weight_m;
     total += ls.weight_m;
   }
-  for (int k = 1; k < kLossStageCount; ++k) std::printf("stage %d: %.3f\n", k, tally[k] / total);
+  const char* names[kLossStageCount] = {"in", "fg", "skel", "pair", "raw", "fit", "thr", "gibbs",
+                                        "assem", "conn", "refine", "kept"};
+  std::printf("seed %llu, share of the length inside 2+ images by first stage lost:",
+              static_cast<unsigned long long>(first));
+  for (int k = kLossForeground; k < kLossStageCount; ++k)
+    std::printf(" %s %.3f", names[k], tally[k] / total);
+  std::printf("\n");
   for (size_t v = 0; v < views.size(); ++v) {
-    const View2D& view = views[v];
-    const int w = view.width, h = view.height;
-    std::vector<uint8_t> rgb(static_cast<size_t>(w) * h * 3, 25);
-    auto put = [&](int x, int y, const uint8_t* c) {
-      if (x < 0 || y < 0 || x >= w || y >= h) return;
-      uint8_t* q = &rgb[(static_cast<size_t>(y) * w + x) * 3];
-      q[0] = c[0]; q[1] = c[1]; q[2] = c[2];
-    };
-    const uint8_t fg[3] = {80, 80, 80}, wire[3] = {50, 50, 150}, post[3] = {110, 80, 50},
-                  sk[3] = {170, 170, 170};
-    for (int y = 0; y < h; ++y)
-      for (int x = 0; x < w; ++x) {
-        const PixelClass c = view.classes.at(x, y);
-        if (c == PixelClass::kForeground) put(x, y, fg);
-        if (c == PixelClass::kWire) put(x, y, wire);
-        if (c == PixelClass::kPost) put(x, y, post);
-      }
-    for (const Segment2D& seg : view.segments)
-      for (const Eigen::Vector2d& q : seg.points)
-        put(static_cast<int>(std::lround(q.x())), static_cast<int>(std::lround(q.y())), sk);
+    Canvas canvas(views[v]);
     const CameraCalibration& cam = stop.true_rig.cameras[v];
     for (size_t i = 0; i < true_samples.size(); ++i) {
       if (stage[i] == kLossInImage) continue;
-      if (const auto uv = cam.Project(true_samples[i].p))
-        put(static_cast<int>(std::lround(uv->x())), static_cast<int>(std::lround(uv->y())),
-            colours[stage[i]]);
+      if (const auto uv = cam.Project(true_samples[i].p)) canvas.Put(*uv, colours[stage[i]]);
     }
-    const std::string path = out + "/stage_" + std::to_string(first) + "_v" + std::to_string(v) +
-                             ".ppm";
-    FILE* f = std::fopen(path.c_str(), "wb");
-    ASSERT_NE(f, nullptr) << path;
-    std::fprintf(f, "P6\n%d %d\n255\n", w, h);
-    std::fwrite(rgb.data(), 1, rgb.size(), f);
-    std::fclose(f);
-    std::printf("wrote %s\n", path.c_str());
+    canvas.Write("stage", first, v);
   }
 }
 
