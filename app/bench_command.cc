@@ -102,6 +102,10 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   // in the calibration; the rig refinement uses them unless --rig-refine off.
   VB_ASSIGN_OR_RETURN(const bool fiducials,
                       flags.Bool("fiducials", capture::SimCaptureOptions{}.fiducials));
+  // --rig-baseline M: the simulated rig's triangle side (sim::RigOptions::baseline_m), for
+  // studies of the rig; the classifiers were trained with the default.
+  VB_ASSIGN_OR_RETURN(const double rig_baseline,
+                      flags.Double("rig-baseline", sim::RigOptions{}.baseline_m));
   // --extend on|off: the single-view extension of cane tips (step 4c); default as ExtendOptions.
   VB_ASSIGN_OR_RETURN(const bool extend,
                       flags.Bool("extend", reconstruct::ExtendOptions{}.enabled));
@@ -151,6 +155,7 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   sim_options.calibration_error_px = calibration_error_px;
   sim_options.render.pixel_format = format;
   sim_options.fiducials = fiducials;
+  sim_options.rig.baseline_m = rig_baseline;
   VB_RETURN_IF_ERROR(sim_options.Validate());
   options.threads = static_cast<int>(threads);
   options.rig_refine.enabled = rig_refine != "off";

@@ -135,6 +135,13 @@ absl::Status RigOptions::Validate() const {
   return absl::OkStatus();
 }
 
+RigOptions NarrowRigOptions() {
+  RigOptions o;
+  o.baseline_m = 0.29;
+  o.apex_aim_up_m = 0.0;
+  return o;
+}
+
 absl::StatusOr<RigCalibration> MakeRig(const RigOptions& options) {
   if (absl::Status s = options.Validate(); !s.ok()) return s;
   const double half_w = 0.5 * options.image_width;

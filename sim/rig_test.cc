@@ -72,9 +72,9 @@ TEST(Rig, DefaultIsATriangleCentredOnTheRigHeight) {
   EXPECT_GT(c1.x(), 0.0);
   EXPECT_GT(c2.z(), c0.z());
   EXPECT_NEAR(c0.z(), c1.z(), 1e-12);
-  EXPECT_NEAR((c0 - c1).norm(), 0.29, 1e-9);
-  EXPECT_NEAR((c0 - c2).norm(), 0.29, 1e-9);
-  EXPECT_NEAR((c1 - c2).norm(), 0.29, 1e-9);
+  EXPECT_NEAR((c0 - c1).norm(), 0.40, 1e-9);
+  EXPECT_NEAR((c0 - c2).norm(), 0.40, 1e-9);
+  EXPECT_NEAR((c1 - c2).norm(), 0.40, 1e-9);
   EXPECT_TRUE(((c0 + c1 + c2) / 3.0).isApprox(Eigen::Vector3d(0, -0.12, 1.05), 1e-9));
   EXPECT_TRUE(rig->Validate().ok());
 }
@@ -97,7 +97,10 @@ TEST(Rig, ToeInCamerasLookAtTheVinePlaneCentre) {
   auto rig = MakeRig();
   ASSERT_TRUE(rig.ok());
   for (const CameraCalibration& c : rig->cameras) {
-    const auto uv = c.Project({0.0, 0.8, 1.15});
+    // The apex camera (cam2) aims apex_aim_up_m (0.03 m) higher.
+    const double up = c.name == "cam2" ? RigOptions{}.apex_aim_up_m : 0.0;
+    EXPECT_EQ(up, c.name == "cam2" ? 0.03 : 0.0);
+    const auto uv = c.Project({0.0, 0.8, 1.15 + up});
     ASSERT_TRUE(uv.has_value());
     // The target is on the optical axis, so it lands on the principal point.
     EXPECT_NEAR(uv->x(), c.camera_matrix(0, 2), 1e-6) << c.name;
@@ -230,13 +233,14 @@ TEST(Rig, UpsideDownTriangleHasThePairAbove) {
   const Eigen::Vector3d c2 = rig->cameras[2].CentreInPlatform();
   EXPECT_NEAR(c0.z(), c1.z(), 1e-12);
   EXPECT_LT(c2.z(), c0.z());
-  EXPECT_NEAR((c0 - c2).norm(), 0.29, 1e-9);
+  EXPECT_NEAR((c0 - c2).norm(), 0.40, 1e-9);
   EXPECT_TRUE(((c0 + c1 + c2) / 3.0).isApprox(Eigen::Vector3d(0, -0.12, 1.05), 1e-9));
 }
 
 TEST(Rig, AimBelowTheRigTiltsEveryCameraToThatPoint) {
   RigOptions o;
   o.aim_below_rig_m = 0.3;
+  o.apex_aim_up_m = 0.0;  // every camera on the one target
   auto rig = MakeRig(o);
   ASSERT_TRUE(rig.ok()) << rig.status();
   for (const CameraCalibration& c : rig->cameras) {
@@ -284,7 +288,7 @@ RigOptions OldDefaultRig() {
   return o;
 }
 
-// The default rig, 0.12 m further back with a 0.29 m triangle and aimed 0.1 m up
+// The default rig, 0.12 m further back with a 0.40 m triangle and aimed 0.1 m up
 // (docs/simulator.md, "Choosing the rig"), sees more of the vine in two views than the old one on
 // a row of test stops, and keeps the arm base of the default mount (workers/plan: (0, 0.45, 0.45),
 // tilted 50 deg, radius 0.075 m) out of view.
@@ -337,7 +341,8 @@ TEST(Rig, UpperAndLowerCamerasBothSeeTheTopWire) {
 // occluder, the neighbouring vines' length inside >= 2 images, and whether the arm base of the
 // default mount (workers/plan, DefaultPlatformFromArmBase) is in view. Rig options from the environment: VB_RIG_Y (rig_y_m;
 // the toe-in target stays on the vine plane y = 0.8), VB_RIG_HEIGHT, VB_RIG_AIM_BELOW,
-// VB_RIG_BASELINE, VB_RIG_APEX_UP, VB_RIG_TOE_IN, VB_RIG_FOV, VB_RIG_K1/K2/K3. Stops: VB_SEED
+// VB_RIG_BASELINE, VB_RIG_APEX_AIM_UP, VB_RIG_APEX_UP, VB_RIG_TOE_IN, VB_RIG_FOV,
+// VB_RIG_K1/K2/K3. Stops: VB_SEED
 // (1100), VB_STOPS (20), vine 1.
 //   VB_SEED=1100 VB_STOPS=100 vb_sim_test --gtest_also_run_disabled_tests
 //     --gtest_filter='RigCoverage.DISABLED_Report'
@@ -352,6 +357,7 @@ TEST(RigCoverage, DISABLED_Report) {
   o.rig_height_m = env("VB_RIG_HEIGHT", o.rig_height_m);
   o.aim_below_rig_m = env("VB_RIG_AIM_BELOW", o.aim_below_rig_m);
   o.baseline_m = env("VB_RIG_BASELINE", o.baseline_m);
+  o.apex_aim_up_m = env("VB_RIG_APEX_AIM_UP", o.apex_aim_up_m);
   o.apex_up = env("VB_RIG_APEX_UP", 1) != 0;
   o.toe_in = env("VB_RIG_TOE_IN", 1) != 0;
   o.horizontal_fov_deg = env("VB_RIG_FOV", o.horizontal_fov_deg);

@@ -100,6 +100,9 @@ absl::StatusOr<Stop> MakeStop(uint64_t seed, const std::string& input, const std
   capture::SimCaptureOptions sim_options;
   sim_options.calibration_error_px = 1.0;
   sim_options.render.pixel_format = PixelFormat::kBayerRg8;
+  // VB_RIG_BASELINE=M: the simulated rig's triangle side (a rig study; its own VB_CACHE).
+  if (auto s = OverrideNumber("VB_RIG_BASELINE", &sim_options.rig.baseline_m); !s.ok()) return s;
+  if (auto s = sim_options.Validate(); !s.ok()) return s;
   auto capture = capture::RenderSimCapture(*scene, sim_options, seed * 1000003 + vine);
   if (!capture.ok()) return capture.status();
   RigCalibration rig;

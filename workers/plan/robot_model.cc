@@ -260,24 +260,31 @@ Capsule CameraBody(const Eigen::Vector3d& centre_in_platform,
 namespace {
 
 // sim/rig.h's default trinocular rig, hard-coded because workers do not depend on sim: an
-// equilateral triangle of side 0.29 m centred at (0, -0.12, 1.05), cam0 lower left, cam1 lower
-// right, cam2 above the middle, each aimed at kRigAim on the vine plane.
-constexpr double kRigSide = 0.29, kRigY = -0.12, kRigHeight = 1.05;
+// equilateral triangle of side 0.40 m centred at (0, -0.12, 1.05), cam0 lower left, cam1 lower
+// right, cam2 above the middle, the lower pair aimed at kRigAim on the vine plane and cam2 at
+// kApexAimUpM above it.
+constexpr double kRigSide = 0.40, kRigY = -0.12, kRigHeight = 1.05, kApexAimUpM = 0.03;
 const Eigen::Vector3d kRigAim(0.0, 0.80, 1.15);
 
-std::vector<Eigen::Vector3d> NominalCameraCentres() {
+struct NominalCamera {
+  Eigen::Vector3d centre;
+  Eigen::Vector3d aim;  // the point on the vine plane it looks at
+};
+
+std::vector<NominalCamera> NominalCameras() {
   const double circum = kRigSide / std::sqrt(3.0);  // centroid to vertex
-  return {Eigen::Vector3d(-kRigSide / 2, kRigY, kRigHeight - circum / 2),
-          Eigen::Vector3d(kRigSide / 2, kRigY, kRigHeight - circum / 2),
-          Eigen::Vector3d(0, kRigY, kRigHeight + circum)};
+  const Eigen::Vector3d apex_aim = kRigAim + Eigen::Vector3d(0, 0, kApexAimUpM);
+  return {{Eigen::Vector3d(-kRigSide / 2, kRigY, kRigHeight - circum / 2), kRigAim},
+          {Eigen::Vector3d(kRigSide / 2, kRigY, kRigHeight - circum / 2), kRigAim},
+          {Eigen::Vector3d(0, kRigY, kRigHeight + circum), apex_aim}};
 }
 
 }  // namespace
 
 PlatformGeometry DefaultPlatform() {
   PlatformGeometry platform;
-  for (const Eigen::Vector3d& centre : NominalCameraCentres()) {
-    platform.fixed_capsules.push_back(CameraBody(centre, kRigAim - centre));
+  for (const NominalCamera& camera : NominalCameras()) {
+    platform.fixed_capsules.push_back(CameraBody(camera.centre, camera.aim - camera.centre));
   }
   return platform;
 }
@@ -292,11 +299,11 @@ absl::StatusOr<PlatformGeometry> PlatformAroundRig(const RigCalibration& rig) {
   for (const CameraCalibration& camera : rig.cameras) {
     double nearest = std::numeric_limits<double>::infinity();
     Eigen::Vector3d nominal_axis = Eigen::Vector3d::UnitY();
-    for (const Eigen::Vector3d& c : NominalCameraCentres()) {
-      const double d = (camera.CentreInPlatform() - c).norm();
+    for (const NominalCamera& nominal : NominalCameras()) {
+      const double d = (camera.CentreInPlatform() - nominal.centre).norm();
       if (d < nearest) {
         nearest = d;
-        nominal_axis = (kRigAim - c).normalized();
+        nominal_axis = (nominal.aim - nominal.centre).normalized();
       }
     }
     if (nearest > kMaxCameraOffNominalM) {

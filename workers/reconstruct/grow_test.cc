@@ -216,8 +216,9 @@ struct SharedStretch {
   }
 };
 
+// Laid out for the rig before session 24 (sim::NarrowRigOptions), which it keeps.
 TEST(GrowCaneEnds, GrowsAlongAnotherCaneOnItsOwnCourseAndPartsFromIt) {
-  const RigCalibration rig = sim::MakeRig().value();
+  const RigCalibration rig = sim::MakeRig(sim::NarrowRigOptions()).value();
   const SharedStretch scene;
   const std::vector<View2D> views = scene.Views(rig);
   // The control: without growth alongside other canes (alongside_max_m 0, as before session 17)
@@ -334,8 +335,9 @@ TEST(GrowCaneEnds, GrowsThroughABundleWhoseSkeletonRunsBetweenTheCanes) {
   }
 }
 
+// Laid out for the rig before session 24 (sim::NarrowRigOptions), which it keeps.
 TEST(GrowCaneEnds, KeepsTheOldRuleWhereTheBandIsOneCaneWide) {
-  const RigCalibration rig = sim::MakeRig().value();
+  const RigCalibration rig = sim::MakeRig(sim::NarrowRigOptions()).value();
   const Polyline3 cane = CurvedCane(-0.3, 0.1, 0.95, 0.3);
   const std::vector<View2D> views = ViewsOf({cane}, rig);
   // The piece's tip lies 3 mm off the axis of its 4 mm cane: inside the cane's wood, but more

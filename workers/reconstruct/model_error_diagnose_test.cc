@@ -23,10 +23,12 @@ namespace vb::reconstruct {
 namespace {
 
 // The default rig, or with VB_OLD_RIG=1 the default rig before 2026-11-22 (at the vine's
-// distance 0.8 m, triangle side 0.22 m, aimed at its own height).
+// distance 0.8 m, triangle side 0.22 m, aimed at its own height), with VB_OLD_RIG=narrow the one
+// from then to session 24 (sim::NarrowRigOptions: the 0.29 m triangle).
 sim::RigOptions RigOptionsFromEnv() {
   const char* old_rig = std::getenv("VB_OLD_RIG");
   if (old_rig != nullptr && std::string(old_rig) == "1") return OldRigOptions();
+  if (old_rig != nullptr && std::string(old_rig) == "narrow") return sim::NarrowRigOptions();
   return sim::RigOptions();
 }
 

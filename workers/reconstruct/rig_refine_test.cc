@@ -52,31 +52,42 @@ Stop MakeStop(uint64_t seed) {
 }
 
 TEST(RigRefine, RecoversTurnedCameras) {
-  const Stop stop = MakeStop(1101);
-  RigCalibration drifted = stop.true_rig;
-  const double pixel = 1.0 / drifted.cameras[1].camera_matrix(0, 0);
-  drifted.cameras[1] = Turned(drifted.cameras[1], {1, 0.3, 0}, 3.0 * pixel);
-  drifted.cameras[2] = Turned(drifted.cameras[2], {0.2, 1, 0.5}, 3.0 * pixel);
-  const Eigen::Vector3d probe(0.1, 0.8, 1.0);
-  RigRefineOptions reference_cam0;  // cam0 is exact here: hold it
-  reference_cam0.reference_camera = 0;
-  ASSERT_GT(Displacement(drifted.cameras[1], stop.true_rig.cameras[1], probe), 2.0);
+  // Four stops: how well the distance field pins a camera depends on the stop (with the default
+  // rig since session 24, 0.3-1.25 px from 3 px on 1100-1103; the 0.29 m triangle before it gave
+  // 0.24-0.90 px).
+  double sum[3] = {};
+  const int stops = 4;
+  for (uint64_t seed = 1100; seed < 1100 + stops; ++seed) {
+    const Stop stop = MakeStop(seed);
+    RigCalibration drifted = stop.true_rig;
+    const double pixel = 1.0 / drifted.cameras[1].camera_matrix(0, 0);
+    drifted.cameras[1] = Turned(drifted.cameras[1], {1, 0.3, 0}, 3.0 * pixel);
+    drifted.cameras[2] = Turned(drifted.cameras[2], {0.2, 1, 0.5}, 3.0 * pixel);
+    const Eigen::Vector3d probe(0.1, 0.8, 1.0);
+    RigRefineOptions reference_cam0;  // cam0 is exact here: hold it
+    reference_cam0.reference_camera = 0;
+    ASSERT_GT(Displacement(drifted.cameras[1], stop.true_rig.cameras[1], probe), 2.0);
 
-  RigRefineSummary summary;
-  const absl::StatusOr<RigCalibration> refined =
-      RefineRig(stop.views, drifted, stop.pieces, reference_cam0, Deadline::Infinite(), &summary);
-  ASSERT_TRUE(refined.ok()) << refined.status();
-  ASSERT_TRUE(summary.applied) << summary.reason;
-  EXPECT_GE(summary.points, 60);
-  EXPECT_EQ(summary.correction_px[0], 0.0);
-  EXPECT_LT(summary.median_after_px, summary.median_before_px);
-  // From 3 px to within half a pixel: the synthetic skeletons are rasterised at whole pixels,
-  // which limits how well the distance field pins a camera.
-  for (int v = 1; v <= 2; ++v) {
-    EXPECT_LT(Displacement(refined->cameras[v], stop.true_rig.cameras[v], probe), 0.6) << v;
-    EXPECT_NEAR((refined->cameras[v].CentreInPlatform() - stop.true_rig.cameras[v].CentreInPlatform()).norm(),
-                0.0, 1e-9);
+    RigRefineSummary summary;
+    const absl::StatusOr<RigCalibration> refined = RefineRig(
+        stop.views, drifted, stop.pieces, reference_cam0, Deadline::Infinite(), &summary);
+    ASSERT_TRUE(refined.ok()) << refined.status();
+    ASSERT_TRUE(summary.applied) << summary.reason;
+    EXPECT_GE(summary.points, 60);
+    EXPECT_EQ(summary.correction_px[0], 0.0);
+    EXPECT_LT(summary.median_after_px, summary.median_before_px);
+    // From 3 px to within half of it on every stop, and a third on average: the synthetic
+    // skeletons are rasterised at whole pixels, which limits how well the distance field pins a
+    // camera.
+    for (int v = 1; v <= 2; ++v) {
+      const double d = Displacement(refined->cameras[v], stop.true_rig.cameras[v], probe);
+      EXPECT_LT(d, 1.5) << "seed " << seed << " camera " << v;
+      sum[v] += d;
+      EXPECT_NEAR((refined->cameras[v].CentreInPlatform() -
+                   stop.true_rig.cameras[v].CentreInPlatform()).norm(), 0.0, 1e-9);
+    }
   }
+  for (int v = 1; v <= 2; ++v) EXPECT_LT(sum[v] / stops, 1.0) << v;
 }
 
 // Least-squares intersection of the rays through `uv` (one pixel per camera of `rig`).
