@@ -18,9 +18,9 @@ struct RigOptions {
   double horizontal_fov_deg = 100.0;   // wide lens: one vine and the gaps either side at 0.8 m
   // Triangle side: 0.40 m since session 24 (0.29 m before). A wider triangle sees canes lying
   // along each other from further apart and fixes depth better (the error per pixel grows as
-  // distance^2 / baseline): on tuning stops recall +0.008-0.014 and connectivity +0.009-0.018
-  // over 0.29 m. 0.43 m is the widest at which the lower cameras keep the arm base of the default
-  // mount out of view (docs/simulator.md, "Choosing the rig").
+  // distance^2 / baseline): on tuning stops 1100-1399 recall +0.010 and connectivity +0.011
+  // over 0.29 m (pooled). 0.43 m is the widest at which the lower cameras keep the arm base of the default
+  // mount out of view (docs/simulator.md, "A wider triangle").
   double baseline_m = 0.40;
   double rig_height_m = 1.05;          // z of the rig centre
   // y of the rig centre in the platform frame (negative: mounted further from the vine). The
