@@ -17,6 +17,7 @@ constexpr double kPi = std::numbers::pi;
 constexpr uint64_t kPlantStream = 0x7A17;
 constexpr double kTrunkStepM = 0.05;
 constexpr double kMaxJitterM = 0.1;  // planting error of the trunk along the row
+constexpr double kPostClearanceM = 0.005;  // least gap between the trunk or head and a post
 // The head top sits at most this far below the fruiting wire (the head is grown up to the wire).
 constexpr double kHeadBelowWireMaxM = 0.08;
 
@@ -33,6 +34,9 @@ class PlantBuilder {
     const double nominal = vine_index * options.vine_spacing_m;
     plant_.position_m = nominal + KeepClearOfPost(nominal, std::clamp(rng_.Normal(0.0, 0.04),
                                                                     -kMaxJitterM, kMaxJitterM));
+    const double spacing = options.post_spacing_m;
+    post_x_ = std::round((plant_.position_m - row.post_offset_m) / spacing) * spacing +
+              row.post_offset_m;
   }
 
   VinePlant Build() {
@@ -54,6 +58,16 @@ class PlantBuilder {
 
  private:
   const Cane& trunk() const { return plant_.model.canes.front(); }
+
+  // Keeps a body of radius r centred at x on the vine's side of the nearest post, clear of it by
+  // kPostClearanceM (in x alone, which is stricter than the distance to the post's axis): the
+  // trunk's lean and bends and the head's spread must not put wood inside the post (tuning stop
+  // 1353 had its head inside one before session 24).
+  double ClearOfPost(double x, double r) const {
+    const double side = plant_.position_m >= post_x_ ? 1.0 : -1.0;
+    const double least = options_.post_radius_m + r + kPostClearanceM;
+    return side * (x - post_x_) >= least ? x : post_x_ + side * least;
+  }
 
   // A vine is never planted through a post: if the nearest post would stand within kMaxJitterM of
   // the trunk, the jitter moves the trunk to kMaxJitterM beside it (still within the jitter range).
@@ -85,8 +99,9 @@ class PlantBuilder {
     head_top = top_z + core_r;
 
     const Eigen::Vector3d base(x0, options_.vine_plane_y_m + rng_.Normal(0.0, 0.015), 0.0);
-    const Eigen::Vector3d top(x0 + std::clamp(rng_.Normal(0.0, 0.04), -0.1, 0.1),
-                              base.y() + rng_.Normal(0.0, 0.015), top_z);
+    Eigen::Vector3d top(x0 + std::clamp(rng_.Normal(0.0, 0.04), -0.1, 0.1),
+                        base.y() + rng_.Normal(0.0, 0.015), top_z);
+    top.x() = ClearOfPost(top.x(), core_r);
     // Old trunks are bent and knobbly: two smooth bends that vanish at both ends, and a radius
     // that tapers a little with a slow swelling.
     const double bend1_x = rng_.Normal(0.0, 0.03), bend2_x = rng_.Normal(0.0, 0.012);
@@ -105,8 +120,10 @@ class PlantBuilder {
       p.x() += bend1_x * std::sin(kPi * t) + bend2_x * std::sin(2.0 * kPi * t);
       p.y() += bend1_y * std::sin(kPi * t) + bend2_y * std::sin(2.0 * kPi * t);
       const double swell = 1.0 + knob * std::sin(5.0 * t + knob_phase) * std::sin(kPi * t);
+      const double radius = (r_base + (r_top - r_base) * t) * swell;
+      p.x() = ClearOfPost(p.x(), radius);
       cane.polyline.points.push_back(p);
-      cane.polyline.radii.push_back((r_base + (r_top - r_base) * t) * swell);
+      cane.polyline.radii.push_back(radius);
     }
     plant_.model.canes.push_back(std::move(cane));
 
@@ -121,7 +138,7 @@ class PlantBuilder {
       const Eigen::Vector3d dir =
           Normalized({rng_.Normal(0.0, 1.0), 0.4 * rng_.Normal(), 0.6 * rng_.Normal() - 0.2});
       Eigen::Vector3d c = anchor.center + rng_.Uniform(0.4, 0.9) * (anchor.radius + r) * dir;
-      c.x() = std::clamp(c.x(), top.x() - 2.2 * hr, top.x() + 2.2 * hr);
+      c.x() = ClearOfPost(std::clamp(c.x(), top.x() - 2.2 * hr, top.x() + 2.2 * hr), r);
       c.z() = std::min(c.z(), head_top - r);
       spheres.push_back({c, r});
     }
@@ -260,6 +277,7 @@ class PlantBuilder {
   const TrellisRow& row_;
   VineRng rng_;
   VinePlant plant_;
+  double post_x_ = 0.0;  // row position of the post nearest the trunk's base
 };
 
 }  // namespace

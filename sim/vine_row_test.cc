@@ -105,6 +105,35 @@ TEST(VineGenerator, TrunksAreNeverPlantedThroughAPost) {
   EXPECT_GT(near_post, 0);  // the row does put posts next to some vines
 }
 
+// Nor does the trunk's lean or bend, or the head's spread, put wood inside a post (tuning stop
+// 1353, vine 1, had its head inside one before session 24): every trunk point and head sphere
+// clears every post's axis by the post's radius plus its own, on vines that stand beside a post.
+TEST(VineGenerator, TrunkAndHeadKeepClearOfPosts) {
+  const VineGeneratorOptions options;
+  int beside_post = 0;
+  auto clearance = [&](const Post& post, const Eigen::Vector3d& c, double r) {
+    return Eigen::Vector2d(c.x() - post.base.x(), c.y() - post.base.y()).norm() -
+           options.post_radius_m - r;
+  };
+  for (const uint64_t seed : {kSeed, uint64_t{1353}}) {
+    for (int k = 0; k < 200; ++k) {
+      const Scene s = MustGenerate(seed, k);
+      const Cane& trunk = s.vine.canes[0];
+      for (const Post& post : s.vine.posts) {
+        if (std::abs(post.base.x() - trunk.polyline.points.front().x()) > 0.15) continue;
+        ++beside_post;
+        for (size_t i = 0; i < trunk.polyline.points.size(); ++i)
+          EXPECT_GE(clearance(post, trunk.polyline.points[i], trunk.polyline.radii[i]), 0.0)
+              << "seed " << seed << " vine " << k << " trunk point " << i;
+        for (const Sphere& sphere : s.vine.head.spheres)
+          EXPECT_GE(clearance(post, sphere.center, sphere.radius), 0.0)
+              << "seed " << seed << " vine " << k << " head sphere";
+      }
+    }
+  }
+  EXPECT_GE(beside_post, 20);  // the check is not empty: many vines stand beside a post
+}
+
 TEST(VineGenerator, NeighboursAreTheAdjacentVinesShifted) {
   const VineGeneratorOptions options;
   for (int k : {-3, 0, 5, 11}) {
