@@ -39,12 +39,21 @@ double ToSegment(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen
   return (a + t * ab - p).norm();
 }
 
+// The band of p's distance to the nearest wire of `vine`: under 2 cm, 2-5, 5-15, 15 cm or more.
+int WireBand(const VineModel& vine, const Eigen::Vector3d& p) {
+  double to_wire = 1e9;
+  for (const Wire& w : vine.wires)
+    for (size_t t = 1; t < w.points.size(); ++t)
+      to_wire = std::min(to_wire, ToSegment(p, w.points[t - 1], w.points[t]));
+  return to_wire < 0.02 ? 0 : to_wire < 0.05 ? 1 : to_wire < 0.15 ? 2 : 3;
+}
+
 TEST(LostWhere, DISABLED_Report) {
   const auto [first, count, images, fiducials] = ReportStopsFromEnv(1300, 10);
   const ReconstructOptions options;
   double total = 0.0, inside = 0.0, lost = 0.0;
   double between_kind[2][2][4] = {};
-  double by_wire[4] = {}, by_run[5][4] = {}, by_kind[2] = {}, by_along[4] = {};
+  double by_wire[4] = {}, by_run[4][4] = {}, by_kind[2] = {}, by_along[4] = {};
   double wire_run[4][4] = {}, wire_total[4][2] = {}, wire_lost[4][2] = {};
   for (int k = 0; k < count; ++k) {
     const SimulatedStop stop = MakeRenderedStop(first + k, images, fiducials);
@@ -100,11 +109,7 @@ TEST(LostWhere, DISABLED_Report) {
         for (size_t q = i; q < j; ++q) {
           const LengthSample& s = samples[q];
           if (s.in_image < 2) continue;
-          double to_wire = 1e9;
-          for (const Wire& w : vine.wires)
-            for (size_t t = 1; t < w.points.size(); ++t)
-              to_wire = std::min(to_wire, ToSegment(s.p, w.points[t - 1], w.points[t]));
-          const int wb = to_wire < 0.02 ? 0 : to_wire < 0.05 ? 1 : to_wire < 0.15 ? 2 : 3;
+          const int wb = WireBand(vine, s.p);
           by_wire[wb] += s.weight_m;
           by_run[pos][len] += s.weight_m;
           wire_run[wb][pos] += s.weight_m;
@@ -119,11 +124,7 @@ TEST(LostWhere, DISABLED_Report) {
         total += s.weight_m;
         if (s.in_image < 2) continue;
         inside += s.weight_m;
-        double to_wire = 1e9;
-        for (const Wire& w : vine.wires)
-          for (size_t t = 1; t < w.points.size(); ++t)
-            to_wire = std::min(to_wire, ToSegment(s.p, w.points[t - 1], w.points[t]));
-        const int wb = to_wire < 0.02 ? 0 : to_wire < 0.05 ? 1 : to_wire < 0.15 ? 2 : 3;
+        const int wb = WireBand(vine, s.p);
         const int dir = std::abs(s.tangent.x()) > 0.9 ? 1 : 0;
         wire_total[wb][dir] += s.weight_m;
         if (!hit[q]) wire_lost[wb][dir] += s.weight_m;
@@ -144,7 +145,7 @@ TEST(LostWhere, DISABLED_Report) {
   for (int p = 0; p < 4; ++p)
     std::printf("  %-12s %8.3f %8.3f %8.3f %8.3f\n", pos[p], by_run[p][0] / total,
                 by_run[p][1] / total, by_run[p][2] / total, by_run[p][3] / total);
-  std::printf("  wire x position: whole  base  tip  between\n");
+  std::printf("  by wire distance and run position: whole  base  tip  between\n");
   const char* wn[4] = {"<2cm", "2-5cm", "5-15cm", ">=15cm"};
   for (int w = 0; w < 4; ++w)
     std::printf("  %-8s %8.3f %8.3f %8.3f %8.3f\n", wn[w], wire_run[w][0] / total,
@@ -164,7 +165,6 @@ TEST(LostWhere, DISABLED_Report) {
                 wire_lost[w][0] / total);
   EXPECT_GT(total, 0.0);
 }
-
 
 // Bridges between model cane ends: every pair of ends of two different model canes within
 // VB_BRIDGE_MAX (0.4 m) whose chord leaves each end within VB_BRIDGE_DEG (25) of its outward
