@@ -34,9 +34,7 @@ class PlantBuilder {
     const double nominal = vine_index * options.vine_spacing_m;
     plant_.position_m = nominal + KeepClearOfPost(nominal, std::clamp(rng_.Normal(0.0, 0.04),
                                                                     -kMaxJitterM, kMaxJitterM));
-    const double spacing = options.post_spacing_m;
-    post_x_ = std::round((plant_.position_m - row.post_offset_m) / spacing) * spacing +
-              row.post_offset_m;
+    post_x_ = NearestPostX(plant_.position_m);
   }
 
   VinePlant Build() {
@@ -59,6 +57,12 @@ class PlantBuilder {
  private:
   const Cane& trunk() const { return plant_.model.canes.front(); }
 
+  // Row position of the post nearest row position x.
+  double NearestPostX(double x) const {
+    const double spacing = options_.post_spacing_m;
+    return std::round((x - row_.post_offset_m) / spacing) * spacing + row_.post_offset_m;
+  }
+
   // Keeps a body of radius r centred at x on the vine's side of the nearest post, clear of it by
   // kPostClearanceM (in x alone, which is stricter than the distance to the post's axis): the
   // trunk's lean and bends and the head's spread must not put wood inside the post (tuning stop
@@ -72,9 +76,7 @@ class PlantBuilder {
   // A vine is never planted through a post: if the nearest post would stand within kMaxJitterM of
   // the trunk, the jitter moves the trunk to kMaxJitterM beside it (still within the jitter range).
   double KeepClearOfPost(double nominal, double jitter) const {
-    const double spacing = options_.post_spacing_m;
-    const double j = std::round((nominal - row_.post_offset_m) / spacing);
-    const double post = j * spacing + row_.post_offset_m - nominal;  // relative to nominal
+    const double post = NearestPostX(nominal) - nominal;  // relative to nominal
     if (std::abs(jitter - post) >= kMaxJitterM) return jitter;
     double best = jitter;
     double best_change = std::numeric_limits<double>::infinity();

@@ -20,10 +20,11 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <string>
 #include <map>
+#include <string>
 #include <vector>
 
+#include "core/geometry.h"
 #include "gtest/gtest.h"
 #include "workers/reconstruct/correspondence_test_util.h"
 #include "workers/reconstruct/diagnose_util.h"
@@ -33,18 +34,12 @@
 namespace vb::reconstruct {
 namespace {
 
-double ToSegment(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-  const Eigen::Vector3d ab = b - a;
-  const double t = std::clamp((p - a).dot(ab) / std::max(ab.squaredNorm(), 1e-12), 0.0, 1.0);
-  return (a + t * ab - p).norm();
-}
-
 // The band of p's distance to the nearest wire of `vine`: under 2 cm, 2-5, 5-15, 15 cm or more.
 int WireBand(const VineModel& vine, const Eigen::Vector3d& p) {
   double to_wire = 1e9;
   for (const Wire& w : vine.wires)
     for (size_t t = 1; t < w.points.size(); ++t)
-      to_wire = std::min(to_wire, ToSegment(p, w.points[t - 1], w.points[t]));
+      to_wire = std::min(to_wire, PointSegmentDistance(p, w.points[t - 1], w.points[t]));
   return to_wire < 0.02 ? 0 : to_wire < 0.05 ? 1 : to_wire < 0.15 ? 2 : 3;
 }
 
@@ -68,23 +63,14 @@ TEST(LostWhere, DISABLED_Report) {
                 [](const LengthSample& a, const LengthSample& b) { return a.index < b.index; });
       const size_t n = samples.size();
       std::vector<char> hit(n, 0);
-      std::vector<int> by(n, -1);  // the nearest model cane within 10 mm
-      std::vector<Eigen::Vector3d> at(n);
+      std::vector<int> by(n, -1);         // the nearest model cane, where within 10 mm
+      std::vector<Eigen::Vector3d> at(n); // ... and its nearest point
+      std::vector<int> wire_band(n, 0);   // WireBand of each sample inside 2+ images
       bool any = false;
       for (size_t i = 0; i < n; ++i) {
-        double best = 0.01;
-        for (size_t m = 0; m < result->model.canes.size(); ++m) {
-          const Polyline3& pl = result->model.canes[m].polyline;
-          double d = 0.0;
-          const double sa = pl.Project(samples[i].p, &d);
-          if (d <= best) {
-            best = d;
-            hit[i] = 1;
-            by[i] = static_cast<int>(m);
-            at[i] = pl.PointAt(sa);
-          }
-        }
+        hit[i] = DistanceToCanes(samples[i].p, result->model.canes, &at[i], &by[i]) <= 0.01;
         any = any || hit[i];
+        if (samples[i].in_image >= 2) wire_band[i] = WireBand(vine, samples[i].p);
       }
       // Runs of lost samples: length and position.
       size_t i = 0;
@@ -102,14 +88,14 @@ TEST(LostWhere, DISABLED_Report) {
           const bool same = by[i - 1] == by[j];
           for (size_t q = i; q < j; ++q) {
             if (samples[q].in_image < 2) continue;
-            const bool chord = ToSegment(samples[q].p, at[i - 1], at[j]) <= 0.01;
+            const bool chord = PointSegmentDistance(samples[q].p, at[i - 1], at[j]) <= 0.01;
             between_kind[same ? 1 : 0][chord ? 1 : 0][len] += samples[q].weight_m;
           }
         }
         for (size_t q = i; q < j; ++q) {
           const LengthSample& s = samples[q];
           if (s.in_image < 2) continue;
-          const int wb = WireBand(vine, s.p);
+          const int wb = wire_band[q];
           by_wire[wb] += s.weight_m;
           by_run[pos][len] += s.weight_m;
           wire_run[wb][pos] += s.weight_m;
@@ -124,7 +110,7 @@ TEST(LostWhere, DISABLED_Report) {
         total += s.weight_m;
         if (s.in_image < 2) continue;
         inside += s.weight_m;
-        const int wb = WireBand(vine, s.p);
+        const int wb = wire_band[q];
         const int dir = std::abs(s.tangent.x()) > 0.9 ? 1 : 0;
         wire_total[wb][dir] += s.weight_m;
         if (!hit[q]) wire_lost[wb][dir] += s.weight_m;
@@ -226,24 +212,12 @@ TEST(LostWhere, DISABLED_Bridges) {
       ++bridges[band];
       for (const Eigen::Vector3d& q : chord.Sample(0.005)) {
         bridge_len[band] += 0.005;
-        double d = 1e9;
-        for (const Cane& t : stop.drawn.canes) {
-          double e = 0.0;
-          t.polyline.Project(q, &e);
-          d = std::min(d, e);
-        }
-        if (d <= 0.01) bridge_right[band] += 0.005;
+        if (NearAnyCane(q, stop.drawn.canes)) bridge_right[band] += 0.005;
       }
     }
     for (const LengthSample& s : SampleTrueLength(stop, 0.005, false)) {
       total += s.weight_m;
-      bool hit = false;
-      for (const Cane& c : canes) {
-        double d = 0.0;
-        c.polyline.Project(s.p, &d);
-        if (d <= 0.01) { hit = true; break; }
-      }
-      if (hit) continue;
+      if (NearAnyCane(s.p, canes)) continue;
       for (const auto& [chord, band] : chords) {
         double d = 0.0;
         chord.Project(s.p, &d);
