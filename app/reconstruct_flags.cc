@@ -2,6 +2,7 @@
 #include "app/reconstruct_flags.h"
 
 #include <cmath>
+#include <string>
 #include <utility>
 
 #include "absl/strings/str_cat.h"
@@ -35,9 +36,21 @@ absl::Status ReadSelectionFlags(Flags& flags, reconstruct::CorrespondenceOptions
     return absl::InvalidArgumentError(absl::StrCat(
         "--context-alpha (", context_alpha, ") must be >= --alpha (", alpha, ")"));
   }
+  // --match-model quadratic|linear: how multi-view candidates are scored (match_classifier.h).
+  VB_ASSIGN_OR_RETURN(const std::string match_model,
+                      flags.String("match-model", options->classifier.multi_view_quadratic.empty()
+                                                      ? "linear"
+                                                      : "quadratic"));
+  if (match_model != "quadratic" && match_model != "linear") {
+    return absl::InvalidArgumentError(
+        absl::StrCat("--match-model must be quadratic or linear, is '", match_model, "'"));
+  }
   options->alpha = alpha;
   options->context.enabled = context;
   options->context.alpha = context_alpha;
+  options->classifier.multi_view_quadratic =
+      match_model == "linear" ? reconstruct::QuadraticLogistic{}
+                              : reconstruct::DefaultQuadraticMatchModel();
   return absl::OkStatus();
 }
 

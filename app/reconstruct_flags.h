@@ -24,9 +24,11 @@ namespace vb::app {
 //     both passes (the first pass's matters only where the rig refinement is not applied: the
 //     refinement takes pieces with P >= 0.8 whatever alpha);
 //   --select-context true|false: the context-aware selection (context_selection.h);
-//   --context-alpha A: its lower threshold 1 / (1 + A), at least --alpha.
+//   --context-alpha A: its lower threshold 1 / (1 + A), at least --alpha;
+//   --match-model quadratic|linear: the second pass's multi-view candidates scored by the
+//     committed quadratic model or by the linear weights (match_classifier.h).
 // INVALID_ARGUMENT naming the flag: a value that does not parse, --alpha or --context-alpha not
-// finite or <= 0, --context-alpha below --alpha with --select-context on.
+// finite or <= 0, --context-alpha below --alpha with --select-context on, --match-model neither.
 absl::Status ReadSelectionFlags(Flags& flags, reconstruct::CorrespondenceOptions* options);
 
 // Reads into *options (defaults: its values as given) the depth sweep of step 4e

@@ -23,7 +23,22 @@ TEST(ReconstructFlags, AbsentFlagsKeepTheDefaults) {
   EXPECT_EQ(options.alpha, defaults.alpha);
   EXPECT_EQ(options.context.enabled, defaults.context.enabled);
   EXPECT_EQ(options.context.alpha, defaults.context.alpha);
+  EXPECT_FALSE(options.classifier.multi_view_quadratic.empty());  // quadratic by default
   EXPECT_TRUE(flags->Finish().ok());
+}
+
+TEST(ReconstructFlags, MatchModelChoosesTheMultiViewClassifier) {
+  auto linear = ParseAll({"--match-model", "linear"});
+  ASSERT_TRUE(linear.ok());
+  reconstruct::CorrespondenceOptions options;
+  ASSERT_TRUE(ReadSelectionFlags(*linear, &options).ok());
+  EXPECT_TRUE(options.classifier.multi_view_quadratic.empty());
+  EXPECT_TRUE(options.Validate().ok());
+  auto quadratic = ParseAll({"--match-model=quadratic"});
+  ASSERT_TRUE(quadratic.ok());
+  ASSERT_TRUE(ReadSelectionFlags(*quadratic, &options).ok());
+  EXPECT_EQ(options.classifier.multi_view_quadratic.weights,
+            reconstruct::DefaultQuadraticMatchModel().weights);
 }
 
 TEST(ReconstructFlags, SetsAlphaAndTheContextSelection) {
@@ -46,6 +61,7 @@ TEST(ReconstructFlags, RejectsBadValuesNamingTheFlag) {
       {{"--alpha", "x"}, "--alpha"},
       {{"--context-alpha", "0"}, "--context-alpha"},
       {{"--select-context", "maybe"}, "--select-context"},
+      {{"--match-model", "cubic"}, "--match-model"},
       {{"--alpha", "6", "--select-context", "--context-alpha", "5"}, "--context-alpha"},
   };
   for (const auto& [args, name] : cases) {

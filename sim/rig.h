@@ -52,12 +52,16 @@ struct RigOptions {
   // least that keeps it); 0 before.
   double apex_aim_up_m = 0.03;
   double pair_aim_up_m = 0.0;
+  // 3 cameras: the apex camera (cam2) this much further from the pair (up with apex_up) than the
+  // equilateral triangle puts it, the pair staying where it is (a taller triangle; the centroid
+  // moves by a third of it). For studies of the rig; 0 by default.
+  double apex_raise_m = 0.0;
 
   // INVALID_ARGUMENT naming the field: camera_count outside [1, 3], image size outside
   // [16, 16384], horizontal_fov_deg outside (10, 170), baseline_m outside (0, 2],
   // rig_height_m or distance_to_vine_plane_m not finite or <= 0.05, rig_y_m not finite or
   // outside [-1, 1], non-finite distortion, aim_below_rig_m, apex_aim_up_m or pair_aim_up_m not
-  // finite or beyond +-rig_height_m.
+  // finite or beyond +-rig_height_m, apex_raise_m not finite or outside [0, 1].
   absl::Status Validate() const;
 };
 
