@@ -181,6 +181,9 @@ TEST(Rig, InvalidOptionsAreRejectedNamingTheField) {
   o = {};
   o.k2 = INFINITY;
   expect_field(o, "k2");
+  o = {};
+  o.apex_raise_m = -0.1;
+  expect_field(o, "apex_raise_m");
 }
 
 TEST(Rig, PerturbationOfZeroIsIdentity) {
@@ -235,6 +238,26 @@ TEST(Rig, UpsideDownTriangleHasThePairAbove) {
   EXPECT_LT(c2.z(), c0.z());
   EXPECT_NEAR((c0 - c2).norm(), 0.40, 1e-9);
   EXPECT_TRUE(((c0 + c1 + c2) / 3.0).isApprox(Eigen::Vector3d(0, -0.12, 1.05), 1e-9));
+}
+
+// apex_raise_m moves the apex camera alone, away from the pair (up, or down when the apex is
+// below).
+TEST(Rig, ApexRaiseMovesOnlyTheApexCamera) {
+  for (const bool up : {true, false}) {
+    RigOptions o;
+    o.apex_up = up;
+    const RigCalibration plain = *MakeRig(o);
+    o.apex_raise_m = 0.2;
+    auto raised = MakeRig(o);
+    ASSERT_TRUE(raised.ok()) << raised.status();
+    for (int i : {0, 1}) {
+      EXPECT_TRUE(raised->cameras[i].CentreInPlatform().isApprox(
+          plain.cameras[i].CentreInPlatform(), 1e-12));
+    }
+    const Eigen::Vector3d moved =
+        raised->cameras[2].CentreInPlatform() - plain.cameras[2].CentreInPlatform();
+    EXPECT_TRUE(moved.isApprox(Eigen::Vector3d(0, 0, up ? 0.2 : -0.2), 1e-12)) << moved;
+  }
 }
 
 TEST(Rig, AimBelowTheRigTiltsEveryCameraToThatPoint) {
