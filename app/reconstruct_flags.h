@@ -104,8 +104,11 @@ absl::Status ReadStrandHalfFlags(Flags& flags, reconstruct::StrandHalfOptions* o
 //   --rescue-min-probability P (rescue_min_probability; 0: off),
 //   --rescue-min-taper R (rescue_min_taper; 0: no test),
 //   --keep-within M (keep_within_m; 0: off), --keep-min-length M (keep_min_length_m),
-//   --keep-taper R (keep_taper_ratio; 0: off), --drop-thickening R (drop_thickening_ratio; 0: off).
-// INVALID_ARGUMENT naming the flag: a value that does not parse, --min-join-probability not in
+//   --keep-taper R (keep_taper_ratio; 0: off), --drop-thickening R (drop_thickening_ratio; 0: off),
+//   --join-model quadratic|linear: the joins scored by the committed quadratic models
+//     (DefaultQuadraticJoinModels) or by the linear weights alone (join_classifier.h).
+// INVALID_ARGUMENT naming the flag: a value that does not parse, --join-model neither,
+// --min-join-probability not in
 // (0, 1), --rescue-min-probability neither 0 nor in [--min-join-probability, 1),
 // --rescue-min-taper, --keep-within or --keep-min-length not finite or < 0, --keep-taper or
 // --drop-thickening neither 0 nor finite and > 1.

@@ -41,6 +41,26 @@ TEST(ReconstructFlags, MatchModelChoosesTheMultiViewClassifier) {
             reconstruct::DefaultQuadraticMatchModel().weights);
 }
 
+TEST(ReconstructFlags, JoinModelChoosesTheJoinClassifier) {
+  auto linear = ParseAll({"--join-model", "linear"});
+  ASSERT_TRUE(linear.ok());
+  reconstruct::ConnectOptions options;
+  EXPECT_FALSE(options.join_weights.cane_quadratic.empty());  // quadratic by default
+  ASSERT_TRUE(ReadConnectFlags(*linear, &options).ok());
+  EXPECT_TRUE(options.join_weights.cane_quadratic.empty());
+  EXPECT_TRUE(options.join_weights.root_quadratic.empty());
+  EXPECT_EQ(options.join_weights.cane, reconstruct::DefaultJoinWeights().cane);  // kept
+  auto quadratic = ParseAll({"--join-model=quadratic"});
+  ASSERT_TRUE(quadratic.ok());
+  ASSERT_TRUE(ReadConnectFlags(*quadratic, &options).ok());
+  EXPECT_EQ(options.join_weights.root_quadratic.weights,
+            reconstruct::DefaultJoinWeights().root_quadratic.weights);
+  auto bad = ParseAll({"--join-model", "tree"});
+  ASSERT_TRUE(bad.ok());
+  const absl::Status status = ReadConnectFlags(*bad, &options);
+  EXPECT_NE(status.message().find("--join-model"), std::string::npos) << status;
+}
+
 TEST(ReconstructFlags, SetsAlphaAndTheContextSelection) {
   auto flags = ParseAll({"--alpha", "5.5", "--select-context", "--context-alpha=12"});
   ASSERT_TRUE(flags.ok());

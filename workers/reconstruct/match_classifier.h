@@ -20,11 +20,11 @@ namespace vb::reconstruct {
 inline constexpr int kMatchFeatureCount = 22;
 using MatchFeatures = std::array<double, kMatchFeatureCount>;
 
-// Weights of the logistic model: P(right) = 1 / (1 + exp(-w . features)). Two models: one for
-// candidates that can be checked in at least one other view, one for a two-camera rig (whose
-// other-view features are all 0).
-// A third, for candidates with other views, is quadratic: when `multi_view_quadratic` is not
-// empty it scores them instead of `multi_view` (features 1-21, QuadraticLogistic).
+// Weights of the logistic model: P(right) = 1 / (1 + exp(-w . features)). Two linear models: one
+// for candidates that can be checked in at least one other view, one for a two-camera rig (whose
+// other-view features are all 0). When `multi_view_quadratic` is not empty, it scores the
+// candidates with other views instead of `multi_view` (features 1-21 and their products; since
+// session 25 the default's, docs/reconstruction.md section 3, "A quadratic match classifier").
 struct MatchClassifier {
   MatchFeatures multi_view{};
   MatchFeatures two_view{};

@@ -108,23 +108,6 @@ void PrintWeights(const char* name, const MatchFeatures& w) {
   std::printf("};\n");
 }
 
-// `values` as the lines of a C++ initialiser list, six to a line.
-void PrintValues(const char* name, const std::vector<double>& values) {
-  std::printf("  model.%s = {", name);
-  for (size_t i = 0; i < values.size(); ++i)
-    std::printf("%s%.9g", i == 0 ? "\n      " : (i % 6 == 0 ? ",\n      " : ", "), values[i]);
-  std::printf("};\n");
-}
-
-void PrintQuadratic(const QuadraticLogistic& m) {
-  std::printf("  model.index = {");
-  for (size_t i = 0; i < m.index.size(); ++i) std::printf("%s%d", i ? ", " : "", m.index[i]);
-  std::printf("};\n");
-  PrintValues("mean", m.mean);
-  PrintValues("sd", m.sd);
-  PrintValues("weights", m.weights);
-}
-
 TEST(MatchClassifier, DefaultWeightsAreFinite) {
   const MatchClassifier c = DefaultMatchClassifier();
   EXPECT_TRUE(c.Validate().ok()) << c.Validate();
@@ -355,7 +338,7 @@ TEST(MatchClassifier, DISABLED_TrainOnSimulatedStops) {
     const auto model = TrainQuadraticLogistic(rows, labels, index, std::atof(quadratic));
     ASSERT_TRUE(model.ok()) << model.status();
     std::printf("quadratic (ridge %s): training AUC %.4f\n", quadratic, Auc(multi, *model));
-    PrintQuadratic(*model);
+    std::printf("%s", QuadraticLogisticSource(*model, "model").c_str());
   }
   // Held-out stops (seeds 1100 onwards): coverage and precision of the selected pieces
   // (correspondence_test_util.h Evaluate) for a range of alpha.

@@ -4,8 +4,11 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <utility>
 
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "absl/strings/str_join.h"
 #include "Eigen/Cholesky"
 #include "Eigen/Core"
 
@@ -59,6 +62,21 @@ double QuadraticLogistic::Probability(std::span<const double> x) const {
   for (size_t k = 0; k < e.size() && k < weights.size(); ++k) z += e[k] * weights[k];
   z = std::clamp(z, -40.0, 40.0);
   return 1.0 / (1.0 + std::exp(-z));
+}
+
+std::string QuadraticLogisticSource(const QuadraticLogistic& model, const std::string& name) {
+  std::string out = absl::StrCat("  ", name, ".index = {", absl::StrJoin(model.index, ", "), "};\n");
+  const std::pair<const char*, const std::vector<double>*> fields[] = {
+      {"mean", &model.mean}, {"sd", &model.sd}, {"weights", &model.weights}};
+  for (const auto& [field, values] : fields) {
+    absl::StrAppend(&out, "  ", name, ".", field, " = {");
+    for (size_t i = 0; i < values->size(); ++i) {
+      absl::StrAppend(&out, i == 0 ? "\n      " : (i % 6 == 0 ? ",\n      " : ", "),
+                      absl::StrFormat("%.9g", (*values)[i]));
+    }
+    absl::StrAppend(&out, "};\n");
+  }
+  return out;
 }
 
 absl::StatusOr<QuadraticLogistic> TrainQuadraticLogistic(

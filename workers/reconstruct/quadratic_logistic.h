@@ -6,6 +6,7 @@
 #pragma once
 
 #include <span>
+#include <string>
 #include <vector>
 
 #include "absl/status/status.h"
@@ -31,6 +32,10 @@ struct QuadraticLogistic {
   std::vector<double> Expand(std::span<const double> x) const;
   double Probability(std::span<const double> x) const;
 };
+
+// `model` as C++ statements assigning its fields to the variable `name` (for pasting the trained
+// model into a source file: the training tools print it).
+std::string QuadraticLogisticSource(const QuadraticLogistic& model, const std::string& name);
 
 // Trains a QuadraticLogistic on `rows` (each a feature vector) labelled by `right`: the base
 // features `index`, standardised by their mean and population sd over `rows` (sd 1 where
