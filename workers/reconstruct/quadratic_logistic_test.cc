@@ -2,6 +2,7 @@
 #include "workers/reconstruct/quadratic_logistic.h"
 
 #include <cmath>
+#include <utility>
 #include <vector>
 
 #include "gtest/gtest.h"
@@ -9,32 +10,35 @@
 namespace vb::reconstruct {
 namespace {
 
-TEST(QuadraticLogistic, ExpandsStandardisedFeaturesAndTheirProductsInOrder) {
+// A model of two base features with zero weights.
+QuadraticLogistic TwoFeatures(std::vector<int> index, std::vector<double> mean,
+                              std::vector<double> sd) {
   QuadraticLogistic m;
-  m.index = {2, 0};
-  m.mean = {1.0, 10.0};
-  m.sd = {2.0, 5.0};
+  m.index = std::move(index);
+  m.mean = std::move(mean);
+  m.sd = std::move(sd);
   m.weights.assign(6, 0.0);
+  return m;
+}
+
+TEST(QuadraticLogistic, ExpandsStandardisedFeaturesAndTheirProductsInOrder) {
+  QuadraticLogistic m = TwoFeatures({2, 0}, {1.0, 10.0}, {2.0, 5.0});
   ASSERT_TRUE(m.Validate(3).ok());
-  const std::vector<double> x = {20.0, -1.0, 5.0};  // z = ((5 - 1) / 2, (20 - 10) / 5) = (2, 2)
+  const std::vector<double> x = {25.0, -1.0, 5.0};  // z = ((5 - 1) / 2, (25 - 10) / 5) = (2, 3)
   const std::vector<double> e = m.Expand(x);
   ASSERT_EQ(e.size(), 6u);
   EXPECT_DOUBLE_EQ(e[0], 1.0);
   EXPECT_DOUBLE_EQ(e[1], 2.0);
-  EXPECT_DOUBLE_EQ(e[2], 2.0);
+  EXPECT_DOUBLE_EQ(e[2], 3.0);
   EXPECT_DOUBLE_EQ(e[3], 4.0);  // z0 z0
-  EXPECT_DOUBLE_EQ(e[4], 4.0);  // z0 z1
-  EXPECT_DOUBLE_EQ(e[5], 4.0);  // z1 z1
-  m.weights = {-1.0, 0.5, 0.0, 0.0, -0.25, 0.0};  // score -1 + 1 - 1 = -1
-  EXPECT_NEAR(m.Probability(x), 1.0 / (1.0 + std::exp(1.0)), 1e-12);
+  EXPECT_DOUBLE_EQ(e[4], 6.0);  // z0 z1
+  EXPECT_DOUBLE_EQ(e[5], 9.0);  // z1 z1
+  m.weights = {-1.0, 0.5, 0.0, 0.0, -0.25, 0.0};  // score -1 + 1 - 1.5 = -1.5
+  EXPECT_NEAR(m.Probability(x), 1.0 / (1.0 + std::exp(1.5)), 1e-12);
 }
 
 TEST(QuadraticLogistic, ValidateNamesTheBadField) {
-  QuadraticLogistic m;
-  m.index = {0, 1};
-  m.mean = {0.0, 0.0};
-  m.sd = {1.0, 1.0};
-  m.weights.assign(6, 0.0);
+  QuadraticLogistic m = TwoFeatures({0, 1}, {0.0, 0.0}, {1.0, 1.0});
   EXPECT_TRUE(m.Validate(2).ok());
   EXPECT_NE(m.Validate(1).message().find("index[1]"), std::string::npos);
   m.weights.pop_back();
