@@ -21,9 +21,10 @@
 namespace {
 
 // DefaultMatchClassifier().multi_view as committed in session 22 (match_classifier.cc).
-const double kCommitted[22] = {-2.3742, -0.2758, -0.2329, 0.1134,  -0.0223, -8.1053, -0.2816, -1.2012,
-                               3.7284,  1.0856,  0.8379,  -6.5119, 5.7752,  -7.4007, 0.2930,  -1.4455,
-                               -0.4452, 1.6496,  -16.7099, 1.1531, -2.6993, -2.5107};
+const double kCommitted[22] = {-2.3742, -0.2758, -0.2329, 0.1134,  -0.0223, -8.1053,
+                               -0.2816, -1.2012, 3.7284,  1.0856,  0.8379,  -6.5119,
+                               5.7752,  -7.4007, 0.2930,  -1.4455, -0.4452, 1.6496,
+                               -16.7099, 1.1531, -2.6993, -2.5107};
 constexpr double kThreshold = 1.0 / (1.0 + 4.5);
 
 void Print(const char *name, const std::vector<std::pair<double, int>> &s) {

@@ -335,9 +335,9 @@ TEST(Rig, DefaultRigSeesMoreOfTheVineInTwoViewsThanTheOldOne) {
   EXPECT_EQ(CameraSeeingTheArmBase(*new_rig), "");
 }
 
-// Whether the top foliage wire (z up to ~1.85 m on the vine plane) lies inside the upper camera's image
-// and a lower camera's, whose planes through a horizontal wire meet at a useful angle (the trellis
-// stage needs 3 degrees); the old default's upper camera, tilted down, missed it.
+// Whether the top foliage wire (z up to ~1.85 m on the vine plane) lies inside the upper camera's
+// image and a lower camera's, whose planes through a horizontal wire meet at a useful angle (the
+// trellis stage needs 3 degrees); the old default's upper camera, tilted down, missed it.
 bool SeesTopWire(const RigCalibration& rig) {
   const CameraCalibration& lower = rig.cameras[0];
   const CameraCalibration& upper = rig.cameras[2];
@@ -365,7 +365,8 @@ TEST(Rig, UpperAndLowerCamerasBothSeeTheTopWire) {
 // occluder, the neighbouring vines' length inside >= 2 images, and whether the arm base of the
 // default mount (workers/plan, DefaultPlatformFromArmBase) is in view. Rig options from the environment: VB_RIG_Y (rig_y_m;
 // the toe-in target stays on the vine plane y = 0.8), VB_RIG_HEIGHT, VB_RIG_AIM_BELOW,
-// VB_RIG_BASELINE, VB_RIG_APEX_AIM_UP, VB_RIG_APEX_RAISE, VB_RIG_APEX_UP, VB_RIG_TOE_IN, VB_RIG_FOV,
+// VB_RIG_BASELINE, VB_RIG_APEX_AIM_UP, VB_RIG_APEX_RAISE, VB_RIG_APEX_UP, VB_RIG_TOE_IN,
+// VB_RIG_FOV,
 // VB_RIG_K1/K2/K3. Stops: VB_SEED
 // (1100), VB_STOPS (20), vine 1.
 //   VB_SEED=1100 VB_STOPS=100 vb_sim_test --gtest_also_run_disabled_tests

@@ -92,7 +92,7 @@ struct JoinWeights {
 JoinWeights DefaultJoinWeights();
 // The committed quadratic models (join_classifier_quadratic.cc says how they were trained): the
 // base features of each, as QuadraticJoinFeatures lists them, in cane_quadratic and
-// root_quadratic; the linear weights empty.
+// root_quadratic; the linear weights all 0.
 JoinWeights DefaultQuadraticJoinModels();
 // The base features of the quadratic join models: for joins to a cane, 1-16 but 3 and 4 (the
 // target's kind, constant there); to the trunk or head, 1-16 but 4 (the trunk: 3 says which) and

@@ -287,7 +287,7 @@ TEST(MatchClassifier, DISABLED_TrainOnSimulatedStops) {
   const bool second = !pass_env || std::string(pass_env) != "first";
   // VB_MATCH_DUMP=path: the multi-view candidates also written there as CSV, one per line
   // (seed, 1 for images, 1 if right, the features) for offline model comparisons
-  // (scripts/logistic_heldout.cc).
+  // (scripts/match_model_heldout.cc).
   const char* dump_path = std::getenv("VB_MATCH_DUMP");
   FILE* dump = dump_path != nullptr ? std::fopen(dump_path, "w") : nullptr;
   ASSERT_TRUE(dump_path == nullptr || dump != nullptr) << "cannot write " << dump_path;
@@ -299,8 +299,8 @@ TEST(MatchClassifier, DISABLED_TrainOnSimulatedStops) {
       TrainingStop stop = MakeTrainingStop(sim_stop, second);
       std::printf("%s %d: %zu candidates\n", input.c_str(), 1000 + k, stop.two_view.size());
       std::fflush(stdout);
-      for (const LabelledMatch& e : dump != nullptr ? stop.multi_view
-                                                    : std::vector<LabelledMatch>{}) {
+      for (const LabelledMatch& e : stop.multi_view) {
+        if (dump == nullptr) break;
         std::fprintf(dump, "%d,%d,%d", 1000 + k, input == "images" ? 1 : 0, e.right ? 1 : 0);
         for (double f : e.features) std::fprintf(dump, ",%.9g", f);
         std::fprintf(dump, "\n");

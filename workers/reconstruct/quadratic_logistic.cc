@@ -39,7 +39,8 @@ absl::Status QuadraticLogistic::Validate(int feature_count) const {
   }
   for (size_t k = 0; k < weights.size(); ++k) {
     if (!std::isfinite(weights[k])) {
-      return absl::InvalidArgumentError(absl::StrCat("quadratic model: weights[", k, "] not finite"));
+      return absl::InvalidArgumentError(
+          absl::StrCat("quadratic model: weights[", k, "] not finite"));
     }
   }
   return absl::OkStatus();
@@ -65,7 +66,8 @@ double QuadraticLogistic::Probability(std::span<const double> x) const {
 }
 
 std::string QuadraticLogisticSource(const QuadraticLogistic& model, const std::string& name) {
-  std::string out = absl::StrCat("  ", name, ".index = {", absl::StrJoin(model.index, ", "), "};\n");
+  std::string out =
+      absl::StrCat("  ", name, ".index = {", absl::StrJoin(model.index, ", "), "};\n");
   const std::pair<const char*, const std::vector<double>*> fields[] = {
       {"mean", &model.mean}, {"sd", &model.sd}, {"weights", &model.weights}};
   for (const auto& [field, values] : fields) {
