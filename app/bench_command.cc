@@ -106,6 +106,12 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   // studies of the rig; the classifiers were trained with the default.
   VB_ASSIGN_OR_RETURN(const double rig_baseline,
                       flags.Double("rig-baseline", sim::RigOptions{}.baseline_m));
+  // --rig-apex-raise M, --rig-apex-aim-up M: the apex camera raised this far above the
+  // triangle, and aimed this far above the pair's target (apex_raise_m, apex_aim_up_m).
+  VB_ASSIGN_OR_RETURN(const double rig_apex_raise,
+                      flags.Double("rig-apex-raise", sim::RigOptions{}.apex_raise_m));
+  VB_ASSIGN_OR_RETURN(const double rig_apex_aim_up,
+                      flags.Double("rig-apex-aim-up", sim::RigOptions{}.apex_aim_up_m));
   // --extend on|off: the single-view extension of cane tips (step 4c); default as ExtendOptions.
   VB_ASSIGN_OR_RETURN(const bool extend,
                       flags.Bool("extend", reconstruct::ExtendOptions{}.enabled));
@@ -156,6 +162,8 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   sim_options.render.pixel_format = format;
   sim_options.fiducials = fiducials;
   sim_options.rig.baseline_m = rig_baseline;
+  sim_options.rig.apex_raise_m = rig_apex_raise;
+  sim_options.rig.apex_aim_up_m = rig_apex_aim_up;
   VB_RETURN_IF_ERROR(sim_options.Validate());
   options.threads = static_cast<int>(threads);
   options.rig_refine.enabled = rig_refine != "off";

@@ -2,6 +2,7 @@
 #include "app/reconstruct_flags.h"
 
 #include <cmath>
+#include <string>
 #include <utility>
 
 #include "absl/strings/str_cat.h"
@@ -21,6 +22,18 @@ absl::Status CheckFinite(double value, absl::string_view flag, bool zero_ok,
                                                  zero_ok ? ">= 0" : "> 0", note, ", got ", value));
 }
 
+// --NAME quadratic|linear: whether a classifier scores with its committed quadratic model(s)
+// (true) or its linear weights; `quadratic` is the default.
+absl::StatusOr<bool> ReadModelKind(Flags& flags, const std::string& name, bool quadratic) {
+  VB_ASSIGN_OR_RETURN(const std::string kind,
+                      flags.String(name, quadratic ? "quadratic" : "linear"));
+  if (kind != "quadratic" && kind != "linear") {
+    return absl::InvalidArgumentError(
+        absl::StrCat("--", name, " must be quadratic or linear, is '", kind, "'"));
+  }
+  return kind == "quadratic";
+}
+
 }  // namespace
 
 absl::Status ReadSelectionFlags(Flags& flags, reconstruct::CorrespondenceOptions* options) {
@@ -35,9 +48,14 @@ absl::Status ReadSelectionFlags(Flags& flags, reconstruct::CorrespondenceOptions
     return absl::InvalidArgumentError(absl::StrCat(
         "--context-alpha (", context_alpha, ") must be >= --alpha (", alpha, ")"));
   }
+  VB_ASSIGN_OR_RETURN(
+      const bool quadratic,
+      ReadModelKind(flags, "match-model", !options->classifier.multi_view_quadratic.empty()));
   options->alpha = alpha;
   options->context.enabled = context;
   options->context.alpha = context_alpha;
+  options->classifier.multi_view_quadratic =
+      quadratic ? reconstruct::DefaultQuadraticMatchModel() : reconstruct::QuadraticLogistic{};
   return absl::OkStatus();
 }
 
@@ -221,6 +239,9 @@ absl::Status ReadConnectFlags(Flags& flags, reconstruct::ConnectOptions* options
                       flags.Double("keep-taper", options->keep_taper_ratio));
   VB_ASSIGN_OR_RETURN(const double drop,
                       flags.Double("drop-thickening", options->drop_thickening_ratio));
+  VB_ASSIGN_OR_RETURN(
+      const bool quadratic,
+      ReadModelKind(flags, "join-model", !options->join_weights.cane_quadratic.empty()));
   if (!(min_join > 0.0 && min_join < 1.0)) {
     return absl::InvalidArgumentError(
         absl::StrCat("--min-join-probability must be in (0, 1), got ", min_join));
@@ -249,6 +270,10 @@ absl::Status ReadConnectFlags(Flags& flags, reconstruct::ConnectOptions* options
   options->keep_min_length_m = keep_length;
   options->keep_taper_ratio = keep_taper;
   options->drop_thickening_ratio = drop;
+  const reconstruct::JoinWeights models =
+      quadratic ? reconstruct::DefaultQuadraticJoinModels() : reconstruct::JoinWeights{};
+  options->join_weights.cane_quadratic = models.cane_quadratic;
+  options->join_weights.root_quadratic = models.root_quadratic;
   return absl::OkStatus();
 }
 

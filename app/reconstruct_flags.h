@@ -24,9 +24,11 @@ namespace vb::app {
 //     both passes (the first pass's matters only where the rig refinement is not applied: the
 //     refinement takes pieces with P >= 0.8 whatever alpha);
 //   --select-context true|false: the context-aware selection (context_selection.h);
-//   --context-alpha A: its lower threshold 1 / (1 + A), at least --alpha.
+//   --context-alpha A: its lower threshold 1 / (1 + A), at least --alpha;
+//   --match-model quadratic|linear: the second pass's multi-view candidates scored by the
+//     committed quadratic model or by the linear weights (match_classifier.h).
 // INVALID_ARGUMENT naming the flag: a value that does not parse, --alpha or --context-alpha not
-// finite or <= 0, --context-alpha below --alpha with --select-context on.
+// finite or <= 0, --context-alpha below --alpha with --select-context on, --match-model neither.
 absl::Status ReadSelectionFlags(Flags& flags, reconstruct::CorrespondenceOptions* options);
 
 // Reads into *options (defaults: its values as given) the depth sweep of step 4e
@@ -102,8 +104,11 @@ absl::Status ReadStrandHalfFlags(Flags& flags, reconstruct::StrandHalfOptions* o
 //   --rescue-min-probability P (rescue_min_probability; 0: off),
 //   --rescue-min-taper R (rescue_min_taper; 0: no test),
 //   --keep-within M (keep_within_m; 0: off), --keep-min-length M (keep_min_length_m),
-//   --keep-taper R (keep_taper_ratio; 0: off), --drop-thickening R (drop_thickening_ratio; 0: off).
-// INVALID_ARGUMENT naming the flag: a value that does not parse, --min-join-probability not in
+//   --keep-taper R (keep_taper_ratio; 0: off), --drop-thickening R (drop_thickening_ratio; 0: off),
+//   --join-model quadratic|linear: the joins scored by the committed quadratic models
+//     (DefaultQuadraticJoinModels) or by the linear weights alone (join_classifier.h).
+// INVALID_ARGUMENT naming the flag: a value that does not parse, --join-model neither,
+// --min-join-probability not in
 // (0, 1), --rescue-min-probability neither 0 nor in [--min-join-probability, 1),
 // --rescue-min-taper, --keep-within or --keep-min-length not finite or < 0, --keep-taper or
 // --drop-thickening neither 0 nor finite and > 1.

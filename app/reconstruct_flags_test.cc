@@ -23,7 +23,42 @@ TEST(ReconstructFlags, AbsentFlagsKeepTheDefaults) {
   EXPECT_EQ(options.alpha, defaults.alpha);
   EXPECT_EQ(options.context.enabled, defaults.context.enabled);
   EXPECT_EQ(options.context.alpha, defaults.context.alpha);
+  EXPECT_FALSE(options.classifier.multi_view_quadratic.empty());  // quadratic by default
   EXPECT_TRUE(flags->Finish().ok());
+}
+
+TEST(ReconstructFlags, MatchModelChoosesTheMultiViewClassifier) {
+  auto linear = ParseAll({"--match-model", "linear"});
+  ASSERT_TRUE(linear.ok());
+  reconstruct::CorrespondenceOptions options;
+  ASSERT_TRUE(ReadSelectionFlags(*linear, &options).ok());
+  EXPECT_TRUE(options.classifier.multi_view_quadratic.empty());
+  EXPECT_TRUE(options.Validate().ok());
+  auto quadratic = ParseAll({"--match-model=quadratic"});
+  ASSERT_TRUE(quadratic.ok());
+  ASSERT_TRUE(ReadSelectionFlags(*quadratic, &options).ok());
+  EXPECT_EQ(options.classifier.multi_view_quadratic.weights,
+            reconstruct::DefaultQuadraticMatchModel().weights);
+}
+
+TEST(ReconstructFlags, JoinModelChoosesTheJoinClassifier) {
+  auto linear = ParseAll({"--join-model", "linear"});
+  ASSERT_TRUE(linear.ok());
+  reconstruct::ConnectOptions options;
+  EXPECT_FALSE(options.join_weights.cane_quadratic.empty());  // quadratic by default
+  ASSERT_TRUE(ReadConnectFlags(*linear, &options).ok());
+  EXPECT_TRUE(options.join_weights.cane_quadratic.empty());
+  EXPECT_TRUE(options.join_weights.root_quadratic.empty());
+  EXPECT_EQ(options.join_weights.cane, reconstruct::DefaultJoinWeights().cane);  // kept
+  auto quadratic = ParseAll({"--join-model=quadratic"});
+  ASSERT_TRUE(quadratic.ok());
+  ASSERT_TRUE(ReadConnectFlags(*quadratic, &options).ok());
+  EXPECT_EQ(options.join_weights.root_quadratic.weights,
+            reconstruct::DefaultJoinWeights().root_quadratic.weights);
+  auto bad = ParseAll({"--join-model", "tree"});
+  ASSERT_TRUE(bad.ok());
+  const absl::Status status = ReadConnectFlags(*bad, &options);
+  EXPECT_NE(status.message().find("--join-model"), std::string::npos) << status;
 }
 
 TEST(ReconstructFlags, SetsAlphaAndTheContextSelection) {
@@ -46,6 +81,7 @@ TEST(ReconstructFlags, RejectsBadValuesNamingTheFlag) {
       {{"--alpha", "x"}, "--alpha"},
       {{"--context-alpha", "0"}, "--context-alpha"},
       {{"--select-context", "maybe"}, "--select-context"},
+      {{"--match-model", "cubic"}, "--match-model"},
       {{"--alpha", "6", "--select-context", "--context-alpha", "5"}, "--context-alpha"},
   };
   for (const auto& [args, name] : cases) {

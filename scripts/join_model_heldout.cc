@@ -12,109 +12,22 @@
 //   ./heldout joins.csv            (held-out AUC and log-loss)
 //   ./heldout joins.csv -1 1 w.txt (the quadratic model, L2 1, on every seed,
 //   written to w.txt)
-#include <Eigen/Dense>
-#include <algorithm>
-#include <cmath>
 #include <cstdio>
-#include <fstream>
-#include <sstream>
-#include <string>
 #include <vector>
-struct Ex {
-  int seed, img, y;
-  std::vector<double> f;
-};
+
+#include "logistic_fit.h"
 const double kCane[22] = {-1.0182, -0.0559, -1.5357, 0.0000,  0.0000, 0.5341, 0.5073,  -0.4121,
                           0.4987,  -0.6448, 0.1947,  -0.1707, 1.9917, 1.7472, -0.0651, -0.4369,
                           -1.5173, 0,       0,       0,       0,      0};
 const double kRoot[22] = {0.1569, -0.1006, -0.1176, -0.3721, 0.3721, 0.0000,  0.3781, 0.0000,
                           0.0000, 0.1190,  0.1167,  0.0000,  2.6093, -0.7673, 0.1016, 0.0254,
                           1.0847, 0,       0,       0,       0,      0};
-double Auc(std::vector<std::pair<double, int>> s) {
-  std::sort(s.begin(), s.end());
-  double rank = 0, pos = 0;
-  for (size_t i = 0; i < s.size(); ++i)
-    if (s[i].second) rank += i + 1, pos += 1;
-  double neg = s.size() - pos;
-  return (rank - pos * (pos + 1) / 2) / (pos * neg);
-}
-double LogLoss(const std::vector<std::pair<double, int>> &s) {
-  double l = 0;
-  for (auto &[p, y] : s) {
-    double q = std::clamp(p, 1e-9, 1 - 1e-9);
-    l -= y ? std::log(q) : std::log(1 - q);
-  }
-  return l / s.size();
-}
-// Expansion: base features (indices `use`), standardised, then all products
-// i<=j if quadratic.
-struct Expander {
-  std::vector<int> use;
-  std::vector<double> mu, sd;
-  bool quad;
-  void Fit(const std::vector<const Ex *> &xs) {
-    mu.assign(use.size(), 0);
-    sd.assign(use.size(), 0);
-    for (auto *e : xs)
-      for (size_t k = 0; k < use.size(); ++k) mu[k] += e->f[use[k]] / xs.size();
-    for (auto *e : xs)
-      for (size_t k = 0; k < use.size(); ++k)
-        sd[k] += std::pow(e->f[use[k]] - mu[k], 2) / xs.size();
-    for (double &v : sd) v = v > 1e-12 ? std::sqrt(v) : 1.0;
-  }
-  Eigen::VectorXd Map(const Ex &e) const {
-    std::vector<double> z;
-    for (size_t k = 0; k < use.size(); ++k) z.push_back((e.f[use[k]] - mu[k]) / sd[k]);
-    std::vector<double> out = {1.0};
-    out.insert(out.end(), z.begin(), z.end());
-    if (quad)
-      for (size_t i = 0; i < z.size(); ++i)
-        for (size_t j = i; j < z.size(); ++j) out.push_back(z[i] * z[j]);
-    return Eigen::Map<Eigen::VectorXd>(out.data(), out.size());
-  }
-};
-Eigen::VectorXd Train(const std::vector<const Ex *> &xs, const Expander &ex, double l2) {
-  const int n = ex.Map(*xs[0]).size();
-  Eigen::MatrixXd X(xs.size(), n);
-  Eigen::VectorXd y(xs.size());
-  for (size_t i = 0; i < xs.size(); ++i) X.row(i) = ex.Map(*xs[i]), y(i) = xs[i]->y;
-  Eigen::VectorXd w = Eigen::VectorXd::Zero(n);
-  Eigen::VectorXd ridge = Eigen::VectorXd::Constant(n, l2);
-  ridge(0) = 0;
-  for (int it = 0; it < 40; ++it) {
-    Eigen::VectorXd z = X * w, p(z.size());
-    for (int i = 0; i < z.size(); ++i) p(i) = 1 / (1 + std::exp(-std::clamp(z(i), -30.0, 30.0)));
-    Eigen::VectorXd g = X.transpose() * (p - y) + ridge.cwiseProduct(w);
-    Eigen::VectorXd s = (p.array() * (1 - p.array())).matrix();
-    Eigen::MatrixXd H = X.transpose() * s.asDiagonal() * X;
-    H.diagonal() += ridge;
-    H.diagonal().array() += 1e-9;
-    Eigen::VectorXd step = H.ldlt().solve(g);
-    w -= step;
-    if (step.norm() < 1e-8) break;
-  }
-  return w;
-}
 int main(int argc, char **argv) {
-  std::ifstream in(argv[1]);
-  std::string line;
-  std::vector<Ex> all;
   const int img_only = argc > 2 ? std::atoi(argv[2]) : -1;
-  while (std::getline(in, line)) {
-    std::stringstream ss(line);
-    std::string t;
-    Ex e;
-    std::getline(ss, t, ',');
-    e.seed = std::stoi(t);
-    std::getline(ss, t, ',');
-    e.img = std::stoi(t);
-    std::getline(ss, t, ',');
-    e.y = std::stoi(t);
-    while (std::getline(ss, t, ',')) e.f.push_back(std::stod(t));
-    if (e.f.size() != 22) continue;
+  std::vector<Ex> all;
+  for (Ex &e : ReadExamples(argv[1], 22)) {
     for (int k = 17; k < 22; ++k) e.f[k] = 0;  // the committed model does not use them
-    if (img_only >= 0 && e.img != img_only) continue;
-    all.push_back(e);
+    if (img_only < 0 || e.img == img_only) all.push_back(e);
   }
   if (argc > 3) {  // export: train on every seed, quadratic, l2 = argv[3]
     FILE *out = std::fopen(argv[4], "w");

@@ -127,6 +127,10 @@ absl::Status RigOptions::Validate() const {
       return Invalid(name, absl::StrCat("must be finite and within +-rig_height_m, is ", value));
     }
   }
+  if (!(std::isfinite(apex_raise_m) && apex_raise_m >= 0.0 && apex_raise_m <= 1.0)) {
+    return Invalid("apex_raise_m",
+                   absl::StrCat("must be finite and within [0, 1], is ", apex_raise_m));
+  }
   const std::pair<const char*, double> coefficients[] = {
       {"k1", k1}, {"k2", k2}, {"p1", p1}, {"p2", p2}, {"k3", k3}};
   for (const auto& [name, value] : coefficients) {
@@ -174,7 +178,8 @@ absl::StatusOr<RigCalibration> MakeRig(const RigOptions& options) {
       // Centroid to the side of the pair; the third camera is twice as far on the other side.
       const double inradius = s / (2.0 * std::sqrt(3.0));
       const double pair = options.apex_up ? -inradius : inradius;
-      centres = {{-0.5 * s, 0.0, pair}, {0.5 * s, 0.0, pair}, {0.0, 0.0, -2.0 * pair}};
+      const double apex = -2.0 * pair + (options.apex_up ? 1.0 : -1.0) * options.apex_raise_m;
+      centres = {{-0.5 * s, 0.0, pair}, {0.5 * s, 0.0, pair}, {0.0, 0.0, apex}};
     }
   }
   const Eigen::Vector3d rig_centre(0.0, options.rig_y_m, options.rig_height_m);

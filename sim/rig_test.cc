@@ -181,6 +181,9 @@ TEST(Rig, InvalidOptionsAreRejectedNamingTheField) {
   o = {};
   o.k2 = INFINITY;
   expect_field(o, "k2");
+  o = {};
+  o.apex_raise_m = -0.1;
+  expect_field(o, "apex_raise_m");
 }
 
 TEST(Rig, PerturbationOfZeroIsIdentity) {
@@ -235,6 +238,26 @@ TEST(Rig, UpsideDownTriangleHasThePairAbove) {
   EXPECT_LT(c2.z(), c0.z());
   EXPECT_NEAR((c0 - c2).norm(), 0.40, 1e-9);
   EXPECT_TRUE(((c0 + c1 + c2) / 3.0).isApprox(Eigen::Vector3d(0, -0.12, 1.05), 1e-9));
+}
+
+// apex_raise_m moves the apex camera alone, away from the pair (up, or down when the apex is
+// below).
+TEST(Rig, ApexRaiseMovesOnlyTheApexCamera) {
+  for (const bool up : {true, false}) {
+    RigOptions o;
+    o.apex_up = up;
+    const RigCalibration plain = *MakeRig(o);
+    o.apex_raise_m = 0.2;
+    auto raised = MakeRig(o);
+    ASSERT_TRUE(raised.ok()) << raised.status();
+    for (int i : {0, 1}) {
+      EXPECT_TRUE(raised->cameras[i].CentreInPlatform().isApprox(
+          plain.cameras[i].CentreInPlatform(), 1e-12));
+    }
+    const Eigen::Vector3d moved =
+        raised->cameras[2].CentreInPlatform() - plain.cameras[2].CentreInPlatform();
+    EXPECT_TRUE(moved.isApprox(Eigen::Vector3d(0, 0, up ? 0.2 : -0.2), 1e-12)) << moved;
+  }
 }
 
 TEST(Rig, AimBelowTheRigTiltsEveryCameraToThatPoint) {
@@ -312,27 +335,28 @@ TEST(Rig, DefaultRigSeesMoreOfTheVineInTwoViewsThanTheOldOne) {
   EXPECT_EQ(CameraSeeingTheArmBase(*new_rig), "");
 }
 
-// The top foliage wire (z up to ~1.85 m on the vine plane) lies inside the upper camera's image
-// and a lower camera's, whose planes through a horizontal wire meet at a useful angle (the trellis
-// stage needs 3 degrees); the old default's upper camera, tilted down, missed it.
-TEST(Rig, UpperAndLowerCamerasBothSeeTheTopWire) {
-  auto sees_top_wire = [](const RigCalibration& rig) {
-    const CameraCalibration& lower = rig.cameras[0];
-    const CameraCalibration& upper = rig.cameras[2];
-    for (double x = -0.3; x <= 0.3 + 1e-9; x += 0.1) {
-      const Eigen::Vector3d p(x, 0.8, 1.85);
-      for (const CameraCalibration* c : {&lower, &upper}) {
-        const auto uv = c->Project(p);
-        if (!uv.has_value() || !c->InImage(*uv)) return false;
-      }
-      const Eigen::Vector3d n0 = (p - lower.CentreInPlatform()).cross(Eigen::Vector3d::UnitX());
-      const Eigen::Vector3d n2 = (p - upper.CentreInPlatform()).cross(Eigen::Vector3d::UnitX());
-      if (n0.normalized().cross(n2.normalized()).norm() < std::sin(3.0 * M_PI / 180)) return false;
+// Whether the top foliage wire (z up to ~1.85 m on the vine plane) lies inside the upper camera's
+// image and a lower camera's, whose planes through a horizontal wire meet at a useful angle (the
+// trellis stage needs 3 degrees); the old default's upper camera, tilted down, missed it.
+bool SeesTopWire(const RigCalibration& rig) {
+  const CameraCalibration& lower = rig.cameras[0];
+  const CameraCalibration& upper = rig.cameras[2];
+  for (double x = -0.3; x <= 0.3 + 1e-9; x += 0.1) {
+    const Eigen::Vector3d p(x, 0.8, 1.85);
+    for (const CameraCalibration* c : {&lower, &upper}) {
+      const auto uv = c->Project(p);
+      if (!uv.has_value() || !c->InImage(*uv)) return false;
     }
-    return true;
-  };
-  EXPECT_TRUE(sees_top_wire(*MakeRig()));
-  EXPECT_FALSE(sees_top_wire(*MakeRig(OldDefaultRig())));
+    const Eigen::Vector3d n0 = (p - lower.CentreInPlatform()).cross(Eigen::Vector3d::UnitX());
+    const Eigen::Vector3d n2 = (p - upper.CentreInPlatform()).cross(Eigen::Vector3d::UnitX());
+    if (n0.normalized().cross(n2.normalized()).norm() < std::sin(3.0 * M_PI / 180)) return false;
+  }
+  return true;
+}
+
+TEST(Rig, UpperAndLowerCamerasBothSeeTheTopWire) {
+  EXPECT_TRUE(SeesTopWire(*MakeRig()));
+  EXPECT_FALSE(SeesTopWire(*MakeRig(OldDefaultRig())));
 }
 
 // Where the true trunk + cane length lies with respect to the rig's images, on simulated stops:
@@ -341,7 +365,8 @@ TEST(Rig, UpperAndLowerCamerasBothSeeTheTopWire) {
 // occluder, the neighbouring vines' length inside >= 2 images, and whether the arm base of the
 // default mount (workers/plan, DefaultPlatformFromArmBase) is in view. Rig options from the environment: VB_RIG_Y (rig_y_m;
 // the toe-in target stays on the vine plane y = 0.8), VB_RIG_HEIGHT, VB_RIG_AIM_BELOW,
-// VB_RIG_BASELINE, VB_RIG_APEX_AIM_UP, VB_RIG_APEX_UP, VB_RIG_TOE_IN, VB_RIG_FOV,
+// VB_RIG_BASELINE, VB_RIG_APEX_AIM_UP, VB_RIG_APEX_RAISE, VB_RIG_APEX_UP, VB_RIG_TOE_IN,
+// VB_RIG_FOV,
 // VB_RIG_K1/K2/K3. Stops: VB_SEED
 // (1100), VB_STOPS (20), vine 1.
 //   VB_SEED=1100 VB_STOPS=100 vb_sim_test --gtest_also_run_disabled_tests
@@ -358,6 +383,7 @@ TEST(RigCoverage, DISABLED_Report) {
   o.aim_below_rig_m = env("VB_RIG_AIM_BELOW", o.aim_below_rig_m);
   o.baseline_m = env("VB_RIG_BASELINE", o.baseline_m);
   o.apex_aim_up_m = env("VB_RIG_APEX_AIM_UP", o.apex_aim_up_m);
+  o.apex_raise_m = env("VB_RIG_APEX_RAISE", o.apex_raise_m);
   o.apex_up = env("VB_RIG_APEX_UP", 1) != 0;
   o.toe_in = env("VB_RIG_TOE_IN", 1) != 0;
   o.horizontal_fov_deg = env("VB_RIG_FOV", o.horizontal_fov_deg);
@@ -423,8 +449,9 @@ TEST(RigCoverage, DISABLED_Report) {
                    0.075;
     if (views >= 2) unoccluded_two += s.length_m;
   }
-  std::printf("stops %d from seed %d; rig y %.3f m; arm base in view: %s\n", stops, seed,
-              o.rig_y_m, base_in_view ? "YES" : "no");
+  std::printf("stops %d from seed %d; rig y %.3f m; arm base in view: %s; top wire seen: %s\n",
+              stops, seed, o.rig_y_m, base_in_view ? "YES" : "no",
+              SeesTopWire(*rig) ? "yes" : "NO");
   std::printf(">=2 views, arm base not in the way: %.4f\n", unoccluded_two / c.truth_cane_length_m);
   std::printf("per stop: this vine %.2f m inside >= 2 images, the neighbours %.2f m\n",
               c.in_two_or_more_fraction * c.truth_cane_length_m / stops, neighbour_two / stops);

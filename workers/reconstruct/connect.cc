@@ -94,13 +94,8 @@ absl::Status ConnectOptions::Validate() const {
         "connect options: rescue_min_probability must be 0 (off) or at least "
         "min_join_probability (a rescue never takes a join less likely than none)");
   }
-  for (double w : join_weights.cane) {
-    if (!std::isfinite(w))
-      return absl::InvalidArgumentError("connect options: join_weights must be finite");
-  }
-  for (double w : join_weights.root) {
-    if (!std::isfinite(w))
-      return absl::InvalidArgumentError("connect options: join_weights must be finite");
+  if (absl::Status s = join_weights.Validate(); !s.ok()) {
+    return absl::InvalidArgumentError(absl::StrCat("connect options: ", s.message()));
   }
   return absl::OkStatus();
 }

@@ -218,10 +218,8 @@ absl::Status CorrespondenceOptions::Validate() const {
       !std::isfinite(other_views.max_residual_growth_px)) {
     return Invalid("other_views.max_residual_growth_px", "must be >= 0 and finite");
   }
-  for (int i = 0; i < kMatchFeatureCount; ++i) {
-    if (!std::isfinite(classifier.multi_view[i]) || !std::isfinite(classifier.two_view[i])) {
-      return Invalid("classifier", absl::StrCat("weight ", i, " not finite"));
-    }
+  if (absl::Status s = classifier.Validate(); !s.ok()) {
+    return Invalid("classifier", std::string(s.message()));
   }
   if (!(min_probability >= 0.0 && min_probability < 1.0)) {
     return Invalid("min_probability", absl::StrCat("must be in [0, 1), got ", min_probability));
@@ -330,8 +328,7 @@ absl::StatusOr<std::vector<ScoredCandidate>> ScoreCandidates(
         s.features = s.multi_view ? ComputeMatchFeatures(s.candidate, s.fit, others,
                                                          options.volume, refinement)
                                   : s.two_view_features;
-        s.probability = MatchProbability(
-            s.features, s.multi_view ? options.classifier.multi_view : options.classifier.two_view);
+        s.probability = options.classifier.Probability(s.features, s.multi_view);
         scored.push_back(std::move(s));
       }
     }

@@ -60,8 +60,10 @@ TEST(MatchSegments, SyntheticVineIsCoveredAndPrecise) {
 TEST(MatchSegments, RefiningInTheOtherViewsRaisesPrecision) {
   const uint64_t seed = 1234;
   const auto [scene, truth_rig, rig, views] = MakeSyntheticVine(seed);
-  // The refinement features (match_classifier.h) off in both, so that both select alike.
+  // The refinement features (match_classifier.h) off in both, so that both select alike: the
+  // linear weights without them (the quadratic model's products would still see them).
   CorrespondenceOptions on;
+  on.classifier.multi_view_quadratic = {};
   for (int i : {19, 20, 21}) on.classifier.multi_view[i] = 0.0;
   CorrespondenceOptions off = on;
   off.other_views.rounds = 0;

@@ -110,6 +110,19 @@ TEST(MatchSegments, BadInputRejects) {
   bad = views;
   bad[2].width = 640;
   EXPECT_EQ(code(MatchSegments(bad, rig, options, inf)), absl::StatusCode::kInvalidArgument);
+  // A quadratic match model that does not fit its features or holds a non-finite weight.
+  CorrespondenceOptions bad_model;
+  bad_model.classifier.multi_view_quadratic.weights.pop_back();
+  auto rejected = MatchSegments(views, rig, bad_model, inf);
+  EXPECT_EQ(code(rejected), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(std::string(rejected.status().message()).find("classifier: quadratic model: weights"),
+            std::string::npos)
+      << rejected.status();
+  bad_model = {};
+  bad_model.classifier.multi_view_quadratic.weights[7] = NAN;
+  rejected = MatchSegments(views, rig, bad_model, inf);
+  EXPECT_NE(std::string(rejected.status().message()).find("weights[7]"), std::string::npos)
+      << rejected.status();
   // Strand halves: a sibling out of range, steps not one per point, a non-finite width.
   StrandHalf half;
   half.path = views[1].segments[0];
@@ -195,6 +208,7 @@ TEST(MatchWithRigRefinement, FirstPassUsesTheFirstPassClassifier) {
   options = {};
   options.rig_refine.enabled = false;
   options.correspondence.classifier.multi_view[0] = -100.0;
+  options.correspondence.classifier.multi_view_quadratic.weights[0] = -100.0;
   options.correspondence.classifier.two_view[0] = -100.0;
   const auto first = MatchWithRigRefinement(views, rig, options, Deadline::Infinite());
   ASSERT_TRUE(first.ok()) << first.status();

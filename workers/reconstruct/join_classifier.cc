@@ -4,7 +4,9 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <utility>
 
+#include "absl/strings/str_cat.h"
 #include "Eigen/Core"
 #include "workers/reconstruct/logistic.h"
 
@@ -50,6 +52,9 @@ JoinWeights DefaultJoinWeights() {
   w.root = {0.1569, -0.1006, -0.1176, -0.3721, 0.3721, 0.0000, 0.3781, 0.0000, 0.0000,
             0.1190, 0.1167, 0.0000, 2.6093, -0.7673, 0.1016, 0.0254, 1.0847,
             0.0, 0.0, 0.0, 0.0, 0.0};
+  const JoinWeights quadratic = DefaultQuadraticJoinModels();
+  w.cane_quadratic = quadratic.cane_quadratic;
+  w.root_quadratic = quadratic.root_quadratic;
   return w;
 }
 
@@ -130,8 +135,35 @@ bool UsesImageFeatures(const JoinWeights& weights) {
 }
 
 double JoinProbability(const JoinFeatures& features, const JoinWeights& weights) {
-  return LogisticProbability(features, features[3] != 0.0 || features[4] != 0.0 ? weights.root
-                                                                                : weights.cane);
+  const bool root = features[3] != 0.0 || features[4] != 0.0;
+  const QuadraticLogistic& quadratic = root ? weights.root_quadratic : weights.cane_quadratic;
+  if (!quadratic.empty()) return quadratic.Probability(features);
+  return LogisticProbability(features, root ? weights.root : weights.cane);
+}
+
+absl::Status JoinWeights::Validate() const {
+  for (int i = 0; i < kJoinFeatureCount; ++i) {
+    if (!std::isfinite(cane[i]) || !std::isfinite(root[i])) {
+      return absl::InvalidArgumentError(absl::StrCat("join_weights: weight ", i, " not finite"));
+    }
+  }
+  for (const auto& [name, model] : {std::pair{"cane_quadratic", &cane_quadratic},
+                                    std::pair{"root_quadratic", &root_quadratic}}) {
+    if (model->empty()) continue;
+    if (absl::Status s = model->Validate(kJoinFeatureCount); !s.ok()) {
+      return absl::InvalidArgumentError(absl::StrCat("join_weights.", name, ": ", s.message()));
+    }
+  }
+  return absl::OkStatus();
+}
+
+std::vector<int> QuadraticJoinFeatures(bool root) {
+  std::vector<int> use;
+  for (int k = 1; k <= 16; ++k) {
+    const bool skip = k == 4 || (root ? (k == 5 || k == 7 || k == 8 || k == 11) : k == 3);
+    if (!skip) use.push_back(k);
+  }
+  return use;
 }
 
 absl::StatusOr<JoinFeatures> TrainJoinClassifier(const std::vector<LabelledJoin>& examples,

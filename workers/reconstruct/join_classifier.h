@@ -15,6 +15,7 @@
 #include "absl/status/statusor.h"
 #include "core/geometry.h"
 #include "core/vine_model.h"
+#include "workers/reconstruct/quadratic_logistic.h"
 
 namespace vb::reconstruct {
 
@@ -72,14 +73,31 @@ JoinFeatures ComputeJoinFeatures(const JoinGeometry& join);
 // Weights of the logistic model: P(right) = 1 / (1 + exp(-w . features)). Joins to another
 // cane and joins to the trunk or head are scored by separate models: what makes them likely
 // differs (a fork leaves its parent's side; a cane from the head starts at its surface).
+// Either model may instead be quadratic (QuadraticLogistic on a subset of features 1-16 and
+// their products): when not empty it scores its joins in place of the linear weights (since
+// session 25 the default's, docs/reconstruction.md section 6, "Quadratic join models").
 struct JoinWeights {
   JoinFeatures cane{};  // the target is another cane
   JoinFeatures root{};  // the target is the trunk or head
+  QuadraticLogistic cane_quadratic;
+  QuadraticLogistic root_quadratic;
+
+  // OK if every weight is finite and the quadratic models, if any, are valid; INVALID_ARGUMENT
+  // naming the bad one otherwise.
+  absl::Status Validate() const;
 };
 
-// The committed, trained weights (see join_classifier.cc for how they were produced). They do
-// not use the image features.
+// The committed, trained weights (see join_classifier.cc for how they were produced), with the
+// quadratic models of DefaultQuadraticJoinModels. They do not use the image features.
 JoinWeights DefaultJoinWeights();
+// The committed quadratic models (join_classifier_quadratic.cc says how they were trained): the
+// base features of each, as QuadraticJoinFeatures lists them, in cane_quadratic and
+// root_quadratic; the linear weights all 0.
+JoinWeights DefaultQuadraticJoinModels();
+// The base features of the quadratic join models: for joins to a cane, 1-16 but 3 and 4 (the
+// target's kind, constant there); to the trunk or head, 1-16 but 4 (the trunk: 3 says which) and
+// 5, 7, 8 and 11 (0 for them).
+std::vector<int> QuadraticJoinFeatures(bool root);
 
 // Weights trained with the image features (an option, off by default: no significant gain on
 // the bench, docs/reconstruction.md section 6, "Image evidence for joins"). They need the
@@ -92,8 +110,8 @@ JoinWeights ImageJoinWeights();
 // need to measure the images (connect.h, JoinImageFn).
 bool UsesImageFeatures(const JoinWeights& weights);
 
-// 1 / (1 + exp(-w . features)) with w the weights for the join's target (features[3] or
-// features[4] set: the root model), clamped against overflow.
+// The probability of the join's target's model (features[3] or features[4] set: the root model):
+// its quadratic model if not empty, else 1 / (1 + exp(-w . features)), clamped against overflow.
 double JoinProbability(const JoinFeatures& features, const JoinWeights& weights);
 
 struct LabelledJoin {

@@ -40,6 +40,24 @@ double Probability(const Polyline3& child, bool base_is_last, const Polyline3& p
 // A piece continuing another beyond a gap: the wider the gap, and the more the piece bends away
 // from the line of its parent, the less likely the join. (Whether a continuation beats a cane
 // the piece touches at a crossing is decided in context: ConnectCanes' crossing test.)
+// The default weights carry the committed quadratic models on their documented features, and a
+// broken model is rejected naming it.
+TEST(JoinClassifier, DefaultWeightsHoldValidQuadraticModels) {
+  JoinWeights w = DefaultJoinWeights();
+  ASSERT_TRUE(w.Validate().ok()) << w.Validate();
+  EXPECT_EQ(w.cane_quadratic.index, QuadraticJoinFeatures(false));
+  EXPECT_EQ(w.root_quadratic.index, QuadraticJoinFeatures(true));
+  EXPECT_EQ(w.cane_quadratic.index.size(), 14u);
+  EXPECT_EQ(w.root_quadratic.index.size(), 11u);
+  w.root_quadratic.sd[2] = -1.0;
+  ConnectOptions options;
+  options.join_weights = w;
+  const absl::Status s = options.Validate();
+  EXPECT_EQ(s.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(s.message().find("join_weights.root_quadratic"), std::string::npos) << s;
+  EXPECT_TRUE(ImageJoinWeights().cane_quadratic.empty());  // the image weights stay linear
+}
+
 TEST(JoinClassifier, WiderGapsAndBendsAreLessLikely) {
   const Polyline3 inner = Line({0.06, 0.8, 1.0}, {0.40, 0.8, 1.0});
   const Polyline3 near = Line({0.41, 0.8, 1.0}, {0.80, 0.8, 1.0});
@@ -291,14 +309,36 @@ TEST(JoinClassifier, DISABLED_TrainOnSimulatedStops) {
       std::printf("seeds 1000-%d, labels and images, joins to a %s: %zu candidates, %d right\n",
                   1000 + stops - 1, name, set->size(), right);
     }
-    std::printf("%s image features: training AUC %.4f (committed weights %.4f)\n",
-                with_images ? "with" : "without", Auc(examples, w),
-                Auc(examples, DefaultJoinWeights()));
+    JoinWeights committed = DefaultJoinWeights();
+    committed.cane_quadratic = committed.root_quadratic = {};
+    std::printf("%s image features: training AUC %.4f (committed linear weights %.4f)\n",
+                with_images ? "with" : "without", Auc(examples, w), Auc(examples, committed));
     for (auto [name, v] : {std::pair{"cane", &w.cane}, std::pair{"root", &w.root}}) {
       std::printf("  w.%s = {", name);
       for (int i = 0; i < kJoinFeatureCount; ++i) std::printf("%s%.4f", i ? ", " : "", (*v)[i]);
       std::printf("};\n");
     }
+  }
+  // VB_TRAIN_QUADRATIC=L2: also the quadratic models (QuadraticJoinFeatures, ridge L2), printed
+  // as the body of DefaultQuadraticJoinModels.
+  if (const char* quadratic = std::getenv("VB_TRAIN_QUADRATIC"); quadratic != nullptr) {
+    JoinWeights q;
+    for (const bool root : {false, true}) {
+      std::vector<std::vector<double>> rows;
+      std::vector<bool> labels;
+      for (const LabelledJoin& e : examples) {
+        if ((e.features[3] != 0.0 || e.features[4] != 0.0) != root) continue;
+        rows.emplace_back(e.features.begin(), e.features.end());
+        labels.push_back(e.right);
+      }
+      const auto model = TrainQuadraticLogistic(rows, labels, QuadraticJoinFeatures(root),
+                                                std::atof(quadratic));
+      ASSERT_TRUE(model.ok()) << model.status();
+      (root ? q.root_quadratic : q.cane_quadratic) = *model;
+    }
+    std::printf("quadratic (ridge %s): training AUC %.4f\n", quadratic, Auc(examples, q));
+    std::printf("%s", QuadraticLogisticSource(q.cane_quadratic, "w.cane_quadratic").c_str());
+    std::printf("%s", QuadraticLogisticSource(q.root_quadratic, "w.root_quadratic").c_str());
   }
 }
 

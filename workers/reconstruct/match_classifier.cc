@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 
+#include "absl/strings/str_cat.h"
 #include "Eigen/Core"
 #include "workers/reconstruct/logistic.h"
 
@@ -21,6 +22,7 @@ MatchClassifier DefaultMatchClassifier() {
   MatchClassifier c;
   c.multi_view = {-2.3742, -0.2758, -0.2329, 0.1134, -0.0223, -8.1053, -0.2816, -1.2012, 3.7284, 1.0856, 0.8379, -6.5119, 5.7752, -7.4007, 0.2930, -1.4455, -0.4452, 1.6496, -16.7099, 1.1531, -2.6993, -2.5107};
   c.two_view = {-5.3968, -0.2740, -1.2360, -0.1466, 0.7152, -9.8974, -0.1747, 0.7356, 4.6802, 1.1054, 1.1247, 0.0000, 0.0000, 0.0000, 0.0000, -1.5798, 0.0000, 0.0000, -27.5482, 0.0000, 0.0000, 0.0000};
+  c.multi_view_quadratic = DefaultQuadraticMatchModel();
   return c;
 }
 
@@ -141,6 +143,22 @@ MatchFeatures ComputeMatchFeatures(const MatchCandidate& candidate, const Polyli
 
 double MatchProbability(const MatchFeatures& features, const MatchFeatures& weights) {
   return LogisticProbability(features, weights);
+}
+
+double MatchClassifier::Probability(const MatchFeatures& features, bool multi) const {
+  if (!multi) return MatchProbability(features, two_view);
+  if (!multi_view_quadratic.empty()) return multi_view_quadratic.Probability(features);
+  return MatchProbability(features, multi_view);
+}
+
+absl::Status MatchClassifier::Validate() const {
+  for (int i = 0; i < kMatchFeatureCount; ++i) {
+    if (!std::isfinite(multi_view[i]) || !std::isfinite(two_view[i])) {
+      return absl::InvalidArgumentError(absl::StrCat("weight ", i, " not finite"));
+    }
+  }
+  if (multi_view_quadratic.empty()) return absl::OkStatus();
+  return multi_view_quadratic.Validate(kMatchFeatureCount);
 }
 
 absl::StatusOr<MatchFeatures> TrainMatchClassifier(const std::vector<LabelledMatch>& examples,

@@ -12,6 +12,7 @@
 #include "core/geometry.h"
 #include "workers/reconstruct/match_candidates.h"
 #include "workers/reconstruct/polyline_fit.h"
+#include "workers/reconstruct/quadratic_logistic.h"
 
 namespace vb::reconstruct {
 
@@ -19,17 +20,31 @@ namespace vb::reconstruct {
 inline constexpr int kMatchFeatureCount = 22;
 using MatchFeatures = std::array<double, kMatchFeatureCount>;
 
-// Weights of the logistic model: P(right) = 1 / (1 + exp(-w . features)). Two models: one for
-// candidates that can be checked in at least one other view, one for a two-camera rig (whose
-// other-view features are all 0).
+// Weights of the logistic model: P(right) = 1 / (1 + exp(-w . features)). Two linear models: one
+// for candidates that can be checked in at least one other view, one for a two-camera rig (whose
+// other-view features are all 0). When `multi_view_quadratic` is not empty, it scores the
+// candidates with other views instead of `multi_view` (features 1-21 and their products; since
+// session 25 the default's, docs/reconstruction.md section 3, "A quadratic match classifier").
 struct MatchClassifier {
   MatchFeatures multi_view{};
   MatchFeatures two_view{};
+  QuadraticLogistic multi_view_quadratic;
+
+  // The probability that a candidate with `features` is right: the two-view weights unless
+  // `multi_view`, then the quadratic model if present, else the multi-view weights.
+  double Probability(const MatchFeatures& features, bool multi_view) const;
+  // OK if every weight is finite and the quadratic model, if any, is valid; INVALID_ARGUMENT
+  // naming the weight otherwise.
+  absl::Status Validate() const;
 };
 
 // The committed, trained weights (see match_classifier.cc for how they were produced): for
 // candidates matched with a refined rig (the second pass of MatchWithRigRefinement, reconstruct.h).
+// The multi-view candidates are scored by the quadratic model (DefaultQuadraticMatchModel).
 MatchClassifier DefaultMatchClassifier();
+// The committed quadratic model for multi-view candidates of the second pass
+// (match_classifier_quadratic.cc says how it was trained).
+QuadraticLogistic DefaultQuadraticMatchModel();
 // Weights for candidates matched with the rig as calibrated, i.e. drifted (the first pass, whose
 // confident pieces refine the rig): trained on such candidates.
 MatchClassifier CalibratedRigMatchClassifier();

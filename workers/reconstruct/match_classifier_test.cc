@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -75,10 +76,11 @@ std::vector<std::string> EnvList(const char* name, const std::string& fallback) 
   return out;
 }
 
-// Area under the ROC curve of `weights` on `examples`.
-double Auc(const std::vector<LabelledMatch>& examples, const MatchFeatures& weights) {
+// Area under the ROC curve of `probability` on `examples`.
+double Auc(const std::vector<LabelledMatch>& examples,
+           const std::function<double(const MatchFeatures&)>& probability) {
   std::vector<std::pair<double, bool>> scored;
-  for (const LabelledMatch& e : examples) scored.push_back({MatchProbability(e.features, weights), e.right});
+  for (const LabelledMatch& e : examples) scored.push_back({probability(e.features), e.right});
   std::sort(scored.begin(), scored.end());
   double rank_sum = 0.0, positives = 0.0;
   for (size_t i = 0; i < scored.size(); ++i) {
@@ -92,6 +94,14 @@ double Auc(const std::vector<LabelledMatch>& examples, const MatchFeatures& weig
   return (rank_sum - positives * (positives + 1) / 2) / (positives * negatives);
 }
 
+double Auc(const std::vector<LabelledMatch>& examples, const MatchFeatures& weights) {
+  return Auc(examples, [&](const MatchFeatures& f) { return MatchProbability(f, weights); });
+}
+
+double Auc(const std::vector<LabelledMatch>& examples, const QuadraticLogistic& model) {
+  return Auc(examples, [&](const MatchFeatures& f) { return model.Probability(f); });
+}
+
 void PrintWeights(const char* name, const MatchFeatures& w) {
   std::printf("  c.%s = {", name);
   for (int i = 0; i < kMatchFeatureCount; ++i) std::printf("%s%.4f", i ? ", " : "", w[i]);
@@ -100,6 +110,8 @@ void PrintWeights(const char* name, const MatchFeatures& w) {
 
 TEST(MatchClassifier, DefaultWeightsAreFinite) {
   const MatchClassifier c = DefaultMatchClassifier();
+  EXPECT_TRUE(c.Validate().ok()) << c.Validate();
+  EXPECT_FALSE(c.multi_view_quadratic.empty());
   for (int i = 0; i < kMatchFeatureCount; ++i) {
     EXPECT_TRUE(std::isfinite(c.multi_view[i]));
     EXPECT_TRUE(std::isfinite(c.two_view[i]));
@@ -229,10 +241,12 @@ TEST(MatchClassifier, DefaultWeightsSeparateHeldOutCandidates) {
   }
   const MatchClassifier c = DefaultMatchClassifier();
   const double auc_multi = Auc(multi, c.multi_view);
+  const double auc_quadratic = Auc(multi, c.multi_view_quadratic);
   const double auc_two = Auc(two, c.two_view);
-  std::printf("[ held-out AUC ] multi-view %.3f over %zu candidates, two-view %.3f\n", auc_multi,
-              multi.size(), auc_two);
+  std::printf("[ held-out AUC ] multi-view %.3f (quadratic %.3f) over %zu candidates, two-view "
+              "%.3f\n", auc_multi, auc_quadratic, multi.size(), auc_two);
   EXPECT_GT(auc_multi, 0.95);
+  EXPECT_GT(auc_quadratic, 0.95);
   EXPECT_GT(auc_two, 0.9);
 }
 
@@ -271,6 +285,12 @@ TEST(MatchClassifier, DISABLED_TrainOnSimulatedStops) {
   const std::vector<std::string> inputs = EnvList("VB_TRAIN_INPUT", "labels,images");
   const char* pass_env = std::getenv("VB_TRAIN_PASS");
   const bool second = !pass_env || std::string(pass_env) != "first";
+  // VB_MATCH_DUMP=path: the multi-view candidates also written there as CSV, one per line
+  // (seed, 1 for images, 1 if right, the features) for offline model comparisons
+  // (scripts/match_model_heldout.cc).
+  const char* dump_path = std::getenv("VB_MATCH_DUMP");
+  FILE* dump = dump_path != nullptr ? std::fopen(dump_path, "w") : nullptr;
+  ASSERT_TRUE(dump_path == nullptr || dump != nullptr) << "cannot write " << dump_path;
   std::vector<LabelledMatch> multi, two;
   for (const std::string& input : inputs) {
     for (int k = 0; k < stops; ++k) {
@@ -279,12 +299,19 @@ TEST(MatchClassifier, DISABLED_TrainOnSimulatedStops) {
       TrainingStop stop = MakeTrainingStop(sim_stop, second);
       std::printf("%s %d: %zu candidates\n", input.c_str(), 1000 + k, stop.two_view.size());
       std::fflush(stdout);
+      for (const LabelledMatch& e : stop.multi_view) {
+        if (dump == nullptr) break;
+        std::fprintf(dump, "%d,%d,%d", 1000 + k, input == "images" ? 1 : 0, e.right ? 1 : 0);
+        for (double f : e.features) std::fprintf(dump, ",%.9g", f);
+        std::fprintf(dump, "\n");
+      }
       multi.insert(multi.end(), stop.multi_view.begin(), stop.multi_view.end());
       two.insert(two.end(), stop.two_view.begin(), stop.two_view.end());
     }
   }
   int right = 0;
   for (const auto& e : multi) right += e.right ? 1 : 0;
+  if (dump != nullptr) std::fclose(dump);
   std::printf("seeds 1000-%d: %zu multi-view candidates (%d right), %zu two-view\n",
               1000 + stops - 1, multi.size(), right, two.size());
   const auto w_multi = TrainMatchClassifier(multi);
@@ -297,6 +324,22 @@ TEST(MatchClassifier, DISABLED_TrainOnSimulatedStops) {
               Auc(multi, current.multi_view), Auc(two, current.two_view));
   PrintWeights("multi_view", *w_multi);
   PrintWeights("two_view", *w_two);
+  // VB_TRAIN_QUADRATIC=L2: also the quadratic model of the multi-view candidates (features
+  // 1-21, ridge L2), printed as the body of DefaultQuadraticMatchModel.
+  if (const char* quadratic = std::getenv("VB_TRAIN_QUADRATIC"); quadratic != nullptr) {
+    std::vector<std::vector<double>> rows;
+    std::vector<bool> labels;
+    for (const LabelledMatch& e : multi) {
+      rows.emplace_back(e.features.begin(), e.features.end());
+      labels.push_back(e.right);
+    }
+    std::vector<int> index;
+    for (int k = 1; k < kMatchFeatureCount; ++k) index.push_back(k);
+    const auto model = TrainQuadraticLogistic(rows, labels, index, std::atof(quadratic));
+    ASSERT_TRUE(model.ok()) << model.status();
+    std::printf("quadratic (ridge %s): training AUC %.4f\n", quadratic, Auc(multi, *model));
+    std::printf("%s", QuadraticLogisticSource(*model, "model").c_str());
+  }
   // Held-out stops (seeds 1100 onwards): coverage and precision of the selected pieces
   // (correspondence_test_util.h Evaluate) for a range of alpha.
   CorrespondenceOptions options;

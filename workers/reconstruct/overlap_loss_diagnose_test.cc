@@ -11,12 +11,16 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <map>
 #include <optional>
 #include <set>
+#include <string>
 #include <tuple>
 #include <vector>
 
+#include "absl/strings/numbers.h"
+#include "absl/strings/str_split.h"
 #include "gtest/gtest.h"
 #include "workers/reconstruct/correspondence_test_util.h"
 #include "workers/reconstruct/diagnose_util.h"
@@ -283,6 +287,52 @@ TEST(OverlapLoss, DISABLED_ByStage) {
     std::printf("    f%-2zu %8.3f %8.3f %+8.3f\n", f, lost, kept, weights[f] * (lost - kept));
   }
   EXPECT_GT(total, 0.0);
+}
+
+// From geometry alone (no rendering), per rig: the share of the vine's true length (trunk and
+// canes, 5 mm samples, vine 1 of each stop) inside two or more images, and of it the share
+// lying along another cane (this vine's or a neighbour's; LyingAlongAnother, 2 px) in every view
+// that sees it, in two or more of them, and the share with at least two views where it lies
+// along nothing (a clean pair). Rigs from VB_RIGS, `;`-separated, each
+// `side,apex_raise,apex_aim_up` (RigOptions baseline_m, apex_raise_m, apex_aim_up_m); the
+// default lists the default rig and taller triangles. Stops: VB_SEED (1300), VB_STOPS (20).
+//   VB_RIGS='0.4,0,0.03;0.4,0.2,0.1' vb_reconstruct_test --gtest_also_run_disabled_tests
+//     --gtest_filter='OverlapLoss.DISABLED_RigGeometry'
+TEST(OverlapLoss, DISABLED_RigGeometry) {
+  const auto [first, count, images, fiducials] = ReportStopsFromEnv(1300, 20);
+  const char* env = std::getenv("VB_RIGS");
+  const std::string rigs = env ? env : "0.4,0,0.03;0.4,0.1,0.06;0.4,0.2,0.1;0.4,0.3,0.14";
+  std::printf("%-20s %8s %8s %8s %8s\n", "side,raise,aim", "in>=2", "along_all", "along>=2",
+              "clean2");
+  for (const std::string& spec : std::vector<std::string>(absl::StrSplit(rigs, ';'))) {
+    const std::vector<std::string> f = absl::StrSplit(spec, ',');
+    ASSERT_EQ(f.size(), 3u) << spec;
+    sim::RigOptions o;
+    ASSERT_TRUE(absl::SimpleAtod(f[0], &o.baseline_m) &&
+                absl::SimpleAtod(f[1], &o.apex_raise_m) &&
+                absl::SimpleAtod(f[2], &o.apex_aim_up_m))
+        << spec;
+    double total = 0.0, seen = 0.0, along_all = 0.0, along_two = 0.0, clean = 0.0;
+    for (int k = 0; k < count; ++k) {
+      SimulatedStop stop;
+      stop.scene = sim::GenerateScene(first + k, 1).value();
+      stop.drawn = stop.scene.vine;
+      for (const VineModel& neighbour : stop.scene.neighbours)
+        for (const Cane& cane : neighbour.canes) stop.drawn.canes.push_back(cane);
+      stop.true_rig = sim::MakeRig(o).value();
+      for (const LengthSample& s : SampleTrueLength(stop, kStepM, true)) {
+        total += s.weight_m;
+        if (s.in_image < 2) continue;
+        seen += s.weight_m;
+        if (s.along == s.in_image) along_all += s.weight_m;
+        if (s.along >= 2) along_two += s.weight_m;
+        if (s.in_image - s.along >= 2) clean += s.weight_m;
+      }
+    }
+    ASSERT_GT(total, 0.0);
+    std::printf("%-20s %8.4f %8.4f %8.4f %8.4f\n", spec.c_str(), seen / total,
+                along_all / total, along_two / total, clean / total);
+  }
 }
 
 }  // namespace

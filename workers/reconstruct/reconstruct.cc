@@ -112,12 +112,9 @@ absl::Status ReconstructOptions::Validate() const {
   if (volume.box.isEmpty()) return absl::InvalidArgumentError("options.volume: empty box");
   VB_RETURN_IF_ERROR(structure.Validate());
   VB_RETURN_IF_ERROR(correspondence.Validate());
-  for (int i = 0; i < kMatchFeatureCount; ++i) {
-    if (!std::isfinite(first_pass_classifier.multi_view[i]) ||
-        !std::isfinite(first_pass_classifier.two_view[i])) {
-      return absl::InvalidArgumentError(
-          absl::StrCat("options.first_pass_classifier: weight ", i, " not finite"));
-    }
+  if (absl::Status s = first_pass_classifier.Validate(); !s.ok()) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("options.first_pass_classifier: ", s.message()));
   }
   VB_RETURN_IF_ERROR(assembly.Validate());
   VB_RETURN_IF_ERROR(sweep.Validate());
