@@ -37,9 +37,6 @@ double Probability(const Polyline3& child, bool base_is_last, const Polyline3& p
   return JoinProbability(ComputeJoinFeatures(g), DefaultJoinWeights());
 }
 
-// A piece continuing another beyond a gap: the wider the gap, and the more the piece bends away
-// from the line of its parent, the less likely the join. (Whether a continuation beats a cane
-// the piece touches at a crossing is decided in context: ConnectCanes' crossing test.)
 // The default weights carry the committed quadratic models on their documented features, and a
 // broken model is rejected naming it.
 TEST(JoinClassifier, DefaultWeightsHoldValidQuadraticModels) {
@@ -58,6 +55,9 @@ TEST(JoinClassifier, DefaultWeightsHoldValidQuadraticModels) {
   EXPECT_TRUE(ImageJoinWeights().cane_quadratic.empty());  // the image weights stay linear
 }
 
+// A piece continuing another beyond a gap: the wider the gap, and the more the piece bends away
+// from the line of its parent, the less likely the join. (Whether a continuation beats a cane
+// the piece touches at a crossing is decided in context: ConnectCanes' crossing test.)
 TEST(JoinClassifier, WiderGapsAndBendsAreLessLikely) {
   const Polyline3 inner = Line({0.06, 0.8, 1.0}, {0.40, 0.8, 1.0});
   const Polyline3 near = Line({0.41, 0.8, 1.0}, {0.80, 0.8, 1.0});

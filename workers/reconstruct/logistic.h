@@ -17,13 +17,17 @@
 
 namespace vb::reconstruct {
 
+// 1 / (1 + exp(-score)), the score clamped to [-40, 40].
+inline double LogisticOfScore(double score) {
+  return 1.0 / (1.0 + std::exp(-std::clamp(score, -40.0, 40.0)));
+}
+
 // 1 / (1 + exp(-w . x)), the score clamped to [-40, 40].
 template <size_t N>
 double LogisticProbability(const std::array<double, N>& x, const std::array<double, N>& w) {
   double z = 0.0;
   for (size_t i = 0; i < N; ++i) z += x[i] * w[i];
-  z = std::clamp(z, -40.0, 40.0);
-  return 1.0 / (1.0 + std::exp(-z));
+  return LogisticOfScore(z);
 }
 
 // Trains on `examples`, each with `features` (std::array<double, N>) and `right` (its label).

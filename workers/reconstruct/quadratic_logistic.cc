@@ -11,6 +11,7 @@
 #include "absl/strings/str_join.h"
 #include "Eigen/Cholesky"
 #include "Eigen/Core"
+#include "workers/reconstruct/logistic.h"
 
 namespace vb::reconstruct {
 
@@ -61,8 +62,7 @@ double QuadraticLogistic::Probability(std::span<const double> x) const {
   const std::vector<double> e = Expand(x);
   double z = 0.0;
   for (size_t k = 0; k < e.size() && k < weights.size(); ++k) z += e[k] * weights[k];
-  z = std::clamp(z, -40.0, 40.0);
-  return 1.0 / (1.0 + std::exp(-z));
+  return LogisticOfScore(z);
 }
 
 std::string QuadraticLogisticSource(const QuadraticLogistic& model, const std::string& name) {
