@@ -249,10 +249,11 @@ double RadiusPx(const CameraCalibration& camera, double radius, double depth) {
   return 1.1 * camera.camera_matrix(0, 0) * radius / depth;
 }
 
-// The cropped maps' margin: the thresholds of the default rig's cubes reach ~40 px (a root cube
-// of 4 cm at the working volume's nearest depth in view, plus silhouette_margin_px); larger ones
-// outside the crops take the full-frame fallback (SetDistance).
-constexpr int kCropMarginPx = 48;
+// The cropped maps' margin: the octree's thresholds reach ~72 px with the default rig (a root
+// cube of 4 cm near the working volume's near face at an image's bottom corner, tuning stops
+// 1400-1405), under 0.955 x 80 px; larger ones outside the crops take the full-frame fallback
+// (SetDistance).
+constexpr int kCropMarginPx = 80;
 
 }  // namespace
 
