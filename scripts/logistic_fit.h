@@ -80,6 +80,16 @@ inline Eigen::VectorXd Train(const std::vector<const Ex *> &xs, const Expander &
   }
   return w;
 }
+// The number of features of the first row (the columns after seed, img and label).
+inline size_t FeatureCount(const char *path) {
+  std::ifstream in(path);
+  std::string line;
+  if (!std::getline(in, line)) return 0;
+  size_t commas = 0;
+  for (char c : line) commas += c == ',' ? 1 : 0;
+  return commas >= 3 ? commas - 2 : 0;
+}
+
 // Examples from a CSV of lines "seed,img,y,f0,f1,...": those with exactly `features` features.
 inline std::vector<Ex> ReadExamples(const char *path, size_t features) {
   std::ifstream in(path);

@@ -3,9 +3,11 @@
 // classifier (s25)"): multi-view match models compared on the labelled candidates that
 // MatchClassifier.DISABLED_TrainOnSimulatedStops writes with VB_MATCH_DUMP=match.csv. Trains on
 // seeds 1000-1079 and holds out 1080-1099: the committed weights (copied below), the same
-// logistic model retrained, and a quadratic expansion (standardised features 1-21, all their
-// products) with L2 1, 10, 100. For each: AUC and log-loss, and at the selection threshold
-// 1 / (1 + 4.5) the share of right candidates above it and the wrong ones above it per right one.
+// logistic model retrained, and a quadratic expansion (standardised features 1 to the last, all
+// their products) with L2 1, 10, 100; with more than 22 features (a dump with features added,
+// as on branch s26-width), also the quadratic model on features 1-21 alone, as committed in
+// session 25. For each: AUC and log-loss, and at the selection threshold 1 / (1 + 4.5) the share
+// of right candidates above it and the wrong ones above it per right one.
 //   g++ -O2 -std=c++17 -I/usr/include/eigen3 scripts/match_model_heldout.cc -o heldout
 //   ./heldout match.csv [img]          (held-out figures on img 0 labels, 1 images, -1 both;
 //                                       trained on both inputs, as the committed weights)
@@ -46,9 +48,11 @@ int main(int argc, char **argv) {
     return 2;
   }
   const int img_only = argc > 2 ? std::atoi(argv[2]) : -1;
-  const std::vector<Ex> all = ReadExamples(argv[1], 22);
-  std::vector<int> use;
-  for (int k = 1; k < 22; ++k) use.push_back(k);
+  const size_t count = FeatureCount(argv[1]);
+  const std::vector<Ex> all = ReadExamples(argv[1], count);
+  std::vector<int> use, use21;
+  for (int k = 1; k < static_cast<int>(count); ++k) use.push_back(k);
+  for (int k = 1; k < 22; ++k) use21.push_back(k);
   if (argc > 4) {  // export: quadratic, every seed
     std::vector<const Ex *> tr;
     for (const Ex &e : all) tr.push_back(&e);
@@ -83,9 +87,11 @@ int main(int argc, char **argv) {
     committed.push_back({1 / (1 + std::exp(-std::clamp(z, -30.0, 30.0))), e->y});
   }
   Print("committed weights", committed);
-  for (bool quad : {false, true})
+  for (int arm : {0, 1, 2})
     for (double l2 : {1.0, 10.0, 100.0}) {
-      Expander ex{use, {}, {}, quad};
+      if (arm == 2 && count <= 22) break;
+      const bool quad = arm > 0;
+      Expander ex{arm == 2 ? use21 : use, {}, {}, quad};
       ex.Fit(tr);
       const Eigen::VectorXd w = Train(tr, ex, l2);
       std::vector<std::pair<double, int>> s;
@@ -93,7 +99,8 @@ int main(int argc, char **argv) {
         const double z = std::clamp(ex.Map(*e).dot(w), -30.0, 30.0);
         s.push_back({1 / (1 + std::exp(-z)), e->y});
       }
-      const std::string name = std::string(quad ? "quadratic" : "linear") + " l2 " +
+      const std::string kind = arm == 2 ? "quadratic 1-21" : quad ? "quadratic" : "linear";
+      const std::string name = kind + " l2 " +
                                std::to_string(static_cast<int>(l2)) + " (" +
                                std::to_string(w.size()) + ")";
       Print(name.c_str(), s);

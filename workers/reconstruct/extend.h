@@ -52,8 +52,10 @@ struct ExtendOptions {
                                           // (plus the projected radius) of its projection
   int image_margin_px = 3;  // a view must see a point this far inside to contradict it
   // Which tips are extended (docs/reconstruction.md, step 4c, "Which tips"; 0 turns a rule off).
-  double max_tip_row_distance_m = 0.9;  // skip a tip farther than this along the row (|x|) from
-                                        // the trunk's top: neighbours' canes overlap there
+  double max_tip_row_distance_m = 0.0;  // skip a tip farther than this along the row (|x|) from
+                                        // the trunk's top: neighbours' canes overlap there; off
+                                        // since s26 (0.9 before: docs/reconstruction.md,
+                                        // section 10, "The row rule off (s26)")
   double max_tip_out_of_plane = 0.3;    // skip a tip whose unit tangent's component across the
                                         // row (|y|, toward the cameras) passes this
   double support_span_m = 0.03;         // the cane's last stretch checked against the skeletons

@@ -167,15 +167,18 @@ TEST(ExtendCanes, SkipsATipFarAlongTheRowFromTheTrunk) {
   const size_t last_two = LastSeenByTwo(rig, cane);
   const Cane cut = Truncated(cane, last_two + 1);
   const double tip_x = cut.polyline.points.back().x();
-  ASSERT_GT(tip_x, 0.95);  // beyond the default 0.9 m from the trunk at x = 0
+  ASSERT_GT(tip_x, 0.95);  // beyond 0.9 m from the trunk at x = 0
   const std::vector<View2D> views = SyntheticViews(VineWith(cane), rig);
   WorkingVolume volume;
   volume.box.max().x() = 1.6;
+  ExtendOptions row_rule = On();
+  EXPECT_EQ(row_rule.max_tip_row_distance_m, 0.0);  // off by default since s26
+  row_rule.max_tip_row_distance_m = 0.9;
   // Trunk at x = 0: the tip is farther than max_tip_row_distance_m along the row: skipped.
   {
     VineModel model = VineWith(cut);
     ExtendSummary summary;
-    ASSERT_TRUE(ExtendCanes(views, rig, volume, On(), &model, &summary).ok());
+    ASSERT_TRUE(ExtendCanes(views, rig, volume, row_rule, &model, &summary).ok());
     EXPECT_EQ(summary.tips_tried, 1);
     EXPECT_EQ(summary.tips_extended, 0);
     EXPECT_EQ(model.canes[1].polyline.points.size(), last_two + 1);
@@ -185,9 +188,16 @@ TEST(ExtendCanes, SkipsATipFarAlongTheRowFromTheTrunk) {
   {
     VineModel model = WithTrunkAt(VineWith(cut), tip_x - 0.6);
     ExtendSummary summary;
-    ASSERT_TRUE(ExtendCanes(views, rig, volume, On(), &model, &summary).ok());
+    ASSERT_TRUE(ExtendCanes(views, rig, volume, row_rule, &model, &summary).ok());
     EXPECT_EQ(summary.tips_extended, 1);
     EXPECT_GT(model.canes[1].polyline.points.size(), last_two + 1);
+  }
+  // With the defaults (the rule off) the far tip is extended.
+  {
+    VineModel model = VineWith(cut);
+    ExtendSummary summary;
+    ASSERT_TRUE(ExtendCanes(views, rig, volume, On(), &model, &summary).ok());
+    EXPECT_EQ(summary.tips_extended, 1);
   }
 }
 

@@ -2,20 +2,170 @@
 #include "workers/reconstruct/head_carve.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <limits>
+#include <mutex>
+#include <utility>
 
 #include "opencv2/imgproc.hpp"
 #include "workers/reconstruct/head_peel.h"
 
 namespace vb::reconstruct::head_internal {
 
+namespace {
+
+// The bounding box of the nonzero pixels of `set` (empty when none).
+cv::Rect BoxOf(const std::vector<uint8_t>& set, int width, int height) {
+  const cv::Mat mask(height, width, CV_8U, const_cast<uint8_t*>(set.data()));
+  return cv::boundingRect(mask);
+}
+
+}  // namespace
+
+CroppedDistance CroppedDistance::ToSet(const std::vector<uint8_t>& set, int width, int height,
+                                       int margin_px, int x_begin, int x_end) {
+  CroppedDistance out;
+  out.width_ = width;
+  out.height_ = height;
+  out.outside_ = std::numeric_limits<float>::infinity();
+  x_begin = std::clamp(x_begin, 0, width);
+  x_end = x_end <= 0 ? width : std::clamp(x_end, x_begin, width);
+  const cv::Mat mask(height, width, CV_8U, const_cast<uint8_t*>(set.data()));
+  cv::Rect box = cv::boundingRect(mask(cv::Rect(x_begin, 0, x_end - x_begin, height)));
+  if (box.area() == 0) return out;
+  box.x += x_begin;
+  const int m = std::max(0, margin_px);
+  const cv::Rect crop =
+      cv::Rect(box.x - m, box.y - m, box.width + 2 * m, box.height + 2 * m) &
+      cv::Rect(0, 0, width, height);
+  out.x0_ = crop.x;
+  out.y0_ = crop.y;
+  out.w_ = crop.width;
+  out.h_ = crop.height;
+  out.distance_.resize(static_cast<size_t>(crop.area()));
+  cv::Mat distance(crop.height, crop.width, CV_32F, out.distance_.data());
+  // Only the columns asked for count as the set.
+  cv::Mat off_set = mask(crop) == 0;
+  for (int x = 0; x < crop.width; ++x) {
+    if (crop.x + x < x_begin || crop.x + x >= x_end) off_set.col(x).setTo(255);
+  }
+  // Every pixel of the set lies in the crop, and a shortest chamfer path from a pixel of the
+  // crop to one of the set stays in the box they span: the crop's values are the full frame's.
+  cv::distanceTransform(off_set, distance, cv::DIST_L2, 3);
+  return out;
+}
+
+CroppedDistance CroppedDistance::InsideSet(const std::vector<uint8_t>& set, int width,
+                                           int height) {
+  CroppedDistance out;
+  out.width_ = width;
+  out.height_ = height;
+  out.outside_ = 0.0f;
+  const cv::Rect box = BoxOf(set, width, height);
+  if (box.area() == 0) return out;
+  const cv::Rect crop = cv::Rect(box.x - 1, box.y - 1, box.width + 2, box.height + 2) &
+                        cv::Rect(0, 0, width, height);
+  const cv::Mat mask(height, width, CV_8U, const_cast<uint8_t*>(set.data()));
+  out.x0_ = crop.x;
+  out.y0_ = crop.y;
+  out.w_ = crop.width;
+  out.h_ = crop.height;
+  out.distance_.resize(static_cast<size_t>(crop.area()));
+  cv::Mat distance(crop.height, crop.width, CV_32F, out.distance_.data());
+  // The crop's rim lies off the set (or on the image's edge, beyond which the full frame has no
+  // pixel either), so the nearest pixel off the set is in the crop.
+  cv::distanceTransform(mask(crop) != 0, distance, cv::DIST_L2, 3);
+  return out;
+}
+
+float CroppedDistance::At(int x, int y) const {
+  x -= x0_;
+  y -= y0_;
+  if (x < 0 || y < 0 || x >= w_ || y >= h_) return outside_;
+  return distance_[static_cast<size_t>(y) * w_ + x];
+}
+
+double CroppedDistance::CroppedShare() const {
+  const double frame = static_cast<double>(width_) * height_;
+  return frame > 0 ? static_cast<double>(w_) * h_ / frame : 0.0;
+}
+
+struct SetDistance::Full {
+  std::vector<uint8_t> set;
+  int width = 0, height = 0;
+  std::once_flag once;
+  std::atomic<bool> computed{false};
+  cv::Mat distance;  // CV_32F, width x height
+};
+
+SetDistance::SetDistance(std::vector<uint8_t> set, int width, int height, int margin_px)
+    : margin_px_(std::max(0, margin_px)), full_(std::make_shared<Full>()) {
+  const cv::Mat mask(height, width, CV_8U, set.data());
+  cv::Mat columns;  // 1 x width: the largest value in each column
+  cv::reduce(mask, columns, 0, cv::REDUCE_MAX);
+  int x = 0;
+  while (x < width) {
+    if (columns.at<uint8_t>(0, x) == 0) {
+      ++x;
+      continue;
+    }
+    // A band: columns with set pixels, gaps of up to 2 x margin_px empty columns included (the
+    // boxes of two bands then never reach each other's pixels).
+    const int begin = x;
+    int end = x + 1, empty = 0;
+    for (x = end; x < width && empty <= 2 * margin_px_; ++x) {
+      if (columns.at<uint8_t>(0, x) != 0) {
+        end = x + 1;
+        empty = 0;
+      } else {
+        ++empty;
+      }
+    }
+    bands_.push_back(CroppedDistance::ToSet(set, width, height, margin_px_, begin, end));
+    x = end;
+  }
+  full_->set = std::move(set);
+  full_->width = width;
+  full_->height = height;
+}
+
+bool SetDistance::Exceeds(int x, int y, double threshold) const {
+  float nearest = std::numeric_limits<float>::infinity();
+  for (const CroppedDistance& band : bands_) nearest = std::min(nearest, band.At(x, y));
+  // At most the threshold in a band's box: the whole set's distance is no larger. Otherwise
+  // every band whose box misses (x, y) lies farther than kChamferStep x margin_px.
+  if (nearest <= threshold) return false;
+  if (threshold < CroppedDistance::kChamferStep * margin_px_ || !full_) return true;
+  std::call_once(full_->once, [full = full_.get()] {
+    const cv::Mat mask(full->height, full->width, CV_8U, full->set.data());
+    cv::distanceTransform(mask == 0, full->distance, cv::DIST_L2, 3);
+    full->computed = true;
+  });
+  return full_->distance.at<float>(y, x) > threshold;
+}
+
+double SetDistance::CroppedShare() const {
+  double share = 0.0;
+  for (const CroppedDistance& band : bands_) share += band.CroppedShare();
+  return share;
+}
+
+bool SetDistance::FullFrameComputed() const { return full_ && full_->computed; }
+
 // Distances from every pixel to the silhouette (0 inside) and to the background (0 outside).
 struct SilhouetteMaps {
   int width = 0;
   int height = 0;
-  cv::Mat to_silhouette;   // CV_32F
-  cv::Mat to_background;   // CV_32F
-  cv::Mat to_thick;        // CV_32F: distance to thick foreground alone (posts excluded)
+  // Distance to the silhouette (the thick mask, peeled and reached when asked) alone, and to
+  // the view's posts: to the silhouette or a post is their minimum (a post in front hides
+  // whatever is behind it, so its pixels do not carve).
+  SetDistance to_thick;
+  SetDistance to_post;
+  CroppedDistance to_background;  // from inside the silhouette to the nearest pixel off it
+  bool OutsideSilhouette(int x, int y, double reach) const {
+    return to_thick.Exceeds(x, y, reach) && to_post.Exceeds(x, y, reach);
+  }
   // CV_32F, when HeadOptions::leaf_wood_radius_px > 0: distance to the silhouette or to wood
   // that a disc of that radius fits in (the opening of the foreground by that disc).
   cv::Mat to_wide_wood;
@@ -55,9 +205,9 @@ namespace {
 
 // `silhouette`: the view's thick mask, or that mask with the canes peeled off (head_peel.h),
 // grown into the foreground by reach_px (ReachIntoForeground). `wood_radius_px` > 0 also makes
-// to_wide_wood.
+// to_wide_wood. The cropped maps' margin is margin_px (SetDistance).
 SilhouetteMaps MakeMaps(const View2D& view, const std::vector<uint8_t>& unreached,
-                        int reach_px, double wood_radius_px) {
+                        int reach_px, double wood_radius_px, int margin_px) {
   const std::vector<uint8_t> silhouette = ReachIntoForeground(view, unreached, reach_px);
   SilhouetteMaps maps;
   maps.width = view.width;
@@ -66,17 +216,18 @@ SilhouetteMaps MakeMaps(const View2D& view, const std::vector<uint8_t>& unreache
   // A post in front hides whatever is behind it: its pixels may not carve (they count as
   // silhouette for the outside test), but neither do they prove a cube whole.
   cv::Mat classes(view.height, view.width, CV_8U, const_cast<uint8_t*>(view.classes.data.data()));
-  cv::Mat inside = mask != 0;
-  cv::Mat outside = (mask == 0) & (classes != static_cast<int>(PixelClass::kPost));
-  cv::distanceTransform(outside, maps.to_silhouette, cv::DIST_L2, 3);
+  std::vector<uint8_t> posts(silhouette.size());
+  for (size_t i = 0; i < posts.size(); ++i) {
+    posts[i] = view.classes.data[i] == static_cast<uint8_t>(PixelClass::kPost) ? 1 : 0;
+  }
+  maps.to_thick = SetDistance(silhouette, view.width, view.height, margin_px);
+  maps.to_post = SetDistance(std::move(posts), view.width, view.height, margin_px);
+  maps.to_background = CroppedDistance::InsideSet(silhouette, view.width, view.height);
   if (reach_px > 0) {
     cv::Mat before(view.height, view.width, CV_8U, const_cast<uint8_t*>(unreached.data()));
     cv::Mat outside_before = (before == 0) & (classes != static_cast<int>(PixelClass::kPost));
     cv::distanceTransform(outside_before, maps.to_unreached, cv::DIST_L2, 3);
   }
-  cv::distanceTransform(inside, maps.to_background, cv::DIST_L2, 3);
-  cv::Mat not_thick = mask == 0;
-  cv::distanceTransform(not_thick, maps.to_thick, cv::DIST_L2, 3);
   if (wood_radius_px > 0) {
     // The opening of the wood (foreground or silhouette) by a disc of wood_radius_px: erosion
     // is {distance to non-wood > radius}, dilation {distance to the eroded set <= radius}.
@@ -85,11 +236,24 @@ SilhouetteMaps MakeMaps(const View2D& view, const std::vector<uint8_t>& unreache
     cv::distanceTransform(wood, to_non_wood, cv::DIST_L2, 3);
     cv::Mat not_core = to_non_wood <= wood_radius_px;
     cv::distanceTransform(not_core, to_core, cv::DIST_L2, 3);
+    cv::Mat outside = (mask == 0) & (classes != static_cast<int>(PixelClass::kPost));
     cv::Mat not_wide = outside & (to_core > wood_radius_px);
     cv::distanceTransform(not_wide, maps.to_wide_wood, cv::DIST_L2, 3);
   }
   return maps;
 }
+
+// The radius in px of a sphere of radius `radius` at `depth` (10% slack for the lens
+// distortion's change of scale across the image).
+double RadiusPx(const CameraCalibration& camera, double radius, double depth) {
+  return 1.1 * camera.camera_matrix(0, 0) * radius / depth;
+}
+
+// The cropped maps' margin: the octree's thresholds reach ~72 px with the default rig (a root
+// cube of 4 cm near the working volume's near face at an image's bottom corner, tuning stops
+// 1400-1405), under 0.955 x 80 px; larger ones outside the crops take the full-frame fallback
+// (SetDistance).
+constexpr int kCropMarginPx = 80;
 
 }  // namespace
 
@@ -102,7 +266,8 @@ Carver::Carver(const std::vector<View2D>& views, const RigCalibration& rig,
                            : views[v].thick_mask;
     maps_.push_back(MakeMaps(views[v], silhouette, options.foreground_reach_px,
                              options.leaf_radius_fraction < 1.0 ? options.leaf_wood_radius_px
-                                                                : 0.0));
+                                                                : 0.0,
+                             kCropMarginPx));
   }
 }
 
@@ -115,7 +280,7 @@ std::optional<Carver::InView> Carver::Place(const Cube& cube, double radius, siz
   const double depth = (camera.camera_from_platform() * cube.centre).z();
   if (depth <= radius) return std::nullopt;
   InView at;
-  at.r_px = 1.1 * camera.camera_matrix(0, 0) * radius / depth;
+  at.r_px = RadiusPx(camera, radius, depth);
   at.x = std::clamp(static_cast<int>(std::lround(uv->x())), 0, maps_[v].width - 1);
   at.y = std::clamp(static_cast<int>(std::lround(uv->y())), 0, maps_[v].height - 1);
   return at;
@@ -136,8 +301,8 @@ CubeVerdict Carver::Judge(const Cube& cube, bool* seen_as_wood) const {
     const double r_px = at->r_px;
     if (OutsideIn(v, x, y, r_px + options_.silhouette_margin_px, &reached_only))
       return CubeVerdict::kOutside;
-    if (maps_[v].to_background.at<float>(y, x) < r_px) all_inside = false;
-    if (maps_[v].to_thick.at<float>(y, x) <= r_px + options_.silhouette_margin_px)
+    if (maps_[v].to_background.At(x, y) < r_px) all_inside = false;
+    if (!maps_[v].to_thick.Exceeds(x, y, r_px + options_.silhouette_margin_px))
       touches_wood = true;
     else
       *seen_as_wood = false;
@@ -165,7 +330,7 @@ bool Carver::OutsideInSomeView(const Cube& cube, double radius_fraction) const {
 }
 
 bool Carver::OutsideIn(size_t v, int x, int y, double reach, int* reached_only) const {
-  if (maps_[v].to_silhouette.at<float>(y, x) > reach) return true;
+  if (maps_[v].OutsideSilhouette(x, y, reach)) return true;
   if (maps_[v].to_unreached.empty() || maps_[v].to_unreached.at<float>(y, x) <= reach)
     return false;
   // Held by the reach alone in this view: allowed in at most foreground_reach_max_views views.

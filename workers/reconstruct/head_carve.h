@@ -15,6 +15,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <vector>
 
@@ -35,13 +36,68 @@ struct Cube {
   bool tight = true;         // not a leaf that the tight test (leaf_radius_fraction) carves
 };
 
+// The distance (cv::distanceTransform's 3x3 chamfer L2, px) from each pixel of a width x height
+// image to the nearest pixel of a set, or from each pixel of the set to the nearest pixel off it,
+// computed over a box around the set only. A head's silhouette covers a few percent of a frame,
+// and a full-frame transform costs ~10 ms.
+class CroppedDistance {
+ public:
+  // Distance to the set's pixels in columns [x_begin, x_end) (`set`: width x height, row-major,
+  // nonzero on the set; x_end <= 0 for width). At(x, y) equals the full-frame transform of those
+  // pixels inside their bounding box grown by margin_px; outside it, +infinity, where the
+  // full-frame value exceeds kChamferStep x margin_px (a chamfer path there takes at least
+  // margin_px steps of >= kChamferStep px). An empty set gives +infinity everywhere.
+  static CroppedDistance ToSet(const std::vector<uint8_t>& set, int width, int height,
+                               int margin_px, int x_begin = 0, int x_end = 0);
+  // Distance from each pixel of the set to the nearest pixel off it (0 off the set), equal to
+  // the full-frame transform everywhere: computed over the set's box grown by 1 px, whose rim
+  // lies off the set.
+  static CroppedDistance InsideSet(const std::vector<uint8_t>& set, int width, int height);
+
+  float At(int x, int y) const;
+  // The share of the frame computed.
+  double CroppedShare() const;
+
+  static constexpr double kChamferStep = 0.955;  // OpenCV's horizontal and vertical step
+
+ private:
+  int width_ = 0, height_ = 0;
+  int x0_ = 0, y0_ = 0, w_ = 0, h_ = 0;  // the box computed
+  float outside_ = 0.0f;                 // At outside the box
+  std::vector<float> distance_;          // w_ x h_, row-major
+};
+
+// The distance to a set, for threshold tests that agree exactly with the full-frame transform.
+// The set's columns are split into bands (runs of columns holding set pixels, runs closer than
+// 2 x margin_px + 1 merged: a post is one band, the head and trunk another), each a
+// CroppedDistance; their minimum is the distance to the whole set wherever it is at most
+// kChamferStep x margin_px. Larger thresholds outside every band's box fall back to the
+// full-frame transform, computed once on first need. Thread-safe.
+class SetDistance {
+ public:
+  SetDistance() = default;
+  SetDistance(std::vector<uint8_t> set, int width, int height, int margin_px);
+
+  // Whether the full-frame transform at (x, y), inside the image, exceeds `threshold`.
+  bool Exceeds(int x, int y, double threshold) const;
+  double CroppedShare() const;     // the bands' boxes' share of the frame
+  bool FullFrameComputed() const;  // whether the fallback ran
+
+ private:
+  struct Full;  // the set and its lazily computed full-frame transform
+  int margin_px_ = 0;
+  std::vector<CroppedDistance> bands_;
+  std::shared_ptr<Full> full_;
+};
+
 struct SilhouetteMaps;  // distance maps of one view (head_carve.cc)
 
 class Carver {
  public:
   // rig.cameras[i] belongs to views[i] (sizes checked by the caller). `canes`: 3D cane points
   // peeled off the silhouettes when options.peel_canes (head_peel.h). Keeps references to `rig`
-  // and `options`, which must outlive it.
+  // and `options`, which must outlive it. The silhouette maps are cropped (SetDistance,
+  // CroppedDistance), and every comparison agrees with full-frame maps.
   Carver(const std::vector<View2D>& views, const RigCalibration& rig, const HeadOptions& options,
          const std::vector<Eigen::Vector3d>& canes);
   ~Carver();
