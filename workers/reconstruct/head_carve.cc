@@ -15,10 +15,10 @@ namespace vb::reconstruct::head_internal {
 
 namespace {
 
-// The bounding box of the nonzero pixels of `set` (empty when none).
-cv::Rect BoxOf(const std::vector<uint8_t>& set, int width, int height) {
-  const cv::Mat mask(height, width, CV_8U, const_cast<uint8_t*>(set.data()));
-  return cv::boundingRect(mask);
+// `box` grown by m px on every side, within the width x height frame.
+cv::Rect Grown(const cv::Rect& box, int m, int width, int height) {
+  return cv::Rect(box.x - m, box.y - m, box.width + 2 * m, box.height + 2 * m) &
+         cv::Rect(0, 0, width, height);
 }
 
 }  // namespace
@@ -35,16 +35,9 @@ CroppedDistance CroppedDistance::ToSet(const std::vector<uint8_t>& set, int widt
   cv::Rect box = cv::boundingRect(mask(cv::Rect(x_begin, 0, x_end - x_begin, height)));
   if (box.area() == 0) return out;
   box.x += x_begin;
-  const int m = std::max(0, margin_px);
-  const cv::Rect crop =
-      cv::Rect(box.x - m, box.y - m, box.width + 2 * m, box.height + 2 * m) &
-      cv::Rect(0, 0, width, height);
-  out.x0_ = crop.x;
-  out.y0_ = crop.y;
-  out.w_ = crop.width;
-  out.h_ = crop.height;
-  out.distance_.resize(static_cast<size_t>(crop.area()));
-  cv::Mat distance(crop.height, crop.width, CV_32F, out.distance_.data());
+  const cv::Rect crop = Grown(box, std::max(0, margin_px), width, height);
+  cv::Mat distance(crop.height, crop.width, CV_32F,
+                   out.Allocate(crop.x, crop.y, crop.width, crop.height));
   // Only the columns asked for count as the set.
   cv::Mat off_set = mask(crop) == 0;
   for (int x = 0; x < crop.width; ++x) {
@@ -62,21 +55,25 @@ CroppedDistance CroppedDistance::InsideSet(const std::vector<uint8_t>& set, int 
   out.width_ = width;
   out.height_ = height;
   out.outside_ = 0.0f;
-  const cv::Rect box = BoxOf(set, width, height);
-  if (box.area() == 0) return out;
-  const cv::Rect crop = cv::Rect(box.x - 1, box.y - 1, box.width + 2, box.height + 2) &
-                        cv::Rect(0, 0, width, height);
   const cv::Mat mask(height, width, CV_8U, const_cast<uint8_t*>(set.data()));
-  out.x0_ = crop.x;
-  out.y0_ = crop.y;
-  out.w_ = crop.width;
-  out.h_ = crop.height;
-  out.distance_.resize(static_cast<size_t>(crop.area()));
-  cv::Mat distance(crop.height, crop.width, CV_32F, out.distance_.data());
+  const cv::Rect box = cv::boundingRect(mask);
+  if (box.area() == 0) return out;
+  const cv::Rect crop = Grown(box, 1, width, height);
+  cv::Mat distance(crop.height, crop.width, CV_32F,
+                   out.Allocate(crop.x, crop.y, crop.width, crop.height));
   // The crop's rim lies off the set (or on the image's edge, beyond which the full frame has no
   // pixel either), so the nearest pixel off the set is in the crop.
   cv::distanceTransform(mask(crop) != 0, distance, cv::DIST_L2, 3);
   return out;
+}
+
+float* CroppedDistance::Allocate(int x0, int y0, int w, int h) {
+  x0_ = x0;
+  y0_ = y0;
+  w_ = w;
+  h_ = h;
+  distance_.assign(static_cast<size_t>(w) * h, 0.0f);
+  return distance_.data();
 }
 
 float CroppedDistance::At(int x, int y) const {

@@ -61,6 +61,9 @@ class CroppedDistance {
   static constexpr double kChamferStep = 0.955;  // OpenCV's horizontal and vertical step
 
  private:
+  // Sets the box computed; returns its w x h row-major storage.
+  float* Allocate(int x0, int y0, int w, int h);
+
   int width_ = 0, height_ = 0;
   int x0_ = 0, y0_ = 0, w_ = 0, h_ = 0;  // the box computed
   float outside_ = 0.0f;                 // At outside the box
