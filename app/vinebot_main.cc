@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
-// vinebot: one binary, one subcommand per job (COLMAP's exe/colmap.cc). main() only dispatches.
+// vinebot: one binary, one subcommand per job (COLMAP's exe/colmap.cc). main() sets glibc's heap
+// thresholds and dispatches.
 #include <malloc.h>
 
 #include <cstring>
