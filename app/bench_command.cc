@@ -351,6 +351,8 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   average("cane_recall", &ReconstructionMetrics::cane_recall);
   average("cane_precision", &ReconstructionMetrics::cane_precision);
   average("connectivity", &ReconstructionMetrics::connectivity);
+  average("cane_recall_near_head", &ReconstructionMetrics::cane_recall_near_head);
+  average("near_head_length_fraction", &ReconstructionMetrics::near_head_length_fraction);
   average("wire_recall", &ReconstructionMetrics::wire_recall);
   average("wire_precision", &ReconstructionMetrics::wire_precision);
   average("head_enclosed_fraction", &ReconstructionMetrics::head_enclosed_fraction);
