@@ -8,7 +8,13 @@
 #include <algorithm>
 #include <chrono>
 #include <iostream>
+#include <string>
+#include <tuple>
+#include <vector>
 
+#include "absl/strings/numbers.h"
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_split.h"
 #include "app/commands.h"
 #include "app/decide_evaluation.h"
 #include "app/reconstruct_flags.h"
@@ -77,6 +83,41 @@ double MeanOf(const std::vector<double>& v) {
   return v.empty() ? 0.0 : sum / v.size();
 }
 
+// "15,20,30" -> {0.015, 0.020, 0.030}: the --tolerances-mm list, each in (0, 1000] mm.
+absl::StatusOr<std::vector<double>> ParseTolerancesMm(const std::string& list) {
+  std::vector<double> metres;
+  if (list.empty()) return metres;
+  for (const absl::string_view item : absl::StrSplit(list, ',')) {
+    double mm = 0.0;
+    if (!absl::SimpleAtod(item, &mm) || !(mm > 0.0 && mm <= 1000.0)) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("--tolerances-mm: '", item, "' is not a distance in (0, 1000] mm"));
+    }
+    metres.push_back(mm / 1000.0);
+  }
+  return metres;
+}
+
+// The key of a tolerance in the JSON: its millimetres, as few digits as needed ("20", "12.5").
+std::string ToleranceKey(double metres) { return absl::StrCat(metres * 1000.0); }
+
+// Recall, precision and connectivity of `model` scored with each tolerance in place of
+// MetricsOptions::match_distance_m (the same 5 mm samples, the same route rule).
+absl::StatusOr<nlohmann::json> ScoreAtTolerances(const VineModel& model, const VineModel& truth,
+                                                 const std::vector<double>& tolerances_m) {
+  nlohmann::json out = nlohmann::json::object();
+  for (const double t : tolerances_m) {
+    MetricsOptions options;
+    options.match_distance_m = t;
+    VB_ASSIGN_OR_RETURN(const ReconstructionMetrics m,
+                        EvaluateReconstruction(model, truth, options));
+    out[ToleranceKey(t)] = {{"cane_recall", m.cane_recall},
+                            {"cane_precision", m.cane_precision},
+                            {"connectivity", m.connectivity}};
+  }
+  return out;
+}
+
 }  // namespace
 
 absl::Status RunBenchReconstruct(Flags& flags) {
@@ -87,6 +128,12 @@ absl::Status RunBenchReconstruct(Flags& flags) {
                       flags.Format("pixel-format", PixelFormat::kBayerRg8));
   VB_ASSIGN_OR_RETURN(const int64_t threads, flags.Int("threads", 2));
   VB_ASSIGN_OR_RETURN(const bool per_vine, flags.Bool("per-vine", false));
+  // --tolerances-mm 15,20,30: recall, precision and connectivity also scored with these match
+  // distances in place of the metrics' 10 mm (how far the missed length lies from the model),
+  // as "by_tolerance_mm" in the summary (means over vines) and in each --per-vine entry.
+  VB_ASSIGN_OR_RETURN(const std::string tolerances_flag, flags.String("tolerances-mm", ""));
+  VB_ASSIGN_OR_RETURN(const std::vector<double> tolerances_m,
+                      ParseTolerancesMm(tolerances_flag));
   // --input images (the real pipeline), labels (perfect segmentation: the renderer's label
   // images replace step 1) or truth (perfect 2D: views drawn from the true model replace steps
   // 1-2). The last two locate where accuracy is lost.
@@ -161,9 +208,16 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   sim_options.calibration_error_px = calibration_error_px;
   sim_options.render.pixel_format = format;
   sim_options.fiducials = fiducials;
-  sim_options.rig.baseline_m = rig_baseline;
-  sim_options.rig.apex_raise_m = rig_apex_raise;
-  sim_options.rig.apex_aim_up_m = rig_apex_aim_up;
+  // Each rig flag is checked on its own against sim::RigOptions::Validate, whose message names
+  // the field, so that a bad value is reported under the flag the user typed.
+  for (const auto& [flag, field, value] :
+       {std::tuple{"--rig-baseline", &sim::RigOptions::baseline_m, rig_baseline},
+        std::tuple{"--rig-apex-raise", &sim::RigOptions::apex_raise_m, rig_apex_raise},
+        std::tuple{"--rig-apex-aim-up", &sim::RigOptions::apex_aim_up_m, rig_apex_aim_up}}) {
+    sim_options.rig.*field = value;
+    if (const absl::Status s = sim_options.rig.Validate(); !s.ok())
+      return absl::InvalidArgumentError(absl::StrCat(flag, ": ", s.message()));
+  }
   VB_RETURN_IF_ERROR(sim_options.Validate());
   options.threads = static_cast<int>(threads);
   options.rig_refine.enabled = rig_refine != "off";
@@ -189,6 +243,7 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   // rig: of the reported calibration and of the rig the model was built with.
   std::vector<double> rig_error_reported_px, rig_error_used_px;
   nlohmann::json per_vine_json = nlohmann::json::array();
+  std::vector<nlohmann::json> by_tolerance;  // per vine reconstructed, with --tolerances-mm
   int failures = 0, empty = 0;
   for (int64_t i = 0; i < vines; ++i) {
     const uint64_t seed = static_cast<uint64_t>(seed_base + i);
@@ -279,6 +334,11 @@ absl::Status RunBenchReconstruct(Flags& flags) {
     entry["metrics"] = MetricsToJson(m);
     entry["metrics"].update(ViewCoverageToJson(view_coverage));
     entry["reconstruction"] = ReconstructReport(*result);
+    if (!tolerances_m.empty()) {
+      VB_ASSIGN_OR_RETURN(entry["by_tolerance_mm"],
+                          ScoreAtTolerances(result->model, capture.ground_truth, tolerances_m));
+      by_tolerance.push_back(entry["by_tolerance_mm"]);
+    }
     per_vine_json.push_back(entry);
   }
 
@@ -291,6 +351,8 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   average("cane_recall", &ReconstructionMetrics::cane_recall);
   average("cane_precision", &ReconstructionMetrics::cane_precision);
   average("connectivity", &ReconstructionMetrics::connectivity);
+  average("cane_recall_near_head", &ReconstructionMetrics::cane_recall_near_head);
+  average("near_head_length_fraction", &ReconstructionMetrics::near_head_length_fraction);
   average("wire_recall", &ReconstructionMetrics::wire_recall);
   average("wire_precision", &ReconstructionMetrics::wire_precision);
   average("head_enclosed_fraction", &ReconstructionMetrics::head_enclosed_fraction);
@@ -362,6 +424,16 @@ absl::Status RunBenchReconstruct(Flags& flags) {
                          {{"reported_mean", MeanOf(rig_error_reported_px)},
                           {"used_mean", MeanOf(rig_error_used_px)},
                           {"used_median", Median(rig_error_used_px)}}}};
+  if (!tolerances_m.empty()) {
+    nlohmann::json& summary = out["by_tolerance_mm"];
+    for (const double t : tolerances_m) {
+      for (const char* key : {"cane_recall", "cane_precision", "connectivity"}) {
+        double sum = 0.0;
+        for (const nlohmann::json& v : by_tolerance) sum += v[ToleranceKey(t)][key].get<double>();
+        summary[ToleranceKey(t)][key] = by_tolerance.empty() ? 0.0 : sum / by_tolerance.size();
+      }
+    }
+  }
   if (per_vine) out["per_vine"] = per_vine_json;
   std::cout << out.dump(1) << "\n";
   return absl::OkStatus();

@@ -65,7 +65,7 @@ const std::vector<Command>& Commands() {
        " [--head-leaf-wood-px X] [--sweep false]"
        " [--grow-refit M] [--grow-max-length M] [--head-bases] [--head-bases-reach M]"
        " [--head-bases-thick-views N] [--head-bases-inside M] [--strand-halves]"
-       " [--strand-halves-dip G]"
+       " [--strand-halves-dip G] [--tolerances-mm 15,20,30]"
        " [--sweep-*, --head-exit-*, --extend-*, --keep-*: app/reconstruct_flags.h]",
        vb::app::RunBenchReconstruct},
       {"plan",

@@ -153,7 +153,7 @@ absl::StatusOr<ReconstructionMetrics> EvaluateReconstruction(const VineModel& mo
                                                              const VineModel& truth,
                                                              const MetricsOptions& options) {
   for (double v : {options.sample_step_m, options.match_distance_m, options.wire_half_span_m,
-                   options.head_grid_m}) {
+                   options.head_grid_m, options.near_head_m}) {
     if (!std::isfinite(v) || v <= 0)
       return absl::InvalidArgumentError("metrics options must be positive and finite");
   }
@@ -225,7 +225,13 @@ absl::StatusOr<ReconstructionMetrics> EvaluateReconstruction(const VineModel& mo
     return false;
   };
 
-  double recalled = 0.0, connected_length = 0.0;
+  // Whether a true sample lies within near_head_m of the true head's surface.
+  auto near_head = [&](const Eigen::Vector3d& p) {
+    for (const Sphere& s : truth.head.spheres)
+      if ((p - s.center).norm() - s.radius <= options.near_head_m) return true;
+    return false;
+  };
+  double recalled = 0.0, connected_length = 0.0, near_length = 0.0, near_recalled = 0.0;
   for (size_t g = 0; g < truth.canes.size(); ++g) {
     const Cane& cane = truth.canes[g];
     if (cane.kind == CaneKind::kSpur) continue;
@@ -236,9 +242,12 @@ absl::StatusOr<ReconstructionMetrics> EvaluateReconstruction(const VineModel& mo
     std::unordered_map<int, bool> route_cache;
     for (size_t k = 0; k < samples.size(); ++k) {
       m.truth_cane_length_m += weights[k];
+      const bool near = near_head(samples[k]);
+      near_length += near ? weights[k] : 0.0;
       const int owner = model_grid.Nearest(samples[k]);
       if (owner < 0) continue;
       recalled += weights[k];
+      near_recalled += near ? weights[k] : 0.0;
       auto it = route_cache.find(owner);
       if (it == route_cache.end())
         it = route_cache.emplace(owner, route_is_true(static_cast<size_t>(owner), g)).first;
@@ -247,6 +256,8 @@ absl::StatusOr<ReconstructionMetrics> EvaluateReconstruction(const VineModel& mo
   }
   m.cane_recall = m.truth_cane_length_m > 0 ? recalled / m.truth_cane_length_m : 1.0;
   m.connectivity = m.truth_cane_length_m > 0 ? connected_length / m.truth_cane_length_m : 1.0;
+  m.cane_recall_near_head = near_length > 0 ? near_recalled / near_length : 1.0;
+  m.near_head_length_fraction = m.truth_cane_length_m > 0 ? near_length / m.truth_cane_length_m : 0.0;
 
   // Wires: recall and precision over the visible stretch.
   std::vector<IndexedSegment> model_wires, truth_wires;
@@ -286,6 +297,8 @@ nlohmann::json MetricsToJson(const ReconstructionMetrics& m) {
   return nlohmann::json{{"cane_recall", m.cane_recall},
                         {"cane_precision", m.cane_precision},
                         {"connectivity", m.connectivity},
+                        {"cane_recall_near_head", m.cane_recall_near_head},
+                        {"near_head_length_fraction", m.near_head_length_fraction},
                         {"wire_recall", m.wire_recall},
                         {"wire_precision", m.wire_precision},
                         {"head_enclosed_fraction", m.head_enclosed_fraction},

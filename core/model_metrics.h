@@ -17,6 +17,9 @@ struct MetricsOptions {
   // trinocular rig sees about +-0.9 m of the vine plane at 0.8 m).
   double wire_half_span_m = 0.8;
   double head_grid_m = 0.002;      // grid spacing for the head volume integral
+  // cane_recall_near_head scores the true length within this distance of the true head's
+  // surface (inside it included): where the cane bases, and so most cuts, are.
+  double near_head_m = 0.05;
 };
 
 struct ReconstructionMetrics {
@@ -32,6 +35,11 @@ struct ReconstructionMetrics {
   // neighbour it merely crosses is not connected. Unmatched length counts as unconnected, so
   // connectivity <= cane_recall.
   double connectivity = 0.0;
+  // cane_recall restricted to the true trunk + cane length within near_head_m of the surface of
+  // the true head's spheres (1 if there is none), and that length's share of the whole. Not a
+  // target of ARCHITECTURE.md: it shows how much of the wood the cuts are made on is modelled.
+  double cane_recall_near_head = 0.0;
+  double near_head_length_fraction = 0.0;
   // Fraction of ground-truth wire length with |x| <= wire_half_span_m within match_distance_m
   // of a reconstructed wire, and of reconstructed wire length (same span) near a true wire.
   double wire_recall = 0.0;

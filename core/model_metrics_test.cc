@@ -78,6 +78,36 @@ TEST(EvaluateReconstruction, ToleranceIsTenMillimetres) {
   EXPECT_LT(m->cane_recall, 0.01);
 }
 
+// The true head is a 5 cm sphere at the top of the trunk, where canes 2 and 3 start: the last
+// 10 cm of the trunk and the first 10 cm of each cane lie within 5 cm of its surface.
+TEST(EvaluateReconstruction, RecallNearTheHeadScoresTheLengthNearItsSurface) {
+  auto m = EvaluateReconstruction(Truth(), Truth());
+  ASSERT_TRUE(m.ok());
+  const double total = 1.5 + std::hypot(0.5, 0.2);
+  EXPECT_DOUBLE_EQ(m->cane_recall_near_head, 1.0);
+  EXPECT_NEAR(m->near_head_length_fraction, 0.3 / total, 0.01);
+  // Cane 2 starts 10 cm out: the near-head length loses 8 cm of it (its first centimetre lies
+  // within the 10 mm match distance of the trunk's top and cane 3's base, its last of the new
+  // base); recall loses the same 8 cm.
+  VineModel model = Truth();
+  model.canes[1] = StraightCane(2, 1, CaneKind::kCane, {0.1, 0.8, 1.0}, {0.5, 0.8, 1.0});
+  m = EvaluateReconstruction(model, Truth());
+  ASSERT_TRUE(m.ok());
+  EXPECT_NEAR(m->cane_recall_near_head, 0.22 / 0.30, 0.01);
+  EXPECT_NEAR(m->cane_recall, (total - 0.08) / total, 0.002);
+  EXPECT_NEAR(m->near_head_length_fraction, 0.3 / total, 0.01);  // a property of the truth
+  // A truth without a head has no length near it.
+  VineModel headless = Truth();
+  headless.head.spheres.clear();
+  m = EvaluateReconstruction(model, headless);
+  ASSERT_TRUE(m.ok());
+  EXPECT_DOUBLE_EQ(m->cane_recall_near_head, 1.0);
+  EXPECT_DOUBLE_EQ(m->near_head_length_fraction, 0.0);
+  MetricsOptions bad;
+  bad.near_head_m = -0.05;
+  EXPECT_FALSE(EvaluateReconstruction(model, Truth(), bad).ok());
+}
+
 TEST(EvaluateReconstruction, RejectsInvalidModel) {
   VineModel model = Truth();
   model.canes[1].polyline.points[0].x() = std::nan("");

@@ -39,7 +39,8 @@ absl::Status ParallelFor(int n, int threads, Fn fn) {
 absl::Status CheckRig(const RigCalibration& rig) {
   if (rig.cameras.size() < 2) {
     return absl::InvalidArgumentError(absl::StrCat(
-        "reconstruction needs at least two cameras, the calibration has ", rig.cameras.size()));
+        "reconstruction needs images from at least two cameras, the stop has ", rig.cameras.size(),
+        rig.cameras.size() == 1 ? " (" + rig.cameras[0].name + ")" : std::string()));
   }
   VB_RETURN_IF_ERROR(rig.Validate());
   for (size_t a = 0; a < rig.cameras.size(); ++a)
