@@ -257,7 +257,8 @@ absl::StatusOr<ReconstructionMetrics> EvaluateReconstruction(const VineModel& mo
   m.cane_recall = m.truth_cane_length_m > 0 ? recalled / m.truth_cane_length_m : 1.0;
   m.connectivity = m.truth_cane_length_m > 0 ? connected_length / m.truth_cane_length_m : 1.0;
   m.cane_recall_near_head = near_length > 0 ? near_recalled / near_length : 1.0;
-  m.near_head_length_fraction = m.truth_cane_length_m > 0 ? near_length / m.truth_cane_length_m : 0.0;
+  m.near_head_length_fraction =
+      m.truth_cane_length_m > 0 ? near_length / m.truth_cane_length_m : 0.0;
 
   // Wires: recall and precision over the visible stretch.
   std::vector<IndexedSegment> model_wires, truth_wires;
