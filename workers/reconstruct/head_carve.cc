@@ -240,12 +240,6 @@ SilhouetteMaps MakeMaps(const View2D& view, const std::vector<uint8_t>& unreache
   return maps;
 }
 
-// The radius in px of a sphere of radius `radius` at `depth` (10% slack for the lens
-// distortion's change of scale across the image).
-double RadiusPx(const CameraCalibration& camera, double radius, double depth) {
-  return 1.1 * camera.camera_matrix(0, 0) * radius / depth;
-}
-
 // The cropped maps' margin: the octree's thresholds reach ~72 px with the default rig (a root
 // cube of 4 cm near the working volume's near face at an image's bottom corner, tuning stops
 // 1400-1405), under 0.955 x 80 px; larger ones outside the crops take the full-frame fallback
@@ -277,7 +271,7 @@ std::optional<Carver::InView> Carver::Place(const Cube& cube, double radius, siz
   const double depth = (camera.camera_from_platform() * cube.centre).z();
   if (depth <= radius) return std::nullopt;
   InView at;
-  at.r_px = RadiusPx(camera, radius, depth);
+  at.r_px = 1.1 * camera.camera_matrix(0, 0) * radius / depth;
   at.x = std::clamp(static_cast<int>(std::lround(uv->x())), 0, maps_[v].width - 1);
   at.y = std::clamp(static_cast<int>(std::lround(uv->y())), 0, maps_[v].height - 1);
   return at;
