@@ -5,6 +5,7 @@
 #include <cmath>
 #include <string>
 #include <unordered_map>
+#include <utility>
 
 #include "absl/strings/str_cat.h"
 #include "core/status_macros.h"
@@ -152,10 +153,15 @@ double SphereUnionVolume(const std::vector<Sphere>& spheres, double grid_m) {
 absl::StatusOr<ReconstructionMetrics> EvaluateReconstruction(const VineModel& model,
                                                              const VineModel& truth,
                                                              const MetricsOptions& options) {
-  for (double v : {options.sample_step_m, options.match_distance_m, options.wire_half_span_m,
-                   options.head_grid_m, options.near_head_m}) {
-    if (!std::isfinite(v) || v <= 0)
-      return absl::InvalidArgumentError("metrics options must be positive and finite");
+  for (const auto& [v, field] : {std::pair{options.sample_step_m, "sample_step_m"},
+                                 {options.match_distance_m, "match_distance_m"},
+                                 {options.wire_half_span_m, "wire_half_span_m"},
+                                 {options.head_grid_m, "head_grid_m"},
+                                 {options.near_head_m, "near_head_m"}}) {
+    if (!std::isfinite(v) || v <= 0) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("metrics options: ", field, " must be positive and finite, is ", v));
+    }
   }
   if (absl::Status s = model.Validate(); !s.ok())
     return absl::InvalidArgumentError(absl::StrCat("model: ", std::string(s.message())));

@@ -2,6 +2,7 @@
 #include "core/model_metrics.h"
 
 #include <cmath>
+#include <string>
 
 #include "gtest/gtest.h"
 #include "core/vine_model_test_util.h"
@@ -105,7 +106,10 @@ TEST(EvaluateReconstruction, RecallNearTheHeadScoresTheLengthNearItsSurface) {
   EXPECT_DOUBLE_EQ(m->near_head_length_fraction, 0.0);
   MetricsOptions bad;
   bad.near_head_m = -0.05;
-  EXPECT_FALSE(EvaluateReconstruction(model, Truth(), bad).ok());
+  const auto rejected = EvaluateReconstruction(model, Truth(), bad);
+  ASSERT_FALSE(rejected.ok());
+  EXPECT_NE(std::string(rejected.status().message()).find("near_head_m"), std::string::npos)
+      << rejected.status();
 }
 
 TEST(EvaluateReconstruction, RejectsInvalidModel) {
