@@ -294,7 +294,8 @@ TEST(OverlapLoss, DISABLED_ByStage) {
 // lying along another cane (this vine's or a neighbour's; LyingAlongAnother, 2 px) in every view
 // that sees it, in two or more of them, and the share with at least two views where it lies
 // along nothing (a clean pair). Rigs from VB_RIGS, `;`-separated, each
-// `side,apex_raise,apex_aim_up` (RigOptions baseline_m, apex_raise_m, apex_aim_up_m); the
+// `side,apex_raise,apex_aim_up` (RigOptions baseline_m, apex_raise_m, apex_aim_up_m), or
+// `side,apex_raise,apex_aim_up,cameras,upper_side` (also camera_count, upper_pair_side_m); the
 // default lists the default rig and taller triangles. Stops: VB_SEED (1300), VB_STOPS (20).
 //   VB_RIGS='0.4,0,0.03;0.4,0.2,0.1' vb_reconstruct_test --gtest_also_run_disabled_tests
 //     --gtest_filter='OverlapLoss.DISABLED_RigGeometry'
@@ -306,12 +307,17 @@ TEST(OverlapLoss, DISABLED_RigGeometry) {
               "clean2");
   for (const std::string& spec : std::vector<std::string>(absl::StrSplit(rigs, ';'))) {
     const std::vector<std::string> f = absl::StrSplit(spec, ',');
-    ASSERT_EQ(f.size(), 3u) << spec;
+    ASSERT_TRUE(f.size() == 3u || f.size() == 5u) << spec;
     sim::RigOptions o;
     ASSERT_TRUE(absl::SimpleAtod(f[0], &o.baseline_m) &&
                 absl::SimpleAtod(f[1], &o.apex_raise_m) &&
                 absl::SimpleAtod(f[2], &o.apex_aim_up_m))
         << spec;
+    if (f.size() == 5u) {
+      ASSERT_TRUE(absl::SimpleAtoi(f[3], &o.camera_count) &&
+                  absl::SimpleAtod(f[4], &o.upper_pair_side_m))
+          << spec;
+    }
     double total = 0.0, seen = 0.0, along_all = 0.0, along_two = 0.0, clean = 0.0;
     for (int k = 0; k < count; ++k) {
       SimulatedStop stop;
