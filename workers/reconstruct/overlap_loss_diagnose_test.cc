@@ -289,6 +289,18 @@ TEST(OverlapLoss, DISABLED_ByStage) {
   EXPECT_GT(total, 0.0);
 }
 
+// Vineyard `seed`'s vine 1 seen through `rig`, for the reports from geometry alone: no images,
+// the drawn canes the vine's and its neighbours'.
+SimulatedStop GeometryStop(uint64_t seed, const RigCalibration& rig) {
+  SimulatedStop stop;
+  stop.scene = sim::GenerateScene(seed, 1).value();
+  stop.drawn = stop.scene.vine;
+  for (const VineModel& neighbour : stop.scene.neighbours)
+    for (const Cane& cane : neighbour.canes) stop.drawn.canes.push_back(cane);
+  stop.true_rig = rig;
+  return stop;
+}
+
 // From geometry alone (no rendering), per rig: the share of the vine's true length (trunk and
 // canes, 5 mm samples, vine 1 of each stop) inside two or more images, and of it the share
 // lying along another cane (this vine's or a neighbour's; LyingAlongAnother, 2 px) in every view
@@ -320,12 +332,7 @@ TEST(OverlapLoss, DISABLED_RigGeometry) {
     }
     double total = 0.0, seen = 0.0, along_all = 0.0, along_two = 0.0, clean = 0.0;
     for (int k = 0; k < count; ++k) {
-      SimulatedStop stop;
-      stop.scene = sim::GenerateScene(first + k, 1).value();
-      stop.drawn = stop.scene.vine;
-      for (const VineModel& neighbour : stop.scene.neighbours)
-        for (const Cane& cane : neighbour.canes) stop.drawn.canes.push_back(cane);
-      stop.true_rig = sim::MakeRig(o).value();
+      const SimulatedStop stop = GeometryStop(first + k, sim::MakeRig(o).value());
       for (const LengthSample& s : SampleTrueLength(stop, kStepM, true)) {
         total += s.weight_m;
         if (s.in_image < 2) continue;
@@ -341,11 +348,6 @@ TEST(OverlapLoss, DISABLED_RigGeometry) {
   }
 }
 
-}  // namespace
-}  // namespace vb::reconstruct
-
-namespace vb::reconstruct {
-namespace {
 
 // A copy of `like`'s intrinsics named `name`, centred at `centre` (platform frame) and looking at
 // `aim`, image down as near world down as the aim allows (as sim::MakeRig aims its cameras).
@@ -390,16 +392,12 @@ TEST(OverlapLoss, DISABLED_ExtraCamera) {
     }
     double total = 0.0, seen = 0.0, along_all = 0.0, all_far = 0.0, all_far20 = 0.0, clean = 0.0;
     for (int k = 0; k < count; ++k) {
-      SimulatedStop stop;
-      stop.scene = sim::GenerateScene(first + k, 1).value();
-      stop.drawn = stop.scene.vine;
-      for (const VineModel& neighbour : stop.scene.neighbours)
-        for (const Cane& cane : neighbour.canes) stop.drawn.canes.push_back(cane);
-      stop.true_rig = sim::MakeRig().value();
+      RigCalibration rig = sim::MakeRig().value();
       if (!v.empty()) {
-        stop.true_rig.cameras.push_back(CameraAt(stop.true_rig.cameras[2], "cam3",
-                                                 {v[0], v[1], v[2]}, {v[3], v[4], v[5]}));
+        rig.cameras.push_back(
+            CameraAt(rig.cameras[2], "cam3", {v[0], v[1], v[2]}, {v[3], v[4], v[5]}));
       }
+      const SimulatedStop stop = GeometryStop(first + k, rig);
       for (const LengthSample& s : SampleTrueLength(stop, kStepM, true)) {
         total += s.weight_m;
         if (s.in_image < 2) continue;
