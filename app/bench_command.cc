@@ -362,6 +362,7 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   average("cane_recall", &ReconstructionMetrics::cane_recall);
   average("cane_precision", &ReconstructionMetrics::cane_precision);
   average("connectivity", &ReconstructionMetrics::connectivity);
+  average("connectivity_strict", &ReconstructionMetrics::connectivity_strict);
   average("cane_recall_near_head", &ReconstructionMetrics::cane_recall_near_head);
   average("near_head_length_fraction", &ReconstructionMetrics::near_head_length_fraction);
   average("wire_recall", &ReconstructionMetrics::wire_recall);
