@@ -60,7 +60,9 @@ struct RigOptions {
   // head enclosure on the bench (docs/simulator.md, "A taller triangle"); 0 by default.
   double apex_raise_m = 0.0;
   // 4 cameras: the side of the upper pair (cam2 left, cam3 right), centred above the lower pair
-  // at the height the triangle's apex would have. Only the lower pair is bounded by the arm base.
+  // at the height the triangle's apex would have. The arm base bounds it too: wider than 0.40 m
+  // an upper camera sees the default mount's arm base unless it aims higher (apex_aim_up_m 0.06
+  // keeps it out up to 0.6 m; docs/simulator.md, "A fourth camera").
   double upper_pair_side_m = 0.40;
 
   // INVALID_ARGUMENT naming the field: camera_count outside [1, 4], image size outside
