@@ -159,6 +159,12 @@ absl::Status RunBenchReconstruct(Flags& flags) {
                       flags.Double("rig-apex-raise", sim::RigOptions{}.apex_raise_m));
   VB_ASSIGN_OR_RETURN(const double rig_apex_aim_up,
                       flags.Double("rig-apex-aim-up", sim::RigOptions{}.apex_aim_up_m));
+  // --rig-cameras N (1-4; camera_count) and --rig-upper-side M (upper_pair_side_m): a study of
+  // four cameras, the triangle's pair with a second pair at the apex's height.
+  VB_ASSIGN_OR_RETURN(const int64_t rig_cameras,
+                      flags.Int("rig-cameras", sim::RigOptions{}.camera_count));
+  VB_ASSIGN_OR_RETURN(const double rig_upper_side,
+                      flags.Double("rig-upper-side", sim::RigOptions{}.upper_pair_side_m));
   // --extend on|off: the single-view extension of cane tips (step 4c); default as ExtendOptions.
   VB_ASSIGN_OR_RETURN(const bool extend,
                       flags.Bool("extend", reconstruct::ExtendOptions{}.enabled));
@@ -213,11 +219,16 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   for (const auto& [flag, field, value] :
        {std::tuple{"--rig-baseline", &sim::RigOptions::baseline_m, rig_baseline},
         std::tuple{"--rig-apex-raise", &sim::RigOptions::apex_raise_m, rig_apex_raise},
-        std::tuple{"--rig-apex-aim-up", &sim::RigOptions::apex_aim_up_m, rig_apex_aim_up}}) {
+        std::tuple{"--rig-apex-aim-up", &sim::RigOptions::apex_aim_up_m, rig_apex_aim_up},
+        std::tuple{"--rig-upper-side", &sim::RigOptions::upper_pair_side_m, rig_upper_side}}) {
     sim_options.rig.*field = value;
     if (const absl::Status s = sim_options.rig.Validate(); !s.ok())
       return absl::InvalidArgumentError(absl::StrCat(flag, ": ", s.message()));
   }
+  if (rig_cameras < 1 || rig_cameras > 4)
+    return absl::InvalidArgumentError(
+        absl::StrCat("--rig-cameras: must be in [1, 4], is ", rig_cameras));
+  sim_options.rig.camera_count = static_cast<int>(rig_cameras);
   VB_RETURN_IF_ERROR(sim_options.Validate());
   options.threads = static_cast<int>(threads);
   options.rig_refine.enabled = rig_refine != "off";
@@ -351,6 +362,7 @@ absl::Status RunBenchReconstruct(Flags& flags) {
   average("cane_recall", &ReconstructionMetrics::cane_recall);
   average("cane_precision", &ReconstructionMetrics::cane_precision);
   average("connectivity", &ReconstructionMetrics::connectivity);
+  average("connectivity_strict", &ReconstructionMetrics::connectivity_strict);
   average("cane_recall_near_head", &ReconstructionMetrics::cane_recall_near_head);
   average("near_head_length_fraction", &ReconstructionMetrics::near_head_length_fraction);
   average("wire_recall", &ReconstructionMetrics::wire_recall);

@@ -206,8 +206,19 @@ absl::StatusOr<ReconstructionMetrics> EvaluateReconstruction(const VineModel& mo
 
   // For true cane g: is model cane i's route to the trunk made of reconstructions of g's
   // ancestors (g excluded: a cane is not its own parent, but a broken cane may hang on its own
-  // base piece, so g itself is allowed)?
-  auto route_is_true = [&](size_t i, size_t g) {
+  // base piece, so g itself is allowed)? `strict` also asks that the true cane the model cane
+  // hung directly on the trunk stands for (g for i itself) be the trunk or grow from it.
+  struct Route {
+    bool connected = false;
+    bool strict = false;
+  };
+  auto grows_from_trunk = [&](size_t t) {
+    if (truth.canes[t].kind == CaneKind::kTrunk) return true;
+    if (!truth.canes[t].parent_id) return false;
+    const auto parent = truth.IndexOf(*truth.canes[t].parent_id);
+    return parent && truth.canes[*parent].kind == CaneKind::kTrunk;
+  };
+  auto route_of = [&](size_t i, size_t g) -> Route {
     std::vector<int> ancestry = {static_cast<int>(g)};
     for (size_t at = g, hops = 0; truth.canes[at].parent_id && hops <= truth.canes.size(); ++hops) {
       const auto parent = truth.IndexOf(*truth.canes[at].parent_id);
@@ -218,17 +229,23 @@ absl::StatusOr<ReconstructionMetrics> EvaluateReconstruction(const VineModel& mo
     size_t at = i;
     for (size_t hops = 0; hops <= model.canes.size(); ++hops) {
       const Cane& c = model.canes[at];
-      if (!c.parent_id) return c.kind == CaneKind::kTrunk &&
-                               (at == i || std::find(ancestry.begin(), ancestry.end(),
-                                                     majority[at]) != ancestry.end());
+      if (!c.parent_id) {
+        const bool ok = c.kind == CaneKind::kTrunk &&
+                        (at == i || std::find(ancestry.begin(), ancestry.end(), majority[at]) !=
+                                        ancestry.end());
+        return {ok, ok};
+      }
       const auto parent = model.IndexOf(*c.parent_id);
-      if (!parent) return false;
+      if (!parent) return {};
+      const size_t below = at;
       at = *parent;
       // The trunk is the root by definition; its own accuracy is scored by recall.
-      if (model.canes[at].kind == CaneKind::kTrunk) return true;
-      if (std::find(ancestry.begin(), ancestry.end(), majority[at]) == ancestry.end()) return false;
+      if (model.canes[at].kind == CaneKind::kTrunk) {
+        return {true, grows_from_trunk(below == i ? g : static_cast<size_t>(majority[below]))};
+      }
+      if (std::find(ancestry.begin(), ancestry.end(), majority[at]) == ancestry.end()) return {};
     }
-    return false;
+    return {};
   };
 
   // Whether a true sample lies within near_head_m of the true head's surface.
@@ -237,7 +254,8 @@ absl::StatusOr<ReconstructionMetrics> EvaluateReconstruction(const VineModel& mo
       if ((p - s.center).norm() - s.radius <= options.near_head_m) return true;
     return false;
   };
-  double recalled = 0.0, connected_length = 0.0, near_length = 0.0, near_recalled = 0.0;
+  double recalled = 0.0, connected_length = 0.0, strict_length = 0.0, near_length = 0.0,
+         near_recalled = 0.0;
   for (size_t g = 0; g < truth.canes.size(); ++g) {
     const Cane& cane = truth.canes[g];
     if (cane.kind == CaneKind::kSpur) continue;
@@ -245,7 +263,7 @@ absl::StatusOr<ReconstructionMetrics> EvaluateReconstruction(const VineModel& mo
     std::vector<Eigen::Vector3d> samples;
     std::vector<double> weights;
     SampleWithWeights(cane.polyline.points, options.sample_step_m, &samples, &weights);
-    std::unordered_map<int, bool> route_cache;
+    std::unordered_map<int, Route> route_cache;
     for (size_t k = 0; k < samples.size(); ++k) {
       m.truth_cane_length_m += weights[k];
       const bool near = near_head(samples[k]);
@@ -256,12 +274,15 @@ absl::StatusOr<ReconstructionMetrics> EvaluateReconstruction(const VineModel& mo
       near_recalled += near ? weights[k] : 0.0;
       auto it = route_cache.find(owner);
       if (it == route_cache.end())
-        it = route_cache.emplace(owner, route_is_true(static_cast<size_t>(owner), g)).first;
-      if (it->second) connected_length += weights[k];
+        it = route_cache.emplace(owner, route_of(static_cast<size_t>(owner), g)).first;
+      if (it->second.connected) connected_length += weights[k];
+      if (it->second.strict) strict_length += weights[k];
     }
   }
   m.cane_recall = m.truth_cane_length_m > 0 ? recalled / m.truth_cane_length_m : 1.0;
   m.connectivity = m.truth_cane_length_m > 0 ? connected_length / m.truth_cane_length_m : 1.0;
+  m.connectivity_strict =
+      m.truth_cane_length_m > 0 ? strict_length / m.truth_cane_length_m : 1.0;
   m.cane_recall_near_head = near_length > 0 ? near_recalled / near_length : 1.0;
   m.near_head_length_fraction =
       m.truth_cane_length_m > 0 ? near_length / m.truth_cane_length_m : 0.0;
@@ -304,6 +325,7 @@ nlohmann::json MetricsToJson(const ReconstructionMetrics& m) {
   return nlohmann::json{{"cane_recall", m.cane_recall},
                         {"cane_precision", m.cane_precision},
                         {"connectivity", m.connectivity},
+                        {"connectivity_strict", m.connectivity_strict},
                         {"cane_recall_near_head", m.cane_recall_near_head},
                         {"near_head_length_fraction", m.near_head_length_fraction},
                         {"wire_recall", m.wire_recall},

@@ -35,6 +35,13 @@ struct ReconstructionMetrics {
   // neighbour it merely crosses is not connected. Unmatched length counts as unconnected, so
   // connectivity <= cane_recall.
   double connectivity = 0.0;
+  // connectivity that also asks where the route meets the trunk: a model cane hung directly on
+  // the trunk (or on the head, whose canes name the trunk as their parent) counts only if the true
+  // cane it stands for grows from the trunk or head too. connectivity counts any cane hung there
+  // as connected, so that a model hanging every cane on the trunk would score connectivity =
+  // recall; this does not. Not a target of ARCHITECTURE.md (s28). connectivity_strict <=
+  // connectivity.
+  double connectivity_strict = 0.0;
   // cane_recall restricted to the true trunk + cane length within near_head_m of the surface of
   // the true head's spheres (1 if there is none), and that length's share of the whole. Not a
   // target of ARCHITECTURE.md: it shows how much of the wood the cuts are made on is modelled.

@@ -29,6 +29,7 @@ TEST(EvaluateReconstruction, PerfectModelScoresOne) {
   EXPECT_DOUBLE_EQ(m->cane_recall, 1.0);
   EXPECT_DOUBLE_EQ(m->cane_precision, 1.0);
   EXPECT_DOUBLE_EQ(m->connectivity, 1.0);
+  EXPECT_DOUBLE_EQ(m->connectivity_strict, 1.0);
   EXPECT_DOUBLE_EQ(m->wire_recall, 1.0);
   EXPECT_NEAR(m->head_enclosed_fraction, 1.0, 1e-9);
   EXPECT_NEAR(m->head_volume_ratio, 1.0, 1e-9);
@@ -46,6 +47,7 @@ TEST(EvaluateReconstruction, CountsMissingShiftedAndDisconnectedLength) {
   const double total = 1.5 + std::hypot(0.5, 0.2);
   EXPECT_NEAR(m->cane_recall, 1.5 / total, 0.01);
   EXPECT_NEAR(m->connectivity, 1.0 / total, 0.01);
+  EXPECT_NEAR(m->connectivity_strict, 1.0 / total, 0.01);
   EXPECT_NEAR(m->cane_precision, 1.5 / 1.8, 0.01);
   // Wires and head missing entirely.
   model.wires.clear();
@@ -54,6 +56,33 @@ TEST(EvaluateReconstruction, CountsMissingShiftedAndDisconnectedLength) {
   ASSERT_TRUE(m2.ok());
   EXPECT_EQ(m2->wire_recall, 0.0);
   EXPECT_EQ(m2->head_enclosed_fraction, 0.0);
+}
+
+// A side cane (4) grows from the middle of cane 2. Hung on the trunk in the model, it counts as
+// connected (the trunk is the root) but not strictly (its true parent is cane 2, not the trunk);
+// hung on cane 3 it is neither.
+TEST(EvaluateReconstruction, StrictConnectivityAsksWhereTheRouteMeetsTheTrunk) {
+  VineModel truth = Truth();
+  truth.canes.push_back(StraightCane(4, 2, CaneKind::kCane, {0.25, 0.8, 1.0}, {0.25, 0.8, 1.3}));
+  const double total = 1.8 + std::hypot(0.5, 0.2);
+  auto m = EvaluateReconstruction(truth, truth);
+  ASSERT_TRUE(m.ok()) << m.status();
+  EXPECT_DOUBLE_EQ(m->connectivity, 1.0);
+  EXPECT_DOUBLE_EQ(m->connectivity_strict, 1.0);
+  VineModel on_trunk = truth;
+  on_trunk.canes[3].parent_id = CaneId(1);
+  m = EvaluateReconstruction(on_trunk, truth);
+  ASSERT_TRUE(m.ok()) << m.status();
+  EXPECT_DOUBLE_EQ(m->cane_recall, 1.0);
+  EXPECT_DOUBLE_EQ(m->connectivity, 1.0);
+  // Its first centimetre lies within 10 mm of cane 2, which is strictly connected.
+  EXPECT_NEAR(m->connectivity_strict, (total - 0.29) / total, 0.005);
+  VineModel on_cane3 = truth;
+  on_cane3.canes[3].parent_id = CaneId(3);
+  m = EvaluateReconstruction(on_cane3, truth);
+  ASSERT_TRUE(m.ok()) << m.status();
+  EXPECT_NEAR(m->connectivity, (total - 0.29) / total, 0.005);
+  EXPECT_NEAR(m->connectivity_strict, (total - 0.29) / total, 0.005);
 }
 
 TEST(EvaluateReconstruction, HalfTheHeadIsHalfEnclosed) {

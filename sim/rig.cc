@@ -91,8 +91,8 @@ CameraCalibration Apply(const CameraCalibration& camera, const Perturbation& p, 
 }  // namespace
 
 absl::Status RigOptions::Validate() const {
-  if (camera_count < 1 || camera_count > 3) {
-    return Invalid("camera_count", absl::StrCat("must be 1, 2 or 3, is ", camera_count));
+  if (camera_count < 1 || camera_count > 4) {
+    return Invalid("camera_count", absl::StrCat("must be 1, 2, 3 or 4, is ", camera_count));
   }
   if (image_width < 16 || image_width > 16384) {
     return Invalid("image_width", absl::StrCat("must be in [16, 16384], is ", image_width));
@@ -130,6 +130,10 @@ absl::Status RigOptions::Validate() const {
   if (!(std::isfinite(apex_raise_m) && apex_raise_m >= 0.0 && apex_raise_m <= 1.0)) {
     return Invalid("apex_raise_m",
                    absl::StrCat("must be finite and within [0, 1], is ", apex_raise_m));
+  }
+  if (!(upper_pair_side_m > 0.0 && upper_pair_side_m <= 2.0)) {
+    return Invalid("upper_pair_side_m",
+                   absl::StrCat("must be in (0, 2], is ", upper_pair_side_m));
   }
   const std::pair<const char*, double> coefficients[] = {
       {"k1", k1}, {"k2", k2}, {"p1", p1}, {"p2", p2}, {"k3", k3}};
@@ -180,6 +184,11 @@ absl::StatusOr<RigCalibration> MakeRig(const RigOptions& options) {
       const double pair = options.apex_up ? -inradius : inradius;
       const double apex = -2.0 * pair + (options.apex_up ? 1.0 : -1.0) * options.apex_raise_m;
       centres = {{-0.5 * s, 0.0, pair}, {0.5 * s, 0.0, pair}, {0.0, 0.0, apex}};
+      if (options.camera_count == 4) {
+        const double u = 0.5 * options.upper_pair_side_m;
+        centres[2] = {-u, 0.0, apex};
+        centres.push_back({u, 0.0, apex});
+      }
     }
   }
   const Eigen::Vector3d rig_centre(0.0, options.rig_y_m, options.rig_height_m);
@@ -193,13 +202,13 @@ absl::StatusOr<RigCalibration> MakeRig(const RigOptions& options) {
     c.image_width = options.image_width;
     c.image_height = options.image_height;
     // Real lenses are never centred exactly; a fixed per-camera offset keeps code honest about cx.
-    const double offset_x[] = {3.2, -2.7, 1.4};
-    const double offset_y[] = {-2.4, 1.9, 2.8};
+    const double offset_x[] = {3.2, -2.7, 1.4, -1.8};
+    const double offset_y[] = {-2.4, 1.9, 2.8, -3.1};
     c.camera_matrix << fx, 0.0, 0.5 * (options.image_width - 1) + offset_x[i], 0.0, fx,
         0.5 * (options.image_height - 1) + offset_y[i], 0.0, 0.0, 1.0;
     c.distortion = {options.k1, options.k2, options.p1, options.p2, options.k3};
     const Eigen::Vector3d centre = rig_centre + centres[i];
-    const bool apex = options.camera_count == 3 && i == 2;
+    const bool apex = options.camera_count >= 3 && i >= 2;
     const Eigen::Vector3d aim =
         target + Eigen::Vector3d::UnitZ() * (apex ? options.apex_aim_up_m : options.pair_aim_up_m);
     c.rotation_camera_from_platform =

@@ -12,7 +12,9 @@
 namespace vb::sim {
 
 struct RigOptions {
-  int camera_count = 3;            // 1 to 3 cameras: 3 in a triangle, 2 a horizontal pair
+  // 1 to 4 cameras: 3 in a triangle, 2 a horizontal pair, 4 the triangle's pair with a second
+  // pair at the apex's height (a study of more views, session 28; not the default).
+  int camera_count = 3;
   int image_width = 1280;
   int image_height = 1024;
   double horizontal_fov_deg = 100.0;   // wide lens: one vine and the gaps either side at 0.8 m
@@ -57,12 +59,18 @@ struct RigOptions {
   // moves by a third of it). For studies of the rig: 0.2-0.3 m lost precision, wire recall and
   // head enclosure on the bench (docs/simulator.md, "A taller triangle"); 0 by default.
   double apex_raise_m = 0.0;
+  // 4 cameras: the side of the upper pair (cam2 left, cam3 right), centred above the lower pair
+  // at the height the triangle's apex would have. The arm base bounds it too: wider than 0.40 m
+  // an upper camera sees the default mount's arm base unless it aims higher (apex_aim_up_m 0.06
+  // keeps it out up to 0.6 m; docs/simulator.md, "A fourth camera").
+  double upper_pair_side_m = 0.40;
 
-  // INVALID_ARGUMENT naming the field: camera_count outside [1, 3], image size outside
+  // INVALID_ARGUMENT naming the field: camera_count outside [1, 4], image size outside
   // [16, 16384], horizontal_fov_deg outside (10, 170), baseline_m outside (0, 2],
   // rig_height_m or distance_to_vine_plane_m not finite or <= 0.05, rig_y_m not finite or
   // outside [-1, 1], non-finite distortion, aim_below_rig_m, apex_aim_up_m or pair_aim_up_m not
-  // finite or beyond +-rig_height_m, apex_raise_m not finite or outside [0, 1].
+  // finite or beyond +-rig_height_m, apex_raise_m not finite or outside [0, 1], upper_pair_side_m
+  // outside (0, 2].
   absl::Status Validate() const;
 };
 
@@ -70,7 +78,9 @@ struct RigOptions {
 // Layout (platform frame): for 3 cameras an equilateral triangle of side baseline_m whose centroid
 // is (0, rig_y_m, rig_height_m) (by default (0, -0.12, 1.05), side 0.40 m): cam0 lower left (-x),
 // cam1 lower right (+x), cam2 above the middle (apex_up; otherwise cam0 upper left, cam1 upper
-// right, cam2 below the middle), cam2 then moved apex_raise_m further from the pair; for 2
+// right, cam2 below the middle), cam2 then moved apex_raise_m further from the pair; for 4 the
+// same pair with cam2 (-x) and cam3 (+x) at the apex's place, upper_pair_side_m apart, both aimed
+// as the apex is; for 2
 // cameras a horizontal pair; for 1 a camera at the centre.
 // Cameras look along +y with the image x axis along +x and image down = world down; with toe_in
 // each camera is rotated to look at (0, rig_y_m + distance_to_vine_plane_m, rig_height_m -

@@ -151,6 +151,40 @@ TEST(Rig, TwoCamerasAreAHorizontalPair) {
   EXPECT_TRUE(d.isApprox(Eigen::Vector3d(0.3, 0, 0), 1e-9));
 }
 
+// Four cameras: the default triangle's lower pair, and cam2 / cam3 where its apex was, spread
+// upper_pair_side_m apart along the row, aimed as the apex is.
+TEST(Rig, FourCamerasAddASecondPairAtTheApexHeight) {
+  RigOptions o;
+  o.camera_count = 4;
+  o.upper_pair_side_m = 0.6;
+  o.apex_aim_up_m = 0.06;  // at 0.03 a pair wider than 0.40 m shows the arm base
+  auto rig = MakeRig(o);
+  ASSERT_TRUE(rig.ok()) << rig.status();
+  ASSERT_EQ(rig->cameras.size(), 4u);
+  auto triangle = MakeRig();
+  ASSERT_TRUE(triangle.ok());
+  for (int i = 0; i < 2; ++i) {
+    EXPECT_TRUE(rig->cameras[i].CentreInPlatform().isApprox(
+        triangle->cameras[i].CentreInPlatform(), 1e-12));
+  }
+  const Eigen::Vector3d apex = triangle->cameras[2].CentreInPlatform();
+  const Eigen::Vector3d c2 = rig->cameras[2].CentreInPlatform();
+  const Eigen::Vector3d c3 = rig->cameras[3].CentreInPlatform();
+  EXPECT_EQ(rig->cameras[3].name, "cam3");
+  EXPECT_TRUE((c2 - apex).isApprox(Eigen::Vector3d(-0.3, 0, 0), 1e-9));
+  EXPECT_TRUE((c3 - apex).isApprox(Eigen::Vector3d(0.3, 0, 0), 1e-9));
+  // Both upper cameras aim at the apex's target, 0.06 m above the pair's.
+  for (int i = 2; i < 4; ++i) {
+    const CameraCalibration& c = rig->cameras[i];
+    const auto uv = c.Project({0.0, 0.8, 1.15 + 0.06});
+    ASSERT_TRUE(uv.has_value());
+    EXPECT_NEAR(uv->x(), c.camera_matrix(0, 2), 1e-6) << c.name;
+    EXPECT_NEAR(uv->y(), c.camera_matrix(1, 2), 1e-6) << c.name;
+  }
+  EXPECT_NE(rig->cameras[3].camera_matrix(0, 2), rig->cameras[2].camera_matrix(0, 2));
+  EXPECT_EQ(CameraSeeingTheArmBase(*rig), "");
+}
+
 TEST(Rig, InvalidOptionsAreRejectedNamingTheField) {
   auto expect_field = [](RigOptions o, const std::string& field) {
     const absl::Status s = MakeRig(o).status();
@@ -161,8 +195,12 @@ TEST(Rig, InvalidOptionsAreRejectedNamingTheField) {
   o.camera_count = 0;
   expect_field(o, "camera_count");
   o = {};
-  o.camera_count = 4;
+  o.camera_count = 5;
   expect_field(o, "camera_count");
+  o = {};
+  o.camera_count = 4;
+  o.upper_pair_side_m = 0.0;
+  expect_field(o, "upper_pair_side_m");
   o = {};
   o.image_width = 0;
   expect_field(o, "image_width");

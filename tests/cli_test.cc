@@ -144,7 +144,8 @@ TEST(VinebotCli, RejectsBadFlagsNamingThem) {
   EXPECT_NE(run.output.find("nonexistent.yaml"), std::string::npos) << run.output;
   // The simulated rig's flags are named as typed, not by the option field behind them; no stop
   // is rendered before the error.
-  for (const char* bad : {"--rig-baseline 3", "--rig-apex-raise -0.1", "--rig-apex-aim-up 5"}) {
+  for (const char* bad : {"--rig-baseline 3", "--rig-apex-raise -0.1", "--rig-apex-aim-up 5",
+                          "--rig-cameras 5", "--rig-upper-side 0"}) {
     run = Vinebot(std::string("bench reconstruct --vines 1 ") + bad);
     EXPECT_EQ(run.exit_code, 2) << bad;
     const std::string flag = std::string(bad).substr(0, std::string(bad).find(' '));

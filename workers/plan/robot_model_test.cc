@@ -330,6 +330,14 @@ TEST(PlatformAroundRig, RejectsACameraFarFromThePlatformsDesign) {
   near->cameras[1].translation_camera_from_platform -=
       near->cameras[1].rotation_camera_from_platform * Eigen::Vector3d(0.0, 0.0, -0.1);
   EXPECT_TRUE(PlatformAroundRig(*near).ok());
+  // The four-camera study rig (docs/simulator.md, "A fourth camera"): its upper pair lies 0.2 m
+  // from the design's apex camera, so the platform's design does not cover it.
+  sim::RigOptions four;
+  four.camera_count = 4;
+  const auto four_platform = PlatformAroundRig(sim::MakeRig(four).value());
+  EXPECT_EQ(four_platform.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(four_platform.status().message().find("cam2"), std::string::npos)
+      << four_platform.status();
 }
 
 TEST(PlatformGeometry, ValidateRejectsBadPlanes) {

@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: Apache-2.0
 // Logistic regression shared by the trained classifiers of reconstruction (match_classifier.h,
-// join_classifier.h): the probability of a linear score, and maximum a posteriori training by
-// Newton's method (iteratively reweighted least squares) with a ridge penalty on every weight
-// but the first (the bias). Header-only (templated on the feature count); thread-safe.
+// join_classifier.h, quadratic_logistic.h): the probability of a linear score, and maximum a
+// posteriori training by Newton's method (iteratively reweighted least squares) with a ridge
+// penalty. TrainLogistic is templated on the feature count; FitLogisticNewton (logistic.cc) is
+// the solver both it and TrainQuadraticLogistic use. Thread-safe.
 #pragma once
 
 #include <algorithm>
@@ -12,7 +13,6 @@
 #include <vector>
 
 #include "absl/status/statusor.h"
-#include "Eigen/Cholesky"
 #include "Eigen/Core"
 
 namespace vb::reconstruct {
@@ -30,7 +30,19 @@ double LogisticProbability(const std::array<double, N>& x, const std::array<doub
   return LogisticOfScore(z);
 }
 
-// Trains on `examples`, each with `features` (std::array<double, N>) and `right` (its label).
+// Newton's method for the weights w maximising sum_r log P(y_r | x_r) - sum_i ridge_i w_i^2 / 2,
+// P(1 | x) = 1 / (1 + exp(-w . x)): the rows of `x` are the examples, `y` their labels (0 or 1),
+// `ridge` one penalty per column. Scores are clamped to [-40, 40], weights p (1 - p) below 1e-9
+// raised to it and 1e-9 added to the Hessian's diagonal; stops after `iterations` steps or a
+// step shorter than 1e-8. INTERNAL naming `caller` if a step is not finite. The caller checks
+// the examples (sizes, finite values, both labels).
+absl::StatusOr<Eigen::VectorXd> FitLogisticNewton(const Eigen::MatrixXd& x,
+                                                  const Eigen::VectorXd& y,
+                                                  const Eigen::VectorXd& ridge, int iterations,
+                                                  const std::string& caller);
+
+// Trains on `examples`, each with `features` (std::array<double, N>) and `right` (its label):
+// FitLogisticNewton with ridge `l2` on every weight but the first (the bias, 1e-6).
 // `what` names the examples in errors ("matches"), `caller` the trainer.
 // INVALID_ARGUMENT if `examples` is empty, holds only one label, or a non-finite feature;
 // INTERNAL if the iteration diverges.
@@ -53,28 +65,20 @@ absl::StatusOr<std::array<double, N>> TrainLogistic(const std::vector<Example>& 
   if (positives == 0 || positives == static_cast<int>(examples.size())) {
     return absl::InvalidArgumentError("examples: need both right and wrong " + what);
   }
-  constexpr int d = static_cast<int>(N);
-  using Vector = Eigen::Matrix<double, d, 1>;
-  Vector w = Vector::Zero();
-  Vector ridge = Vector::Constant(l2);
-  ridge(0) = 1e-6;
-  for (int it = 0; it < iterations; ++it) {
-    Eigen::Matrix<double, d, d> h = ridge.asDiagonal();
-    Vector g = ridge.cwiseProduct(w);
-    for (const Example& e : examples) {
-      const Eigen::Map<const Vector> x(e.features.data());
-      const double z = std::clamp(w.dot(x), -40.0, 40.0);
-      const double p = 1.0 / (1.0 + std::exp(-z));
-      g += (p - (e.right ? 1.0 : 0.0)) * x;
-      h += std::max(p * (1.0 - p), 1e-9) * x * x.transpose();
-    }
-    const Vector step = h.ldlt().solve(g);
-    if (!step.allFinite()) return absl::InternalError(caller + ": diverged");
-    w -= step;
-    if (step.norm() < 1e-8) break;
+  const Eigen::Index d = static_cast<Eigen::Index>(N);
+  Eigen::MatrixXd x(static_cast<Eigen::Index>(examples.size()), d);
+  Eigen::VectorXd y(x.rows());
+  for (size_t r = 0; r < examples.size(); ++r) {
+    const auto row = static_cast<Eigen::Index>(r);
+    for (Eigen::Index i = 0; i < d; ++i) x(row, i) = examples[r].features[i];
+    y(row) = examples[r].right ? 1.0 : 0.0;
   }
+  Eigen::VectorXd ridge = Eigen::VectorXd::Constant(d, l2);
+  ridge(0) = 1e-6;
+  const absl::StatusOr<Eigen::VectorXd> w = FitLogisticNewton(x, y, ridge, iterations, caller);
+  if (!w.ok()) return w.status();
   std::array<double, N> out;
-  for (int i = 0; i < d; ++i) out[i] = w(i);
+  for (Eigen::Index i = 0; i < d; ++i) out[i] = (*w)(i);
   return out;
 }
 

@@ -56,10 +56,13 @@ TrainingStop MakeTrainingStop(uint64_t seed) { return MakeTrainingStop(MakeSimul
 
 // The stop of vineyard `seed` from input `input`: "synthetic" (MakeSimulatedStop), "labels" or
 // "images" (MakeRenderedStop: the real 2D stage on label images or on segmented images, with the
-// platform's fiducials when `fiducials`).
+// platform's fiducials when `fiducials`). VB_RIG_CAMERAS=4 renders with the four-camera study rig
+// (sim::RigOptions::camera_count; docs/simulator.md, "A fourth camera").
 SimulatedStop MakeStop(const std::string& input, uint64_t seed, bool fiducials = false) {
   if (input == "synthetic") return MakeSimulatedStop(seed);
-  return MakeRenderedStop(seed, input == "images", fiducials);
+  sim::RigOptions rig;
+  if (const char* cameras = std::getenv("VB_RIG_CAMERAS")) rig.camera_count = std::atoi(cameras);
+  return MakeRenderedStop(seed, input == "images", fiducials, rig);
 }
 
 // Comma-separated list in the environment variable `name`, or `fallback`.

@@ -9,7 +9,6 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
-#include "Eigen/Cholesky"
 #include "Eigen/Core"
 #include "workers/reconstruct/logistic.h"
 
@@ -128,22 +127,12 @@ absl::StatusOr<QuadraticLogistic> TrainQuadraticLogistic(
   }
   Eigen::VectorXd y(expanded.rows());
   for (size_t r = 0; r < rows.size(); ++r) y(static_cast<Eigen::Index>(r)) = right[r] ? 1.0 : 0.0;
-  Eigen::VectorXd w = Eigen::VectorXd::Zero(d);
   Eigen::VectorXd ridge = Eigen::VectorXd::Constant(d, l2);
   ridge(0) = 0.0;
-  for (int it = 0; it < iterations; ++it) {
-    const Eigen::VectorXd z = (expanded * w).cwiseMax(-30.0).cwiseMin(30.0);
-    const Eigen::VectorXd p = (1.0 + (-z.array()).exp()).inverse().matrix();
-    const Eigen::VectorXd g = expanded.transpose() * (p - y) + ridge.cwiseProduct(w);
-    const Eigen::VectorXd s = (p.array() * (1.0 - p.array())).max(1e-9).matrix();
-    Eigen::MatrixXd h = expanded.transpose() * s.asDiagonal() * expanded;
-    h.diagonal() += ridge;
-    h.diagonal().array() += 1e-9;
-    const Eigen::VectorXd step = h.ldlt().solve(g);
-    if (!step.allFinite()) return absl::InternalError("TrainQuadraticLogistic: diverged");
-    w -= step;
-    if (step.norm() < 1e-8) break;
-  }
+  const absl::StatusOr<Eigen::VectorXd> fitted =
+      FitLogisticNewton(expanded, y, ridge, iterations, "TrainQuadraticLogistic");
+  if (!fitted.ok()) return fitted.status();
+  const Eigen::VectorXd& w = *fitted;
   for (int k = 0; k < d; ++k) model.weights[k] = w(k);
   return model;
 }
