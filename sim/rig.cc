@@ -37,18 +37,6 @@ std::pair<double, double> Fold(const RigOptions& o) {
   return {r_best, best};
 }
 
-// Rows are the camera axes in the platform frame: x right (+x of the row), y down, z forward.
-Eigen::Matrix3d LookAlong(const Eigen::Vector3d& forward) {
-  const Eigen::Vector3d z = forward.normalized();
-  const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
-  const Eigen::Vector3d y = z.cross(x);
-  Eigen::Matrix3d r;
-  r.row(0) = x.transpose();
-  r.row(1) = y.transpose();
-  r.row(2) = z.transpose();
-  return r;
-}
-
 // Portable random numbers: only the raw output of mt19937_64 is specified by the standard, so
 // uniforms and normals are derived here rather than with std distributions.
 class Rng {
@@ -141,6 +129,17 @@ absl::Status RigOptions::Validate() const {
     if (!std::isfinite(value)) return Invalid(name, "is not finite");
   }
   return absl::OkStatus();
+}
+
+Eigen::Matrix3d LookAlong(const Eigen::Vector3d& forward) {
+  const Eigen::Vector3d z = forward.normalized();
+  const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
+  const Eigen::Vector3d y = z.cross(x);
+  Eigen::Matrix3d r;
+  r.row(0) = x.transpose();
+  r.row(1) = y.transpose();
+  r.row(2) = z.transpose();
+  return r;
 }
 
 RigOptions NarrowRigOptions() {

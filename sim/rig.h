@@ -94,6 +94,12 @@ struct RigOptions {
 // the image.
 absl::StatusOr<RigCalibration> MakeRig(const RigOptions& options = {});
 
+// The rotation camera-from-platform of a camera looking along `forward` (not vertical): its rows
+// are the camera axes in the platform frame, x right (toward +x of the row when looking along
+// +y), y down (as near world down as `forward` allows), z along `forward`. MakeRig aims its
+// cameras with it.
+Eigen::Matrix3d LookAlong(const Eigen::Vector3d& forward);
+
 // The default rig from 2026-11-22 to session 24: a 0.29 m triangle, every camera aimed at the one
 // target (apex_aim_up_m 0). Unit tests whose constructed scenes were laid out for it keep it.
 RigOptions NarrowRigOptions();

@@ -350,18 +350,12 @@ TEST(OverlapLoss, DISABLED_RigGeometry) {
 
 
 // A copy of `like`'s intrinsics named `name`, centred at `centre` (platform frame) and looking at
-// `aim`, image down as near world down as the aim allows (as sim::MakeRig aims its cameras).
+// `aim` (sim::LookAlong, as sim::MakeRig aims its cameras).
 CameraCalibration CameraAt(const CameraCalibration& like, const std::string& name,
                            const Eigen::Vector3d& centre, const Eigen::Vector3d& aim) {
   CameraCalibration c = like;
   c.name = name;
-  const Eigen::Vector3d z = (aim - centre).normalized();
-  const Eigen::Vector3d down = -Eigen::Vector3d::UnitZ();
-  const Eigen::Vector3d y = (down - down.dot(z) * z).normalized();
-  const Eigen::Vector3d x = y.cross(z);
-  c.rotation_camera_from_platform.row(0) = x.transpose();
-  c.rotation_camera_from_platform.row(1) = y.transpose();
-  c.rotation_camera_from_platform.row(2) = z.transpose();
+  c.rotation_camera_from_platform = sim::LookAlong(aim - centre);
   c.translation_camera_from_platform = -c.rotation_camera_from_platform * centre;
   return c;
 }
