@@ -103,6 +103,34 @@ inline SimulatedStop MakeSimulatedStop(uint64_t seed, double break_px = 100.0) {
   return stop;
 }
 
+// The noise seed of vine 1 of vineyard `seed`, as app/bench_command.cc derives it.
+inline uint64_t StopNoiseSeed(uint64_t seed) { return seed * 1000003 + 1; }
+
+// The stop at vine 1 of vineyard `seed` without images: the scene, the vine and its neighbours'
+// canes and heads as `drawn`, the true rig placed by `rig_options` (with the platform's fiducials
+// listed when `fiducials`) and the calibration the bench reports, 1 px off (as
+// capture::MakeSimRig). No views: MakeRenderedStop renders them; the oracles of the diagnosis
+// reports draw them (SyntheticViews).
+inline SimulatedStop MakeStopGeometry(uint64_t seed, bool fiducials = false,
+                                      const sim::RigOptions& rig_options = {}) {
+  SimulatedStop stop;
+  const uint64_t noise_seed = StopNoiseSeed(seed);
+  stop.scene = sim::GenerateScene(seed, 1).value();
+  stop.drawn = stop.scene.vine;
+  for (const VineModel& neighbour : stop.scene.neighbours) {
+    for (const Cane& cane : neighbour.canes) stop.drawn.canes.push_back(cane);
+    for (const Sphere& s : neighbour.head.spheres) stop.drawn.head.spheres.push_back(s);
+  }
+  stop.true_rig = sim::MakeRig(rig_options).value();
+  if (fiducials) {
+    stop.true_rig.fiducials = sim::PlatformFiducials().value();
+    stop.scene.fiducials = stop.true_rig.fiducials;
+  }
+  // As capture::MakeSimRig.
+  stop.rig = sim::PerturbCalibration(stop.true_rig, 1.0, noise_seed ^ 0xCA11B4A7Eull);
+  return stop;
+}
+
 // The stop at vine 1 of vineyard `seed` as `vinebot bench reconstruct` renders it (sensor noise,
 // reported calibration 1 px off), its views from the real 2D stage (ExtractStructure) run on
 // the renderer's label images (`segment` false) or on the segmenter's classes of the rendered
@@ -116,22 +144,8 @@ inline SimulatedStop MakeSimulatedStop(uint64_t seed, double break_px = 100.0) {
 // without views if rendering or the 2D stage fails.
 inline SimulatedStop MakeRenderedStop(uint64_t seed, bool segment, bool fiducials = false,
                                       const sim::RigOptions& rig_options = {}) {
-  SimulatedStop stop;
-  const int vine = 1;
-  const uint64_t noise_seed = seed * 1000003 + vine;  // as app/bench_command.cc
-  stop.scene = sim::GenerateScene(seed, vine).value();
-  stop.drawn = stop.scene.vine;
-  for (const VineModel& neighbour : stop.scene.neighbours) {
-    for (const Cane& cane : neighbour.canes) stop.drawn.canes.push_back(cane);
-    for (const Sphere& s : neighbour.head.spheres) stop.drawn.head.spheres.push_back(s);
-  }
-  stop.true_rig = sim::MakeRig(rig_options).value();
-  if (fiducials) {
-    stop.true_rig.fiducials = sim::PlatformFiducials().value();
-    stop.scene.fiducials = stop.true_rig.fiducials;
-  }
-  // As capture::MakeSimRig.
-  stop.rig = sim::PerturbCalibration(stop.true_rig, 1.0, noise_seed ^ 0xCA11B4A7Eull);
+  SimulatedStop stop = MakeStopGeometry(seed, fiducials, rig_options);
+  const uint64_t noise_seed = StopNoiseSeed(seed);
   for (size_t i = 0; i < stop.true_rig.cameras.size(); ++i) {
     const auto view = sim::Render(stop.scene, stop.true_rig.cameras[i], sim::RenderOptions{},
                                   noise_seed + 7919 * (i + 1));

@@ -302,6 +302,17 @@ bool HoldsEnds(const Polyline3& a, const Polyline3& b) {
   return front && back;
 }
 
+double NearestOtherCane(const VineModel& vine, size_t own, const Eigen::Vector3d& p) {
+  double nearest = 1e9;
+  for (size_t o = 0; o < vine.canes.size(); ++o) {
+    if (o == own) continue;
+    double d = 0.0;
+    vine.canes[o].polyline.Project(p, &d);
+    nearest = std::min(nearest, d);
+  }
+  return nearest;
+}
+
 bool NearAnyCane(const Eigen::Vector3d& p, const std::vector<Cane>& canes, double radius_m) {
   for (const Cane& c : canes)
     if (DistanceToPolyline(p, c.polyline) <= radius_m) return true;

@@ -208,6 +208,10 @@ LossStage FirstLostStage(const Eigen::Vector3d& p, const SampleEvidence& evidenc
 // holds an assembled cane's ends carries it. `a` must have points.
 bool HoldsEnds(const Polyline3& a, const Polyline3& b);
 
+// The 3D distance from p to the nearest cane of `vine` other than its cane `own` (axis to axis;
+// 1e9 if none).
+double NearestOtherCane(const VineModel& vine, size_t own, const Eigen::Vector3d& p);
+
 // Whether p lies within `radius_m` of a cane of `canes` (DistanceToPolyline).
 bool NearAnyCane(const Eigen::Vector3d& p, const std::vector<Cane>& canes,
                  double radius_m = 0.01);

@@ -10,7 +10,7 @@
 // cane within 10 mm (the recall metric's test). What the merge loses outside those stretches is
 // length its consequences lose (pieces left unmatched or unconnected), not the merged wood
 // itself. Run with
-//   VB_SEED=1300 VB_STOPS=40 vb_reconstruct_test --gtest_also_run_disabled_tests
+//   VB_SEED=1300 VB_STOPS=40 [VB_FIDUCIALS=0] vb_reconstruct_test --gtest_also_run_disabled_tests
 //     --gtest_filter='OverlapLoss.DISABLED_MergedOracle'
 // Tuning seeds only (1100-1999; docs/reconstruction.md "Seeds").
 #include <algorithm>
@@ -26,17 +26,9 @@
 namespace vb::reconstruct {
 namespace {
 
-bool WithinOf(const VineModel& model, const Eigen::Vector3d& p, double distance_m) {
-  for (const Cane& cane : model.canes) {
-    double d = 0.0;
-    cane.polyline.Project(p, &d);
-    if (d <= distance_m) return true;
-  }
-  return false;
-}
-
 TEST(OverlapLoss, DISABLED_MergedOracle) {
   const auto [first, count, images, fiducials] = ReportStopsFromEnv(1300, 20);
+  (void)images;  // the oracles draw their views; nothing is rendered
   const ReconstructOptions options;
   // Rows: lying along another cane of the vine in 0, 1, 2, 3+ of the views. The row 0 samples
   // are split by whether their cane lies along another anywhere (a cane the merge cuts) or not.
@@ -47,8 +39,7 @@ TEST(OverlapLoss, DISABLED_MergedOracle) {
   double lost[kRows] = {}, lost_near_other[kRows] = {}, total = 0.0;
   for (int k = 0; k < count; ++k) {
     const uint64_t seed = first + k;
-    const SimulatedStop stop = MakeRenderedStop(seed, images, fiducials);
-    ASSERT_FALSE(stop.views.empty()) << seed;
+    const SimulatedStop stop = MakeStopGeometry(seed, fiducials);
     SyntheticViewOptions broken;
     broken.break_at_crossings_px = 2.0;
     SyntheticViewOptions merged = broken;
@@ -69,7 +60,7 @@ TEST(OverlapLoss, DISABLED_MergedOracle) {
       if (s.in_image < 2) continue;
       const int row = s.along_own > 0 ? std::min(s.along_own, 3) + 1
                                       : (merged_canes.count(s.cane) ? 0 : 1);
-      const bool hit_a = WithinOf(a->model, s.p, 0.01), hit_b = WithinOf(b->model, s.p, 0.01);
+      const bool hit_a = NearAnyCane(s.p, a->model.canes), hit_b = NearAnyCane(s.p, b->model.canes);
       length[row] += s.weight_m;
       broken_hit[row] += hit_a * s.weight_m;
       merged_hit[row] += hit_b * s.weight_m;
@@ -77,14 +68,7 @@ TEST(OverlapLoss, DISABLED_MergedOracle) {
       lost[row] += s.weight_m;
       // Lost with another true cane of the vine within 10 mm: one model cane along the strand
       // would have recalled it.
-      for (size_t o = 0; o < vine.canes.size(); ++o) {
-        double d = 0.0;
-        vine.canes[o].polyline.Project(s.p, &d);
-        if (o != s.cane && d < 0.01) {
-          lost_near_other[row] += s.weight_m;
-          break;
-        }
-      }
+      if (NearestOtherCane(vine, s.cane, s.p) < 0.01) lost_near_other[row] += s.weight_m;
     }
   }
   ASSERT_GT(total, 0.0);

@@ -32,18 +32,6 @@ namespace {
 
 constexpr double kStepM = 0.005;
 
-// The 3D distance from p to the nearest cane of `vine` other than its cane `own` (axis to axis).
-double NearestOtherCane(const VineModel& vine, size_t own, const Eigen::Vector3d& p) {
-  double nearest = 1e9;
-  for (size_t o = 0; o < vine.canes.size(); ++o) {
-    if (o == own) continue;
-    double d = 0.0;
-    vine.canes[o].polyline.Project(p, &d);
-    nearest = std::min(nearest, d);
-  }
-  return nearest;
-}
-
 // The distance from p to the surface of `vine`'s head (its nearest sphere; negative inside).
 double ToHeadSurface(const VineModel& vine, const Eigen::Vector3d& p) {
   double to_head = 1e9;
@@ -81,15 +69,7 @@ TEST(OverlapLoss, DISABLED_Report) {
         outside += w;
         continue;
       }
-      bool hit = false;
-      for (const Cane& cane : result->model.canes) {
-        double d = 0.0;
-        cane.polyline.Project(p, &d);
-        if (d <= 0.01) {
-          hit = true;
-          break;
-        }
-      }
+      const bool hit = NearAnyCane(p, result->model.canes);
       const int row = std::min(s.along, kRows - 1);
       length[row] += w;
       if (hit) recalled[row] += w;
